@@ -1,0 +1,44 @@
+"""The obstacle mesh catalogue shared by every tool.
+
+The C++ simulator builds the meshes (asg_sim_core, ``meshCatalogue()``); this module holds the
+figures that Python tools need without the simulator: footprint radius and height at scale 1.
+A test compares both sides (``asg_sim_catalogue`` prints the C++ figures).
+"""
+from dataclasses import dataclass
+
+#: An obstacle no taller than this counts as traversable: the vehicle may drive over it [m].
+TRAVERSABLE_HEIGHT = 0.20
+
+#: Half of the vehicle's width, used to tell whether the start pose is inside an obstacle [m].
+VEHICLE_HALF_WIDTH = 0.75
+
+
+@dataclass(frozen=True)
+class MeshInfo:
+    """Size of an obstacle type at scale 1."""
+
+    name: str
+    height: float  #: [m] top of the mesh above the ground
+    collision_radius: float  #: [m] radius of the vertical cylinder used for collisions
+    description: str
+
+
+MESHES = {
+    "juniper": MeshInfo(
+        "juniper",
+        height=4.5,
+        collision_radius=1.2,
+        description="Juniper tree: conifer, trunk and dense conical foliage",
+    ),
+    "barberry": MeshInfo(
+        "barberry",
+        height=1.2,
+        collision_radius=0.8,
+        description="Barberry bush: rounded shrub about 1.2 m tall",
+    ),
+}
+
+
+def mesh_names():
+    """Names of the catalogue's meshes, sorted."""
+    return sorted(MESHES)

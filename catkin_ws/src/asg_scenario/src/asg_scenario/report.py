@@ -1,0 +1,81 @@
+"""Writing a run's outcome: trajectory CSV, result YAML and a top-down picture (no ROS)."""
+import csv
+import math
+import os
+from typing import List, Optional, Sequence
+
+import yaml
+
+from .catalogue import MESHES
+
+TERMINATION_NAMES = ["SUCCESS", "COLLISION", "FLIPPED", "SIM_TIMEOUT", "IDLING_TIMEOUT",
+                     "STUCK_TIMEOUT", "OUT_OF_BOUNDS", "ERROR"]
+
+
+def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
+    """Heading [rad] of a quaternion."""
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+def path_length(xy: Sequence[Sequence[float]]) -> float:
+    """Arc length [m] of a polyline."""
+    return sum(math.dist(a, b) for a, b in zip(xy, xy[1:]))
+
+
+def write_trajectory_csv(path: str, samples: List[dict]):
+    """samples: dicts with t, x, y, z, yaw, vx, vy, vz, wx, wy, wz."""
+    keys = ["t", "x", "y", "z", "yaw", "vx", "vy", "vz", "wx", "wy", "wz"]
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(keys)
+        for s in samples:
+            w.writerow([f"{s[k]:.6f}" for k in keys])
+
+
+def write_result_yaml(path: str, result: dict):
+    with open(path, "w") as f:
+        yaml.safe_dump(result, f, sort_keys=False)
+
+
+def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: str = "",
+             removed: Optional[set] = None):
+    """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle
+
+    removed = removed or set()
+    size = scenario["structural"]["landscape"]["size"]
+    op = scenario["operational"]
+    fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
+    ax.add_patch(plt.Rectangle((0, 0), size, size, fill=False, color="0.4"))
+    colors = {"juniper": "darkgreen", "barberry": "firebrick"}
+    for i, layout in enumerate(scenario["structural"]["layouts"]):
+        mesh = MESHES[layout["mesh_name"]]
+        for j, inst in enumerate(layout["instances"]):
+            if not inst["visible"]:
+                continue
+            gone = (i, j) in removed
+            ax.add_patch(Circle((inst["x"], inst["y"]), mesh.collision_radius * inst["scale"],
+                                color=colors.get(layout["mesh_name"], "k"), fill=not gone,
+                                ls="--" if gone else "-", alpha=0.8))
+    for (x, y), r, c, label in (((op["start_x"], op["start_y"]), op["safety_radius"], "tab:blue",
+                                 "start"), ((op["goal_x"], op["goal_y"]), op["goal_radius"],
+                                            "tab:orange", "goal")):
+        ax.add_patch(Circle((x, y), r, fill=False, color=c, ls=":"))
+        ax.plot([x], [y], "o", color=c, label=label)
+    if len(xy):
+        ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="tab:purple", lw=1.5,
+                label="vehicle")
+    ax.set_xlim(-2, size + 2)
+    ax.set_ylim(-2, size + 2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title or scenario.get("name", ""))
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)

@@ -1,0 +1,103 @@
+"""run_scenario: send one scenario file to a scene worker and write what came back.
+
+The ROS adapter of the scenario tools (this module is the only one here that imports rospy).
+"""
+import argparse
+import os
+import sys
+
+from .convert import to_goal_msg
+from .report import (TERMINATION_NAMES, path_length, plot_run, write_result_yaml,
+                     write_trajectory_csv, yaw_of)
+from .schema import ScenarioError, dump_scenario, load_scenario
+
+
+def _samples(result):
+    out = []
+    for s in result.trajectory:
+        p, q, v, w = s.pose.position, s.pose.orientation, s.twist.linear, s.twist.angular
+        out.append(dict(t=s.t, x=p.x, y=p.y, z=p.z, yaw=yaw_of(q.x, q.y, q.z, q.w), vx=v.x,
+                        vy=v.y, vz=v.z, wx=w.x, wy=w.y, wz=w.z))
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="run_scenario",
+        description="Run a scenario YAML file on a scene worker and write the outcome "
+                    "(result.yaml, trajectory.csv, run.png) to an output folder.")
+    parser.add_argument("scenario", help="scenario YAML file (docs/scenario-format.md)")
+    parser.add_argument("--worker", default="/worker_0", help="worker namespace [/worker_0]")
+    parser.add_argument("--out", default="runs/latest", help="output folder [runs/latest]")
+    parser.add_argument("--timeout", type=float, default=600.0,
+                        help="wall-clock limit for the whole run [s] (600)")
+    parser.add_argument("--scenario-id", type=int, default=None,
+                        help="override the file's scenario_id")
+    args = parser.parse_args(argv)
+
+    try:
+        scenario = load_scenario(args.scenario)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if args.scenario_id is not None:
+        scenario["scenario_id"] = args.scenario_id
+
+    import actionlib
+    import rospy
+    from asg_msgs.msg import RunScenarioAction
+
+    rospy.init_node("run_scenario", anonymous=True, disable_signals=True)
+    name = args.worker.rstrip("/") + "/run_scenario"
+    client = actionlib.SimpleActionClient(name, RunScenarioAction)
+    print(f"waiting for worker action server {name} ...", flush=True)
+    if not client.wait_for_server(rospy.Duration(60.0)):
+        print(f"error: no action server at {name} after 60 s (is the worker launched?)",
+              file=sys.stderr)
+        return 3
+    last = [-1.0]
+
+    def feedback(fb):
+        if fb.sim_time - last[0] >= 1.0:
+            last[0] = fb.sim_time
+            print(f"  t = {fb.sim_time:6.1f} s   distance to goal {fb.distance_to_goal:7.2f} m",
+                  flush=True)
+
+    print(f"running scenario {scenario['scenario_id']} ({scenario['name'] or args.scenario})",
+          flush=True)
+    client.send_goal(to_goal_msg(scenario), feedback_cb=feedback)
+    if not client.wait_for_result(rospy.Duration(args.timeout)):
+        client.cancel_goal()
+        print(f"error: no result within {args.timeout:g} s", file=sys.stderr)
+        return 4
+    result = client.get_result()
+    samples = _samples(result)
+    xy = [(s["x"], s["y"]) for s in samples]
+    os.makedirs(args.out, exist_ok=True)
+    name = TERMINATION_NAMES[result.termination] if result.termination < len(
+        TERMINATION_NAMES) else str(result.termination)
+    summary = {
+        "scenario_id": int(result.scenario_id),
+        "termination": name,
+        "error": result.error,
+        "sim_time": float(result.sim_time),
+        "num_control_msgs": int(result.num_control_msgs),
+        "path_length": path_length(xy),
+        "trajectory_samples": len(samples),
+        "obstacle_visibility": [float(v) for v in result.obstacle_visibility],
+        "removed_obstacles": [{"layout": int(r.layout_index), "instance": int(r.instance_index),
+                               "reason": r.reason} for r in result.removed_obstacles],
+        "collision_with": result.collision_with,
+    }
+    write_result_yaml(os.path.join(args.out, "result.yaml"), summary)
+    write_trajectory_csv(os.path.join(args.out, "trajectory.csv"), samples)
+    with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
+        f.write(dump_scenario(scenario))
+    removed = {(int(r.layout_index), int(r.instance_index)) for r in result.removed_obstacles}
+    plot_run(os.path.join(args.out, "run.png"), scenario, xy,
+             f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed)
+    print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  path {summary['path_length']:.1f} m"
+          f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}"
+                                                         if result.error else ""))
+    print(f"wrote {args.out}/result.yaml, trajectory.csv, scenario.yaml, run.png")
+    return 0 if name != "ERROR" else 1

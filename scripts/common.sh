@@ -1,0 +1,69 @@
+# Shared by setup.sh, demo.sh and test.sh: paths, the Debian packages, install and build steps.
+# Debian's ROS 1 lives in /usr/bin/python3's site-packages: whatever python3 comes first on the
+# caller's PATH, everything here runs with /usr/bin/python3.
+set -euo pipefail
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+WS="$REPO/catkin_ws"
+export PATH="/usr/bin:/bin:/usr/sbin:/sbin:$PATH"
+export PYTHONDONTWRITEBYTECODE=1
+export ROS_PYTHON_VERSION=3
+
+# Every package the stack needs, all from Debian bookworm.
+APT_PACKAGES=(
+  build-essential cmake catkin python3-catkin-pkg ros-message-generation ros-message-runtime
+  libroscpp-dev python3-rospy librostest-dev python3-rostest rosbash python3-roslaunch
+  libactionlib-dev python3-actionlib libtf2-ros-dev python3-tf2-ros librosbag-dev python3-rosbag
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs
+  libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev libvisualization-msgs-dev
+  python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
+  python3-visualization-msgs python3-actionlib-msgs libactionlib-msgs-dev
+  rviz ros-desktop-dev
+  libbullet-dev libosmesa6-dev mesa-common-dev liboctomap-dev libeigen3-dev libopencv-dev
+  libgtest-dev googletest
+  python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-tqdm
+  python3-pytest python3-pil xvfb
+)
+
+log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
+
+as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
+
+install_packages() {
+  local missing=()
+  for p in "${APT_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    log "all ${#APT_PACKAGES[@]} Debian packages present"
+    return
+  fi
+  log "installing ${#missing[@]} Debian packages: ${missing[*]}"
+  as_root apt-get update
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "${missing[@]}"
+}
+
+source_ros() {
+  # setup files read unset variables
+  set +u
+  # shellcheck disable=SC1091
+  [ -f "$WS/devel/setup.bash" ] && source "$WS/devel/setup.bash"
+  set -u
+}
+
+build_workspace() {
+  local first=0
+  [ -f "$WS/devel/setup.bash" ] || first=1
+  log "building catkin workspace $WS"
+  source_ros
+  (cd "$WS" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release \
+      -DCATKIN_ENABLE_TESTING="${1:-ON}" -j2 "${@:2}")
+  if [ "$first" -eq 1 ]; then
+    # Debian's catkin: the first configure does not put the devel space on the Python path of
+    # rostest nodes; configuring again with the workspace sourced does.
+    log "first build: configuring again with the devel space sourced"
+    source_ros
+    (cd "$WS" && catkin_make --force-cmake -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+        -DCMAKE_BUILD_TYPE=Release -DCATKIN_ENABLE_TESTING="${1:-ON}" -j2 "${@:2}")
+  fi
+  source_ros
+}

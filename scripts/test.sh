@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The whole test suite: gtest (C++ cores), pytest (Python cores), rostest (integration).
+# Installs and builds first when needed. Prints 'N passed, N failed' and exits non-zero on any
+# failure or when no test ran.
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+install_packages
+build_workspace ON
+RESULTS="$WS/build/test_results"
+rm -rf "$RESULTS"
+mkdir -p "$RESULTS/pytest"
+
+log "gtest + rostest (catkin_make run_tests)"
+export LP_NUM_THREADS=1
+(cd "$WS" && catkin_make run_tests -j2 2>&1 | grep -vE '^(\[ *[0-9]+%\]|-- )' ) || true
+
+log "pytest (Python cores)"
+for t in "$WS"/src/*/test; do
+  pkg="$(basename "$(dirname "$t")")"
+  ls "$t"/test_*.py >/dev/null 2>&1 || continue
+  /usr/bin/python3 -m pytest -q -p no:cacheprovider --ignore="$t/rostest" \
+      --junitxml="$RESULTS/pytest/$pkg.xml" "$t" || true
+done
+
+/usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$RESULTS"
