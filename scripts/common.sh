@@ -19,7 +19,7 @@ APT_PACKAGES=(
   python3-visualization-msgs python3-actionlib-msgs libactionlib-msgs-dev
   rviz ros-desktop-dev
   libbullet-dev libosmesa6-dev mesa-common-dev liboctomap-dev libeigen3-dev libopencv-dev
-  libgtest-dev googletest
+  libgtest-dev googletest libyaml-cpp-dev
   python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-tqdm
   python3-pytest python3-pil xvfb
 )

@@ -1,0 +1,47 @@
+#pragma once
+/// @file meshes.hpp
+/// Procedural, deterministic meshes: the ground and the obstacle catalogue.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace asg_sim {
+
+struct Vertex {
+  std::array<float, 3> pos;     ///< [m] mesh frame (z up, origin on the ground)
+  std::array<float, 3> normal;  ///< unit
+  std::array<float, 3> color;   ///< linear RGB 0..1
+};
+
+struct Mesh {
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> indices;  ///< triangles, counter-clockwise seen from outside
+};
+
+/// Size figures of an obstacle type at scale 1 (the Python catalogue holds the same).
+struct MeshInfo {
+  std::string name;
+  double height;            ///< [m]
+  double collision_radius;  ///< [m]
+};
+
+/// Catalogue of obstacle meshes, sorted by name.
+const std::vector<MeshInfo>& meshCatalogue();
+
+/// nullptr when the name is unknown.
+const MeshInfo* findMesh(const std::string& name);
+
+/// Builds the named obstacle mesh at scale 1. Throws std::invalid_argument on an unknown name.
+Mesh makeObstacleMesh(const std::string& name);
+
+/// Ground over [-border, size + border]^2 with subdivisions cells across the nominal size
+/// (at most 8 x 8 cells when the ground is flat)
+/// (the heights array is where a heightmap goes later).
+Mesh makeGroundMesh(double size, double border, uint32_t subdivisions);
+
+/// Height of the ground [m] at (x, y) [m]; flat for now.
+inline double groundHeight(double /*x*/, double /*y*/) { return 0.0; }
+
+}  // namespace asg_sim

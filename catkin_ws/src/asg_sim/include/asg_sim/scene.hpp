@@ -1,0 +1,101 @@
+#pragma once
+/// @file scene.hpp
+/// The scene description as plain C++ (a mirror of asg_msgs/SceneDescription, no ROS), its
+/// validation, and the safety-radius filter. Units: metres, seconds, radians unless a name ends
+/// in Deg. Frame: map (x east, y north, z up, landscape corner at the origin).
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace asg_sim {
+
+/// One placed obstacle.
+struct ObstacleInstance {
+  bool visible = true;      ///< false: not placed
+  bool cast_shadow = true;  ///< false: rendered without shadow
+  double x = 0.0;           ///< [m]
+  double y = 0.0;           ///< [m]
+  double yaw = 0.0;         ///< [rad]
+  double scale = 1.0;       ///< [-] > 0
+};
+
+/// All instances of one obstacle type.
+struct ObstacleLayout {
+  std::string mesh_name;
+  std::vector<ObstacleInstance> instances;
+};
+
+struct Landscape {
+  double size = 100.0;          ///< [m] side of the nominal square
+  uint32_t subdivisions = 64;   ///< [-] ground cells per side
+  double border = 50.0;         ///< [m] ground beyond the nominal square
+};
+
+struct Textural {
+  double sun_inclination_deg = 45.0;  ///< [deg] elevation, 0..90
+  double sun_yaw_deg = 0.0;           ///< [deg] direction the light comes from
+  uint32_t ground_texture_seed = 0;
+};
+
+struct Operational {
+  double start_x = 0, start_y = 0, start_yaw = 0;  ///< [m], [m], [rad]
+  double goal_x = 0, goal_y = 0;                   ///< [m]
+  double goal_radius = 11.0;                       ///< [m]
+  double safety_radius = 11.0;                     ///< [m]
+  double speed = 5.0;                              ///< [m/s]
+  double sim_timeout = 120.0;                      ///< [s], -1 disables
+  double idle_timeout = 10.0;                      ///< [s], -1 disables
+  double stuck_timeout = 10.0;                     ///< [s], -1 disables
+  double max_roll_deg = 70.0;                      ///< [deg]
+  double max_pitch_deg = 70.0;                     ///< [deg]
+  bool allow_collisions = false;
+};
+
+struct SceneSpec {
+  Landscape landscape;
+  std::vector<ObstacleLayout> layouts;
+  Textural textural;
+  Operational operational;
+};
+
+/// A malformed scene: the message names the field, the value and what is allowed.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Most obstacle instances one scene may hold.
+constexpr size_t kMaxObstacles = 512;
+
+/// Throws SceneError listing every problem (NaN, out of range, unknown mesh, too many
+/// obstacles, start inside an obstacle that the safety radius keeps).
+void validateScene(const SceneSpec& spec);
+
+/// An obstacle the worker places: its indices in the request and its resolved geometry.
+struct PlacedObstacle {
+  uint32_t layout_index = 0;
+  uint32_t instance_index = 0;
+  uint32_t id = 0;          ///< [-] 1-based, unique in the scene (0 is "no obstacle")
+  std::string mesh_name;
+  ObstacleInstance pose;
+  double height = 0.0;      ///< [m] height x scale
+  double radius = 0.0;      ///< [m] collision radius x scale
+  bool traversable = false; ///< height <= 0.2 m
+};
+
+struct RemovedObstacle {
+  uint32_t layout_index = 0;
+  uint32_t instance_index = 0;
+  std::string reason;  ///< "start_safety_radius" or "goal_safety_radius"
+};
+
+/// Splits the visible instances into placed ones and those inside a safety radius.
+void placeObstacles(const SceneSpec& spec, std::vector<PlacedObstacle>* placed,
+                    std::vector<RemovedObstacle>* removed);
+
+/// Total instance count over all layouts (visible or not); visibility arrays use this order.
+size_t instanceCount(const SceneSpec& spec);
+
+}  // namespace asg_sim

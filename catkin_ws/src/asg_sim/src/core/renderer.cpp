@@ -1,0 +1,561 @@
+#define GL_GLEXT_PROTOTYPES 1
+#include "asg_sim/renderer.hpp"
+
+#include <GL/osmesa.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#include "asg_sim/meshes.hpp"
+
+namespace asg_sim {
+namespace {
+
+using Mat4 = Eigen::Matrix4f;
+
+void checkGl(const char* what) {
+  const GLenum e = glGetError();
+  if (e != GL_NO_ERROR) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "0x%04x", e);
+    throw std::runtime_error(std::string("OpenGL error ") + buf + " in " + what);
+  }
+}
+
+const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 aPos;
+layout(location = 1) in vec3 aNormal;
+layout(location = 2) in vec3 aColor;
+uniform mat4 uModel;
+uniform mat4 uView;
+uniform mat4 uProj;
+uniform mat4 uLightViewProj;
+out vec3 vWorld;
+out vec3 vNormal;
+out vec3 vColor;
+out vec4 vLight;
+out float vEyeDepth;
+void main() {
+  vec4 world = uModel * vec4(aPos, 1.0);
+  vec4 eye = uView * world;
+  vWorld = world.xyz;
+  vNormal = mat3(uModel) * aNormal;
+  vColor = aColor;
+  vLight = uLightViewProj * world;
+  vEyeDepth = -eye.z;
+  gl_Position = uProj * eye;
+}
+)";
+
+const char* kFragmentShader = R"(#version 330 core
+in vec3 vWorld;
+in vec3 vNormal;
+in vec3 vColor;
+in vec4 vLight;
+in float vEyeDepth;
+uniform vec3 uSunDir;
+uniform float uSunIntensity;
+uniform float uAmbient;
+uniform int uGround;
+uniform float uSeed;
+uniform sampler2DShadow uShadowMap;
+uniform int uShadows;
+uniform vec4 uLabel;  // r: label / 255, g, b: instance id low, high byte / 255
+layout(location = 0) out vec4 oColor;
+layout(location = 1) out float oDepth;
+layout(location = 2) out vec4 oLabel;
+
+float hash(vec2 p) {
+  p = fract(p * vec2(0.1031, 0.1030) + uSeed);
+  p += dot(p, p.yx + 33.33);
+  return fract((p.x + p.y) * p.x);
+}
+float noise(vec2 p) {
+  vec2 i = floor(p), f = fract(p);
+  vec2 u = f * f * (3.0 - 2.0 * f);
+  return mix(mix(hash(i), hash(i + vec2(1, 0)), u.x), mix(hash(i + vec2(0, 1)), hash(i + vec2(1, 1)), u.x), u.y);
+}
+vec3 groundAlbedo(vec2 xy) {
+  float n = 0.5 * noise(xy * 0.08) + 0.3 * noise(xy * 0.4) + 0.2 * noise(xy * 2.1);
+  vec3 grass = vec3(0.30, 0.42, 0.17);
+  vec3 dry = vec3(0.48, 0.46, 0.26);
+  vec3 dirt = vec3(0.46, 0.37, 0.25);
+  vec3 c = mix(grass, dry, smoothstep(0.35, 0.65, n));
+  c = mix(c, dirt, smoothstep(0.62, 0.80, noise(xy * 0.05 + 17.0)));
+  return c * (0.85 + 0.3 * noise(xy * 6.0));
+}
+void main() {
+  vec3 n = normalize(vNormal);
+  if (!gl_FrontFacing && uGround == 0) n = -n;
+  vec3 albedo = uGround == 1 ? groundAlbedo(vWorld.xy) : vColor;
+  float lit = 1.0;
+  if (uShadows == 1) {
+    vec3 p = vLight.xyz / vLight.w * 0.5 + 0.5;
+    if (p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0 && p.z < 1.0)
+      lit = texture(uShadowMap, vec3(p.xy, p.z - 0.0015));
+  }
+  float diffuse = max(dot(n, uSunDir), 0.0);
+  vec3 c = albedo * (uAmbient + uSunIntensity * diffuse * lit);
+  oColor = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.6)), 1.0);
+  oDepth = vEyeDepth;
+  oLabel = uLabel;
+}
+)";
+
+const char* kShadowVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 aPos;
+uniform mat4 uModel;
+uniform mat4 uLightViewProj;
+void main() { gl_Position = uLightViewProj * uModel * vec4(aPos, 1.0); }
+)";
+
+const char* kShadowFragmentShader = R"(#version 330 core
+void main() {}
+)";
+
+GLuint compile(GLenum type, const char* src) {
+  GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &src, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetShaderInfoLog(s, sizeof(log), nullptr, log);
+    throw std::runtime_error(std::string("shader compile failed: ") + log);
+  }
+  return s;
+}
+
+GLuint link(const char* vs, const char* fs) {
+  GLuint p = glCreateProgram();
+  GLuint v = compile(GL_VERTEX_SHADER, vs), f = compile(GL_FRAGMENT_SHADER, fs);
+  glAttachShader(p, v);
+  glAttachShader(p, f);
+  glLinkProgram(p);
+  glDeleteShader(v);
+  glDeleteShader(f);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetProgramInfoLog(p, sizeof(log), nullptr, log);
+    throw std::runtime_error(std::string("shader link failed: ") + log);
+  }
+  return p;
+}
+
+Mat4 perspective(double fov_rad, double aspect, double n, double f) {
+  const float t = 1.0f / std::tan(fov_rad / 2);
+  Mat4 m = Mat4::Zero();
+  m(0, 0) = t / aspect;
+  m(1, 1) = t;
+  m(2, 2) = -(f + n) / (f - n);
+  m(2, 3) = -2 * f * n / (f - n);
+  m(3, 2) = -1;
+  return m;
+}
+
+Mat4 ortho(double l, double r, double b, double t, double n, double f) {
+  Mat4 m = Mat4::Identity();
+  m(0, 0) = 2 / (r - l);
+  m(1, 1) = 2 / (t - b);
+  m(2, 2) = -2 / (f - n);
+  m(0, 3) = -(r + l) / (r - l);
+  m(1, 3) = -(t + b) / (t - b);
+  m(2, 3) = -(f + n) / (f - n);
+  return m;
+}
+
+// World -> eye for a camera at `eye` looking at `target` (GL convention: -z forward, y up).
+Mat4 lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& up) {
+  const Eigen::Vector3d f = (target - eye).normalized();
+  const Eigen::Vector3d s = f.cross(up).normalized();
+  const Eigen::Vector3d u = s.cross(f);
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  m(0, 3) = -s.dot(eye);
+  m(1, 3) = -u.dot(eye);
+  m(2, 3) = f.dot(eye);
+  return m.cast<float>();
+}
+
+struct GpuMesh {
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  GLsizei count = 0;
+};
+
+GpuMesh upload(const Mesh& m) {
+  GpuMesh g;
+  glGenVertexArrays(1, &g.vao);
+  glBindVertexArray(g.vao);
+  glGenBuffers(1, &g.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, g.vbo);
+  glBufferData(GL_ARRAY_BUFFER, m.vertices.size() * sizeof(Vertex), m.vertices.data(),
+               GL_STATIC_DRAW);
+  glGenBuffers(1, &g.ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, m.indices.size() * sizeof(uint32_t), m.indices.data(),
+               GL_STATIC_DRAW);
+  for (int i = 0; i < 3; ++i) {
+    glEnableVertexAttribArray(i);
+    glVertexAttribPointer(i, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                          reinterpret_cast<void*>(i * 3 * sizeof(float)));
+  }
+  glBindVertexArray(0);
+  g.count = m.indices.size();
+  return g;
+}
+
+void release(GpuMesh* g) {
+  if (g->ebo) glDeleteBuffers(1, &g->ebo);
+  if (g->vbo) glDeleteBuffers(1, &g->vbo);
+  if (g->vao) glDeleteVertexArrays(1, &g->vao);
+  *g = GpuMesh();
+}
+
+// Render target with the camera's three colour attachments and a depth buffer.
+struct Target {
+  GLuint fbo = 0, color = 0, depth = 0, label = 0, zbuf = 0;
+  int w = 0, h = 0;
+};
+
+GLuint makeTexture(GLenum internal, GLenum format, GLenum type, int w, int h) {
+  GLuint t;
+  glGenTextures(1, &t);
+  glBindTexture(GL_TEXTURE_2D, t);
+  glTexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, type, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  return t;
+}
+
+Target makeTarget(int w, int h, bool full) {
+  Target t;
+  t.w = w;
+  t.h = h;
+  glGenFramebuffers(1, &t.fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+  t.color = makeTexture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, w, h);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.color, 0);
+  if (full) {
+    t.depth = makeTexture(GL_R32F, GL_RED, GL_FLOAT, w, h);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.depth, 0);
+    t.label = makeTexture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, w, h);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, t.label, 0);
+  }
+  glGenRenderbuffers(1, &t.zbuf);
+  glBindRenderbuffer(GL_RENDERBUFFER, t.zbuf);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.zbuf);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("camera framebuffer incomplete");
+  return t;
+}
+
+void release(Target* t) {
+  GLuint tex[] = {t->color, t->depth, t->label};
+  for (GLuint x : tex)
+    if (x) glDeleteTextures(1, &x);
+  if (t->zbuf) glDeleteRenderbuffers(1, &t->zbuf);
+  if (t->fbo) glDeleteFramebuffers(1, &t->fbo);
+  *t = Target();
+}
+
+// Reads one attachment into a top-row-first buffer.
+template <class T>
+void readRows(GLenum attachment, GLenum format, GLenum type, int w, int h, int channels,
+              std::vector<T>* rows, std::vector<T>* scratch) {
+  scratch->resize(size_t(w) * h * channels);
+  glReadBuffer(attachment);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, w, h, format, type, scratch->data());
+  rows->resize(scratch->size());
+  const size_t stride = size_t(w) * channels;
+  for (int r = 0; r < h; ++r)  // OSMesa/GL origin is bottom-left
+    std::copy_n(scratch->data() + size_t(h - 1 - r) * stride, stride, rows->data() + r * stride);
+}
+
+}  // namespace
+
+struct Renderer::Gl {
+  OSMesaContext ctx = nullptr;
+  std::vector<unsigned char> dummy;
+  GLuint program = 0, shadow_program = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0;
+  Target camera, topdown;
+  GpuMesh ground;
+  std::map<std::string, GpuMesh> meshes;
+  struct Instance {
+    std::string mesh;
+    Mat4 model;
+    float label[4];
+    bool cast_shadow;
+  };
+  std::vector<Instance> instances;
+  Mat4 light_view_proj = Mat4::Identity();
+  float seed = 0.0f;
+  float sun_intensity = 0.9f;
+  std::vector<uint8_t> scratch8, rows8;
+  std::vector<float> scratchf;
+
+  void use() {
+    if (!OSMesaMakeCurrent(ctx, dummy.data(), GL_UNSIGNED_BYTE, 16, 16))
+      throw std::runtime_error("OSMesaMakeCurrent failed");
+  }
+
+  void drawScene(GLuint prog, bool shadow_pass, bool ground_too) {
+    const GLint model_loc = glGetUniformLocation(prog, "uModel");
+    const GLint ground_loc = shadow_pass ? -1 : glGetUniformLocation(prog, "uGround");
+    const GLint label_loc = shadow_pass ? -1 : glGetUniformLocation(prog, "uLabel");
+    if (ground_too) {
+      Mat4 id = Mat4::Identity();
+      glUniformMatrix4fv(model_loc, 1, GL_FALSE, id.data());
+      if (!shadow_pass) {
+        glUniform1i(ground_loc, 1);
+        glUniform4f(label_loc, kTraversable / 255.0f, 0, 0, 0);
+      }
+      glBindVertexArray(ground.vao);
+      glDrawElements(GL_TRIANGLES, ground.count, GL_UNSIGNED_INT, nullptr);
+    }
+    if (!shadow_pass) glUniform1i(ground_loc, 0);
+    for (const auto& inst : instances) {
+      if (shadow_pass && !inst.cast_shadow) continue;
+      glUniformMatrix4fv(model_loc, 1, GL_FALSE, inst.model.data());
+      if (!shadow_pass) glUniform4fv(label_loc, 1, inst.label);
+      const GpuMesh& m = meshes.at(inst.mesh);
+      glBindVertexArray(m.vao);
+      glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+    }
+    glBindVertexArray(0);
+  }
+};
+
+double CameraModel::fx() const { return (width / 2.0) / std::tan(fov_deg * M_PI / 360.0); }
+double CameraModel::fy() const { return fx(); }
+
+Eigen::Isometry3d cameraMount(double x, double y, double z, double pitch_down_rad) {
+  // optical axes in base_link: z_opt = +x_base, x_opt = -y_base, y_opt = -z_base
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(pitch_down_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * R;
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+Renderer::Renderer(const CameraModel& camera, const RenderOptions& options)
+    : gl_(new Gl), camera_(camera), options_(options) {
+  const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE,
+                         OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
+                         OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  gl_->ctx = OSMesaCreateContextAttribs(attribs, nullptr);
+  if (!gl_->ctx) throw std::runtime_error("OSMesaCreateContextAttribs failed (OpenGL 3.3 core)");
+  gl_->dummy.resize(16 * 16 * 4);
+  gl_->use();
+  gl_->program = link(kVertexShader, kFragmentShader);
+  gl_->shadow_program = link(kShadowVertexShader, kShadowFragmentShader);
+  gl_->camera = makeTarget(camera_.width, camera_.height, true);
+
+  glGenTextures(1, &gl_->shadow_tex);
+  glBindTexture(GL_TEXTURE_2D, gl_->shadow_tex);
+  const int s = options_.shadow_map_px;
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, s, s, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
+               nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  glGenFramebuffers(1, &gl_->shadow_fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, gl_->shadow_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, gl_->shadow_tex, 0);
+  glDrawBuffer(GL_NONE);
+  glReadBuffer(GL_NONE);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("shadow framebuffer incomplete");
+  for (const auto& info : meshCatalogue()) gl_->meshes[info.name] = upload(makeObstacleMesh(info.name));
+  glEnable(GL_DEPTH_TEST);
+  glEnable(GL_CULL_FACE);
+  checkGl("Renderer setup");
+}
+
+Renderer::~Renderer() {
+  if (!gl_ || !gl_->ctx) return;
+  gl_->use();
+  // reverse order of creation
+  for (auto& kv : gl_->meshes) release(&kv.second);
+  release(&gl_->ground);
+  if (gl_->shadow_fbo) glDeleteFramebuffers(1, &gl_->shadow_fbo);
+  if (gl_->shadow_tex) glDeleteTextures(1, &gl_->shadow_tex);
+  release(&gl_->topdown);
+  release(&gl_->camera);
+  glDeleteProgram(gl_->shadow_program);
+  glDeleteProgram(gl_->program);
+  OSMesaDestroyContext(gl_->ctx);
+}
+
+void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>& placed) {
+  gl_->use();
+  const auto& L = spec.landscape;
+  scene_size_ = L.size;
+  release(&gl_->ground);
+  gl_->ground = upload(makeGroundMesh(L.size, L.border, L.subdivisions));
+  gl_->seed = float(spec.textural.ground_texture_seed % 9973) * 0.6180339f;
+  gl_->instances.clear();
+  for (const auto& p : placed) {
+    Eigen::Affine3f m = Eigen::Affine3f::Identity();
+    m.translate(Eigen::Vector3f(p.pose.x, p.pose.y, groundHeight(p.pose.x, p.pose.y)));
+    m.rotate(Eigen::AngleAxisf(p.pose.yaw, Eigen::Vector3f::UnitZ()));
+    m.scale(float(p.pose.scale));
+    Gl::Instance inst{p.mesh_name, m.matrix(), {}, p.pose.cast_shadow};
+    inst.label[0] = (p.traversable ? kTraversable : kNonTraversable) / 255.0f;
+    inst.label[1] = (p.id & 0xFF) / 255.0f;
+    inst.label[2] = ((p.id >> 8) & 0xFF) / 255.0f;
+    inst.label[3] = 0.0f;
+    gl_->instances.push_back(inst);
+  }
+
+  const double inc = spec.textural.sun_inclination_deg * M_PI / 180.0;
+  const double yaw = spec.textural.sun_yaw_deg * M_PI / 180.0;
+  // A sun below 5 degrees is lit as at 5 degrees: the ground stays visible at dawn and dusk.
+  const double elev = std::max(inc, 5.0 * M_PI / 180.0);
+  sun_dir_ = Eigen::Vector3d(std::cos(elev) * std::cos(yaw), std::cos(elev) * std::sin(yaw),
+                             std::sin(elev));
+
+  // Orthographic light frustum fitted around the ground box and the tallest obstacle.
+  double top = 1.0;
+  for (const auto& p : placed) top = std::max(top, p.height);
+  const Eigen::Vector3d centre(L.size / 2, L.size / 2, 0);
+  const double R = L.size / 2 + L.border;
+  const Eigen::Vector3d up =
+      std::abs(sun_dir_.z()) > 0.99 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  const Mat4 view = lookAt(centre + sun_dir_ * (2 * R + top), centre, up);
+  Eigen::Vector3f lo(1e9, 1e9, 1e9), hi(-1e9, -1e9, -1e9);
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector4f corner(centre.x() + ((c & 1) ? R : -R), centre.y() + ((c & 2) ? R : -R),
+                                 (c & 4) ? top : 0.0, 1.0);
+    const Eigen::Vector4f v = view * corner;
+    lo = lo.cwiseMin(v.head<3>());
+    hi = hi.cwiseMax(v.head<3>());
+  }
+  gl_->light_view_proj = ortho(lo.x(), hi.x(), lo.y(), hi.y(), -hi.z() - 1, -lo.z() + 1) * view;
+  gl_->sun_intensity = 0.95f;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  glBindFramebuffer(GL_FRAMEBUFFER, gl_->shadow_fbo);
+  glViewport(0, 0, options_.shadow_map_px, options_.shadow_map_px);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  if (options_.shadows) {
+    glUseProgram(gl_->shadow_program);
+    glUniformMatrix4fv(glGetUniformLocation(gl_->shadow_program, "uLightViewProj"), 1, GL_FALSE,
+                       gl_->light_view_proj.data());
+    glDisable(GL_CULL_FACE);  // thin foliage must cast from both sides
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.5f, 2.0f);
+    gl_->drawScene(gl_->shadow_program, true, false);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glEnable(GL_CULL_FACE);
+  }
+  glFinish();
+  shadow_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  checkGl("Renderer::setScene");
+}
+
+namespace {
+void setCommonUniforms(GLuint prog, const Mat4& view, const Mat4& proj, const Mat4& light,
+                       const Eigen::Vector3d& sun, float intensity, float seed, bool shadows,
+                       GLuint shadow_tex) {
+  glUseProgram(prog);
+  glUniformMatrix4fv(glGetUniformLocation(prog, "uView"), 1, GL_FALSE, view.data());
+  glUniformMatrix4fv(glGetUniformLocation(prog, "uProj"), 1, GL_FALSE, proj.data());
+  glUniformMatrix4fv(glGetUniformLocation(prog, "uLightViewProj"), 1, GL_FALSE, light.data());
+  glUniform3f(glGetUniformLocation(prog, "uSunDir"), sun.x(), sun.y(), sun.z());
+  glUniform1f(glGetUniformLocation(prog, "uSunIntensity"), intensity);
+  glUniform1f(glGetUniformLocation(prog, "uAmbient"), 0.38f);
+  glUniform1f(glGetUniformLocation(prog, "uSeed"), seed);
+  glUniform1i(glGetUniformLocation(prog, "uShadows"), shadows ? 1 : 0);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, shadow_tex);
+  glUniform1i(glGetUniformLocation(prog, "uShadowMap"), 0);
+}
+}  // namespace
+
+void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_labels,
+                            CameraFrame* out) {
+  gl_->use();
+  const int w = camera_.width, h = camera_.height;
+  Eigen::Matrix4d flip = Eigen::Matrix4d::Identity();
+  flip(1, 1) = -1;
+  flip(2, 2) = -1;  // optical (y down, z forward) -> GL eye (y up, -z forward)
+  const Mat4 view = (flip * T_map_optical.inverse().matrix()).cast<float>();
+  const Mat4 proj = perspective(camera_.fov_deg * M_PI / 180.0, double(w) / h, camera_.near, camera_.far);
+  glBindFramebuffer(GL_FRAMEBUFFER, gl_->camera.fbo);
+  glViewport(0, 0, w, h);
+  const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  glDrawBuffers(with_labels ? 3 : 2, bufs);
+  const float sky[] = {0.62f, 0.75f, 0.90f, 1.0f};
+  const float nan[] = {std::numeric_limits<float>::quiet_NaN(), 0, 0, 0};
+  const float sky_label[] = {kSky / 255.0f, 0, 0, 0};
+  glClearBufferfv(GL_COLOR, 0, sky);
+  glClearBufferfv(GL_COLOR, 1, nan);
+  if (with_labels) glClearBufferfv(GL_COLOR, 2, sky_label);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
+                    gl_->seed, options_.shadows, gl_->shadow_tex);
+  gl_->drawScene(gl_->program, false, true);
+
+  readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
+  out->rgb.resize(w, h);
+  for (size_t i = 0, n = size_t(w) * h; i < n; ++i)
+    for (int c = 0; c < 3; ++c) out->rgb.data[i * 3 + c] = gl_->rows8[i * 4 + c];
+  out->depth.resize(w, h);
+  readRows(GL_COLOR_ATTACHMENT1, GL_RED, GL_FLOAT, w, h, 1, &out->depth.data, &gl_->scratchf);
+  if (with_labels) {
+    readRows(GL_COLOR_ATTACHMENT2, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
+    out->labels.resize(w, h);
+    out->instances.resize(w, h);
+    for (size_t i = 0, n = size_t(w) * h; i < n; ++i) {
+      out->labels.data[i] = gl_->rows8[i * 4];
+      out->instances.data[i] = uint16_t(gl_->rows8[i * 4 + 1] | (gl_->rows8[i * 4 + 2] << 8));
+    }
+  } else {
+    out->labels = LabelImage();
+    out->instances = InstanceImage();
+  }
+  checkGl("Renderer::renderCamera");
+}
+
+void Renderer::renderTopDown(int px, RgbImage* out) {
+  gl_->use();
+  if (gl_->topdown.w != px) {
+    release(&gl_->topdown);
+    gl_->topdown = makeTarget(px, px, false);
+  }
+  const double s = scene_size_;
+  const Mat4 view = lookAt(Eigen::Vector3d(s / 2, s / 2, 100.0), Eigen::Vector3d(s / 2, s / 2, 0),
+                           Eigen::Vector3d::UnitY());
+  const Mat4 proj = ortho(-s / 2, s / 2, -s / 2, s / 2, 1.0, 200.0);
+  glBindFramebuffer(GL_FRAMEBUFFER, gl_->topdown.fbo);
+  glViewport(0, 0, px, px);
+  const GLenum bufs[] = {GL_COLOR_ATTACHMENT0};
+  glDrawBuffers(1, bufs);
+  glClearColor(0.62f, 0.75f, 0.90f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
+                    gl_->seed, options_.shadows, gl_->shadow_tex);
+  gl_->drawScene(gl_->program, false, true);
+  readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, px, px, 4, &gl_->rows8, &gl_->scratch8);
+  out->resize(px, px);
+  for (size_t i = 0, n = size_t(px) * px; i < n; ++i)
+    for (int c = 0; c < 3; ++c) out->data[i * 3 + c] = gl_->rows8[i * 4 + c];
+  checkGl("Renderer::renderTopDown");
+}
+
+}  // namespace asg_sim

@@ -1,0 +1,162 @@
+#include "asg_sim/scene.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "asg_sim/meshes.hpp"
+
+namespace asg_sim {
+namespace {
+
+constexpr double kVehicleHalfWidth = 0.75;  // [m] same as asg_scenario.catalogue
+constexpr double kTraversableHeight = 0.20; // [m]
+
+class Problems {
+ public:
+  void add(const std::string& field, const std::string& msg) {
+    out_ << "\n  - " << field << ": " << msg;
+    ++n_;
+  }
+  void finite(const std::string& field, double v) {
+    if (!std::isfinite(v)) add(field, "= " + num(v) + ": must be a finite number");
+  }
+  void range(const std::string& field, double v, double lo, double hi, const std::string& unit,
+             bool allow_disable = false) {
+    if (!std::isfinite(v)) {
+      finite(field, v);
+    } else if (allow_disable && v == -1.0) {
+      return;
+    } else if (v < lo || v > hi) {
+      add(field, "= " + num(v) + ": out of range, must be in [" + num(lo) + ", " + num(hi) + "] " +
+                     unit + (allow_disable ? ", or -1 to disable" : ""));
+    }
+  }
+  static std::string num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+  void raise() const {
+    if (n_) throw SceneError("invalid scene, " + std::to_string(n_) + " problem(s):" + out_.str());
+  }
+
+ private:
+  std::ostringstream out_;
+  int n_ = 0;
+};
+
+}  // namespace
+
+size_t instanceCount(const SceneSpec& spec) {
+  size_t n = 0;
+  for (const auto& l : spec.layouts) n += l.instances.size();
+  return n;
+}
+
+void validateScene(const SceneSpec& spec) {
+  Problems p;
+  const auto& L = spec.landscape;
+  p.range("structural.landscape.size", L.size, 1.0, 10000.0, "m");
+  p.range("structural.landscape.subdivisions", L.subdivisions, 1, 4096, "");
+  p.range("structural.landscape.border", L.border, 0.0, 10000.0, "m");
+  const double size = std::isfinite(L.size) ? L.size : 0.0;
+  auto inside = [&](const std::string& prefix, double x, double y) {
+    bool ok = true;
+    for (auto [axis, v] : {std::pair<const char*, double>{"x", x}, {"y", y}}) {
+      if (!std::isfinite(v)) {
+        p.finite(prefix + axis, v);
+        ok = false;
+      } else if (v < 0.0 || v > size) {
+        p.add(prefix + axis, "= " + Problems::num(v) + ": outside the landscape, must be in [0, " +
+                                 Problems::num(size) + "] m");
+        ok = false;
+      }
+    }
+    return ok;
+  };
+  const auto& O = spec.operational;
+  inside("operational.start_", O.start_x, O.start_y);
+  inside("operational.goal_", O.goal_x, O.goal_y);
+  p.range("operational.start_yaw", O.start_yaw, -2 * M_PI, 2 * M_PI, "rad");
+  p.range("operational.goal_radius", O.goal_radius, 0.1, 1000.0, "m");
+  p.range("operational.safety_radius", O.safety_radius, 0.0, 1000.0, "m");
+  p.range("operational.speed", O.speed, 0.1, 30.0, "m/s");
+  p.range("operational.sim_timeout", O.sim_timeout, 0.1, 86400.0, "s", true);
+  p.range("operational.idle_timeout", O.idle_timeout, 0.1, 86400.0, "s", true);
+  p.range("operational.stuck_timeout", O.stuck_timeout, 0.1, 86400.0, "s", true);
+  p.range("operational.max_roll_deg", O.max_roll_deg, 1.0, 180.0, "deg");
+  p.range("operational.max_pitch_deg", O.max_pitch_deg, 1.0, 180.0, "deg");
+  p.range("textural.sun_inclination_deg", spec.textural.sun_inclination_deg, 0.0, 90.0, "deg");
+  p.range("textural.sun_yaw_deg", spec.textural.sun_yaw_deg, -360.0, 360.0, "deg");
+
+  const size_t n = instanceCount(spec);
+  if (n > kMaxObstacles) {
+    p.add("structural.layouts", std::to_string(n) + " obstacle instances: at most " +
+                                    std::to_string(kMaxObstacles) + " allowed");
+  } else {
+    for (size_t i = 0; i < spec.layouts.size(); ++i) {
+      const auto& layout = spec.layouts[i];
+      const std::string lp = "structural.layouts[" + std::to_string(i) + "]";
+      const MeshInfo* mesh = findMesh(layout.mesh_name);
+      if (!mesh) {
+        std::string names;
+        for (const auto& m : meshCatalogue()) names += (names.empty() ? "" : ", ") + m.name;
+        p.add(lp + ".mesh_name", "= '" + layout.mesh_name + "': unknown mesh (one of " + names + ")");
+      }
+      for (size_t j = 0; j < layout.instances.size(); ++j) {
+        const auto& inst = layout.instances[j];
+        const std::string ip = lp + ".instances[" + std::to_string(j) + "].";
+        bool ok = inside(ip, inst.x, inst.y);
+        p.range(ip + "yaw", inst.yaw, -2 * M_PI, 2 * M_PI, "rad");
+        p.range(ip + "scale", inst.scale, 0.01, 100.0, "");
+        ok = ok && std::isfinite(inst.scale) && inst.scale > 0;
+        if (!ok || !mesh || !inst.visible || mesh->height * inst.scale <= kTraversableHeight)
+          continue;
+        const double d = std::hypot(inst.x - O.start_x, inst.y - O.start_y);
+        const double reach = mesh->collision_radius * inst.scale + kVehicleHalfWidth;
+        if (std::isfinite(d) && d >= O.safety_radius && d < reach)
+          p.add(ip.substr(0, ip.size() - 1),
+                "the start pose is inside this " + layout.mesh_name + " (distance " +
+                    Problems::num(d) + " m < " + Problems::num(reach) + " m)");
+      }
+    }
+  }
+  p.raise();
+}
+
+void placeObstacles(const SceneSpec& spec, std::vector<PlacedObstacle>* placed,
+                    std::vector<RemovedObstacle>* removed) {
+  placed->clear();
+  removed->clear();
+  const auto& O = spec.operational;
+  uint32_t id = 0;
+  for (uint32_t i = 0; i < spec.layouts.size(); ++i) {
+    const auto& layout = spec.layouts[i];
+    const MeshInfo* mesh = findMesh(layout.mesh_name);
+    for (uint32_t j = 0; j < layout.instances.size(); ++j) {
+      ++id;  // ids follow the flattened request order, placed or not
+      const auto& inst = layout.instances[j];
+      if (!inst.visible || !mesh) continue;
+      if (std::hypot(inst.x - O.start_x, inst.y - O.start_y) < O.safety_radius) {
+        removed->push_back({i, j, "start_safety_radius"});
+        continue;
+      }
+      if (std::hypot(inst.x - O.goal_x, inst.y - O.goal_y) < O.safety_radius) {
+        removed->push_back({i, j, "goal_safety_radius"});
+        continue;
+      }
+      PlacedObstacle p;
+      p.layout_index = i;
+      p.instance_index = j;
+      p.id = id;
+      p.mesh_name = layout.mesh_name;
+      p.pose = inst;
+      p.height = mesh->height * inst.scale;
+      p.radius = mesh->collision_radius * inst.scale;
+      p.traversable = p.height <= kTraversableHeight;
+      placed->push_back(p);
+    }
+  }
+}
+
+}  // namespace asg_sim
