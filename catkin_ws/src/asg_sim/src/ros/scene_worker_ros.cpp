@@ -1,0 +1,464 @@
+#include "scene_worker_ros.hpp"
+
+#include <asg_msgs/ScenarioInfo.h>
+#include <asg_msgs/Tick.h>
+#include <asg_msgs/WorkerStatus.h>
+#include <nav_msgs/Odometry.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <chrono>
+#include <thread>
+#include <cstdlib>
+#include <cstring>
+
+namespace asg_sim {
+namespace {
+
+SceneSpec toSpec(const asg_msgs::SceneDescription& m) {
+  SceneSpec s;
+  s.landscape.size = m.structural.landscape.size;
+  s.landscape.subdivisions = m.structural.landscape.subdivisions;
+  s.landscape.border = m.structural.landscape.border;
+  for (const auto& l : m.structural.layouts) {
+    ObstacleLayout layout;
+    layout.mesh_name = l.mesh_name;
+    for (const auto& i : l.instances)
+      layout.instances.push_back({bool(i.visible), bool(i.cast_shadow), i.x, i.y, i.yaw, i.scale});
+    s.layouts.push_back(layout);
+  }
+  s.textural.sun_inclination_deg = m.textural.sun_inclination_deg;
+  s.textural.sun_yaw_deg = m.textural.sun_yaw_deg;
+  s.textural.ground_texture_seed = m.textural.ground_texture_seed;
+  const auto& o = m.operational;
+  auto& d = s.operational;
+  d.start_x = o.start_x;
+  d.start_y = o.start_y;
+  d.start_yaw = o.start_yaw;
+  d.goal_x = o.goal_x;
+  d.goal_y = o.goal_y;
+  d.goal_radius = o.goal_radius;
+  d.safety_radius = o.safety_radius;
+  d.speed = o.speed;
+  d.sim_timeout = o.sim_timeout;
+  d.idle_timeout = o.idle_timeout;
+  d.stuck_timeout = o.stuck_timeout;
+  d.max_roll_deg = o.max_roll_deg;
+  d.max_pitch_deg = o.max_pitch_deg;
+  d.allow_collisions = o.allow_collisions;
+  return s;
+}
+
+void toPose(const VehicleState& s, geometry_msgs::Pose* p) {
+  p->position.x = s.position.x();
+  p->position.y = s.position.y();
+  p->position.z = s.position.z();
+  p->orientation.x = s.orientation.x();
+  p->orientation.y = s.orientation.y();
+  p->orientation.z = s.orientation.z();
+  p->orientation.w = s.orientation.w();
+}
+
+void toTwist(const VehicleState& s, geometry_msgs::Twist* t) {
+  t->linear.x = s.linear.x();
+  t->linear.y = s.linear.y();
+  t->linear.z = s.linear.z();
+  t->angular.x = s.angular.x();
+  t->angular.y = s.angular.y();
+  t->angular.z = s.angular.z();
+}
+
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ros::Time& stamp,
+                                            const std::string& parent, const std::string& child) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  const Eigen::Quaterniond q(T.rotation());
+  t.transform.translation.x = T.translation().x();
+  t.transform.translation.y = T.translation().y();
+  t.transform.translation.z = T.translation().z();
+  t.transform.rotation.x = q.x();
+  t.transform.rotation.y = q.y();
+  t.transform.rotation.z = q.z();
+  t.transform.rotation.w = q.w();
+  return t;
+}
+
+template <class T>
+void fillImage(sensor_msgs::Image* msg, const ros::Time& stamp, const std::string& encoding,
+               int w, int h, int bytes_per_px, const std::vector<T>& data) {
+  msg->header.stamp = stamp;
+  msg->header.frame_id = "camera";
+  msg->width = w;
+  msg->height = h;
+  msg->encoding = encoding;
+  msg->is_bigendian = 0;
+  msg->step = w * bytes_per_px;
+  msg->data.resize(size_t(msg->step) * h);
+  std::memcpy(msg->data.data(), data.data(), msg->data.size());
+}
+
+std::string formatSeconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.1f s", s);
+  return buf;
+}
+
+}  // namespace
+
+SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh) {
+  readParameters();
+  // llvmpipe reads LP_NUM_THREADS when the first context is made; an explicit environment wins.
+  setenv("LP_NUM_THREADS", std::to_string(params_.render_threads).c_str(), 0);
+  CameraModel cam;
+  cam.width = params_.width;
+  cam.height = params_.height;
+  cam.fov_deg = params_.fov_deg;
+  RenderOptions ro;
+  ro.shadow_map_px = params_.shadow_map_px;
+  renderer_ = std::make_unique<Renderer>(cam, ro);
+  RunnerConfig rc;
+  rc.visibility_full_px = params_.visibility_full_px;
+  runner_ = std::make_unique<ScenarioRunner>(renderer_.get(), rc);
+
+  image_pub_ = nh_.advertise<sensor_msgs::Image>("camera/image", 4);
+  depth_pub_ = nh_.advertise<sensor_msgs::Image>("camera/depth", 4);
+  info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("camera/camera_info", 4);
+  labels_pub_ = nh_.advertise<sensor_msgs::Image>("camera/labels_gt", 4);
+  odom_pub_ = nh_.advertise<nav_msgs::Odometry>("odom", 16);
+  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("tf", 16);
+  tick_pub_ = nh_.advertise<asg_msgs::Tick>("tick", 4);
+  scenario_pub_ = nh_.advertise<asg_msgs::ScenarioInfo>("scenario", 1, true);
+  status_pub_ = nh_.advertise<asg_msgs::WorkerStatus>("status", 1, true);
+  cmd_sub_ = nh_.subscribe("cmd", 16, &SceneWorkerROS::onCommand, this, ros::TransportHints().tcpNoDelay());
+  ack_sub_ = nh_.subscribe("stack_ack", 16, &SceneWorkerROS::onAck, this);
+  server_ = std::make_unique<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>>(
+      nh_, "run_scenario", [this](const asg_msgs::RunScenarioGoalConstPtr& g) { execute(g); }, false);
+  server_->start();
+  publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
+  ROS_INFO("scene_worker ready in %s (stack: %zu node(s), lockstep %s)", nh_.getNamespace().c_str(),
+           params_.stack_nodes.size(), params_.lockstep ? "on" : "off");
+}
+
+void SceneWorkerROS::readParameters() {
+  auto& p = params_;
+  if (!pnh_.getParam("stack_nodes", p.stack_nodes))
+    throw std::runtime_error("parameter ~stack_nodes (list of node names) is required");
+  pnh_.param("ack_timeout", p.ack_timeout, p.ack_timeout);
+  pnh_.param("command_timeout", p.command_timeout, p.command_timeout);
+  pnh_.param("lockstep", p.lockstep, p.lockstep);
+  pnh_.param("realtime_factor", p.realtime_factor, p.realtime_factor);
+  pnh_.param("publish_labels", p.publish_labels, p.publish_labels);
+  pnh_.param("render_threads", p.render_threads, p.render_threads);
+  pnh_.param("camera/width", p.width, p.width);
+  pnh_.param("camera/height", p.height, p.height);
+  pnh_.param("camera/fov_deg", p.fov_deg, p.fov_deg);
+  pnh_.param("shadow_map_px", p.shadow_map_px, p.shadow_map_px);
+  pnh_.param("visibility_full_px", p.visibility_full_px, p.visibility_full_px);
+  auto check = [](bool ok, const std::string& what) {
+    if (!ok) throw std::runtime_error("bad parameter " + what);
+  };
+  check(p.ack_timeout > 0, "~ack_timeout: must be > 0 s");
+  check(p.command_timeout > 0, "~command_timeout: must be > 0 s");
+  check(p.realtime_factor > 0, "~realtime_factor: must be > 0");
+  check(p.render_threads >= 1 && p.render_threads <= 64, "~render_threads: must be 1..64");
+  check(p.width >= 16 && p.width <= 4096 && p.height >= 16 && p.height <= 4096,
+        "~camera/width, ~camera/height: must be 16..4096 px");
+  check(p.fov_deg > 1 && p.fov_deg < 179, "~camera/fov_deg: must be in (1, 179)");
+  check(p.shadow_map_px >= 256 && p.shadow_map_px <= 8192, "~shadow_map_px: must be 256..8192");
+  check(p.visibility_full_px > 0, "~visibility_full_px: must be > 0");
+}
+
+void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
+  asg_msgs::WorkerStatus s;
+  s.header.stamp = ros::Time::now();  // wall clock: status is about the process, not the scenario
+  s.worker = nh_.getNamespace();
+  s.status = status;
+  s.scenario_id = scenario_id;
+  status_pub_.publish(s);
+}
+
+void SceneWorkerROS::onCommand(const asg_msgs::VehicleCommandConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (msg->scenario_id != current_id_) return;  // a late answer from an earlier scenario
+  if (params_.lockstep && msg->header.stamp != awaited_) return;
+  latest_ = *msg;
+  have_command_ = true;
+  cv_.notify_all();
+}
+
+void SceneWorkerROS::onAck(const asg_msgs::StackAckConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (msg->scenario_id != current_id_) return;
+  acks_.insert(msg->node);
+  cv_.notify_all();
+}
+
+bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(params_.ack_timeout));
+  auto all = [&] {
+    for (const auto& n : params_.stack_nodes)
+      if (!acks_.count(n)) return false;
+    return true;
+  };
+  while (!all() && std::chrono::steady_clock::now() < deadline) {
+    if (!ros::ok() || server_->isPreemptRequested()) return false;
+    cv_.wait_for(lock, std::chrono::milliseconds(50));
+  }
+  missing->clear();
+  for (const auto& n : params_.stack_nodes)
+    if (!acks_.count(n)) *missing += (missing->empty() ? "" : ", ") + n;
+  (void)scenario_id;
+  return missing->empty();
+}
+
+bool SceneWorkerROS::waitForCommand(uint32_t /*scenario_id*/, const ros::Time& stamp, Command* out,
+                                    std::string* why) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.command_timeout);
+  while (!(have_command_ && latest_.header.stamp == stamp)) {
+    if (!ros::ok()) {
+      *why = "ROS is shutting down";
+      return false;
+    }
+    if (server_->isPreemptRequested()) {
+      *why = "preempted";
+      return false;
+    }
+    if (std::chrono::steady_clock::now() >= deadline) {
+      char buf[200];
+      std::snprintf(buf, sizeof(buf),
+                    "no command from the stack for control tick t = %.3f s within %.1f s "
+                    "(wall clock); is the planner running in this namespace?",
+                    stamp.toSec(), params_.command_timeout);
+      *why = buf;
+      return false;
+    }
+    cv_.wait_for(lock, std::chrono::milliseconds(50));
+  }
+  out->throttle = latest_.throttle;
+  out->steering = latest_.steering;
+  out->brake = latest_.brake;
+  out->target_speed = latest_.target_speed;
+  return true;
+}
+
+void SceneWorkerROS::publishState(const ros::Time& stamp) {
+  const VehicleState& s = runner_->state();
+  nav_msgs::Odometry odom;
+  odom.header.stamp = stamp;
+  odom.header.frame_id = "map";
+  odom.child_frame_id = "base_link";
+  toPose(s, &odom.pose.pose);
+  toTwist(s, &odom.twist.twist);
+  odom_pub_.publish(odom);
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(toTransform(s.pose(), stamp, "map", "base_link"));
+  const auto& m = runner_->config().camera_mount;
+  tf.transforms.push_back(toTransform(cameraMount(m.x(), m.y(), m.z()), stamp, "base_link", "camera"));
+  tf_pub_.publish(tf);
+}
+
+void SceneWorkerROS::publishCamera(const ros::Time& stamp, bool labels) {
+  runner_->renderCamera(labels, &frame_);
+  const int w = frame_.rgb.width, h = frame_.rgb.height;
+  sensor_msgs::Image img, depth;
+  fillImage(&img, stamp, "rgb8", w, h, 3, frame_.rgb.data);
+  fillImage(&depth, stamp, "32FC1", w, h, 4, frame_.depth.data);
+  sensor_msgs::CameraInfo info;
+  info.header = img.header;
+  info.width = w;
+  info.height = h;
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  const CameraModel& c = renderer_->camera();
+  info.K = {c.fx(), 0, c.cx(), 0, c.fy(), c.cy(), 0, 0, 1};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  info.P = {c.fx(), 0, c.cx(), 0, 0, c.fy(), c.cy(), 0, 0, 0, 1, 0};
+  // Labels first: a stack on ground truth then has them when the image arrives.
+  if (labels && params_.publish_labels) {
+    sensor_msgs::Image lab;
+    fillImage(&lab, stamp, "mono8", w, h, 1, frame_.labels.data);
+    labels_pub_.publish(lab);
+  }
+  info_pub_.publish(info);
+  depth_pub_.publish(depth);
+  image_pub_.publish(img);
+  ++camera_frames_;
+  last_camera_stamp_ = stamp;
+}
+
+void SceneWorkerROS::finish(asg_msgs::RunScenarioResult* r, Termination t, const std::string& error) {
+  r->termination = uint8_t(t);
+  r->termination_name = terminationName(t);
+  r->error = error;
+}
+
+void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
+  asg_msgs::RunScenarioResult result;
+  result.scenario_id = goal->scenario_id;
+  const auto wall0 = std::chrono::steady_clock::now();
+  auto fail = [&](const std::string& why) {
+    ROS_ERROR("scenario %u: %s", goal->scenario_id, why.c_str());
+    finish(&result, Termination::kError, why);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      current_id_ = 0;
+    }
+    publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
+    server_->setAborted(result, why);
+  };
+  if (goal->scenario_id == 0) return fail("scenario_id must be > 0");
+  if (goal->top_down_px > 4096) return fail("top_down_px = " + std::to_string(goal->top_down_px) + ": must be <= 4096");
+  try {
+    runner_->reset(toSpec(goal->scene));
+  } catch (const SceneError& e) {
+    return fail(e.what());
+  } catch (const std::exception& e) {
+    return fail(std::string("could not build the scene: ") + e.what());
+  }
+  publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_RUNNING, goal->scenario_id);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    current_id_ = goal->scenario_id;
+    acks_.clear();
+    have_command_ = false;
+    awaited_ = ros::Time();
+  }
+  camera_frames_ = 0;
+  last_camera_stamp_ = ros::Time();
+  const auto& op = goal->scene.operational;
+  asg_msgs::ScenarioInfo info;
+  info.scenario_id = goal->scenario_id;
+  info.landscape_size = goal->scene.structural.landscape.size;
+  info.goal_x = op.goal_x;
+  info.goal_y = op.goal_y;
+  info.goal_radius = op.goal_radius;
+  info.speed = op.speed;
+  info.start_x = op.start_x;
+  info.start_y = op.start_y;
+  info.start_yaw = op.start_yaw;
+  scenario_pub_.publish(info);
+  std::string missing;
+  if (!waitForAcks(goal->scenario_id, &missing))
+    return fail(server_->isPreemptRequested() ? "preempted while waiting for the stack"
+                                              : "stack node(s) did not acknowledge the scenario within " +
+                                                    formatSeconds(params_.ack_timeout) + ": " + missing);
+
+  Termination term = Termination::kNone;
+  std::string error;
+  const bool labels = goal->record_labels || params_.publish_labels;
+  const auto start = std::chrono::steady_clock::now();
+  while (term == Termination::kNone) {
+    const ros::Time stamp(runner_->time());
+    publishState(stamp);
+    if (runner_->cameraDue()) publishCamera(stamp, labels);
+    if (runner_->controlDue()) {
+      Command cmd;
+      if (params_.lockstep) {
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          awaited_ = stamp;
+          if (latest_.header.stamp != stamp) have_command_ = false;
+        }
+        asg_msgs::Tick tick;
+        tick.header.stamp = stamp;
+        tick.header.frame_id = "map";
+        tick.scenario_id = goal->scenario_id;
+        tick.tick = runner_->tick() / runner_->config().control_every;
+        tick.last_camera_stamp = last_camera_stamp_;
+        tick.camera_frames = camera_frames_;
+        tick_pub_.publish(tick);
+        if (!waitForCommand(goal->scenario_id, stamp, &cmd, &error)) {
+          if (error == "preempted") {
+            finish(&result, Termination::kError, "preempted");
+            break;
+          }
+          term = Termination::kError;
+          break;
+        }
+        runner_->applyCommand(cmd);
+      } else {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (have_command_) {
+          cmd.throttle = latest_.throttle;
+          cmd.steering = latest_.steering;
+          cmd.brake = latest_.brake;
+          cmd.target_speed = latest_.target_speed;
+          have_command_ = false;
+          runner_->applyCommand(cmd);
+        }
+      }
+    }
+    term = runner_->step();
+    if (runner_->tick() % runner_->config().tick_hz == 0) {
+      asg_msgs::RunScenarioFeedback fb;
+      fb.sim_time = runner_->time();
+      fb.distance_to_goal = runner_->distanceToGoal();
+      server_->publishFeedback(fb);
+    }
+    if (!params_.lockstep) {  // free-running: hold simulated time to wall time x factor
+      const auto due = start + std::chrono::duration<double>(runner_->time() / params_.realtime_factor);
+      std::this_thread::sleep_until(due);
+    }
+    if (!ros::ok()) {
+      term = Termination::kError;
+      error = "ROS is shutting down";
+    }
+  }
+  if (term != Termination::kError || error != "preempted")
+    publishState(ros::Time(runner_->time()));
+
+  result.sim_time = runner_->time();
+  result.num_control_msgs = runner_->commandsReceived();
+  result.trajectory.reserve(runner_->trajectory().size());
+  for (const auto& s : runner_->trajectory()) {
+    asg_msgs::TrajectorySample ts;
+    ts.t = s.t;
+    toPose(s.state, &ts.pose);
+    toTwist(s.state, &ts.twist);
+    result.trajectory.push_back(ts);
+  }
+  result.obstacle_visibility = runner_->obstacleVisibility();
+  for (const auto& r : runner_->removed()) {
+    asg_msgs::RemovedObstacle ro;
+    ro.layout_index = r.layout_index;
+    ro.instance_index = r.instance_index;
+    ro.reason = r.reason;
+    result.removed_obstacles.push_back(ro);
+  }
+  result.collision_with = runner_->collisionWith();
+  if (goal->top_down_px > 0) {
+    RgbImage top;
+    renderer_->renderTopDown(int(goal->top_down_px), &top);
+    fillImage(&result.top_down, ros::Time(runner_->time()), "rgb8", top.width, top.height, 3, top.data);
+    result.top_down.header.frame_id = "map";
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    current_id_ = 0;
+  }
+  publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  if (server_->isPreemptRequested()) {
+    finish(&result, Termination::kError, "preempted");
+    server_->setPreempted(result, "preempted");
+    return;
+  }
+  finish(&result, term, error);
+  ROS_INFO("scenario %u: %s after %.2f s simulated (%.2f s wall, %u commands)%s%s", goal->scenario_id,
+           terminationName(term), runner_->time(), wall, result.num_control_msgs,
+           error.empty() ? "" : ": ", error.c_str());
+  if (term == Termination::kError)
+    server_->setAborted(result, error);
+  else
+    server_->setSucceeded(result);
+}
+
+}  // namespace asg_sim

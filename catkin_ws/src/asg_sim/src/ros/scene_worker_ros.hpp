@@ -1,0 +1,77 @@
+#pragma once
+// SceneWorkerROS: the thin ROS adapter around asg_sim::ScenarioRunner. Serves the RunScenario
+// action, announces each scenario to the autonomy stack and waits for every stack node's ack,
+// then runs the lockstep loop: publish odometry/tf every tick and camera frames when due, and at
+// each control tick publish a Tick and wait for the VehicleCommand stamped with it.
+// Topics, parameters and the protocol: docs/simulator.md.
+
+#include <actionlib/server/simple_action_server.h>
+#include <asg_msgs/RunScenarioAction.h>
+#include <asg_msgs/StackAck.h>
+#include <asg_msgs/VehicleCommand.h>
+#include <ros/ros.h>
+
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "asg_sim/renderer.hpp"
+#include "asg_sim/scenario_runner.hpp"
+
+namespace asg_sim {
+
+class SceneWorkerROS {
+ public:
+  SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh);
+
+ private:
+  struct Params {
+    std::vector<std::string> stack_nodes;  // nodes that must acknowledge each scenario
+    double ack_timeout = 30.0;             // [s, wall]
+    double command_timeout = 10.0;         // [s, wall]
+    bool lockstep = true;
+    double realtime_factor = 1.0;          // free-running mode: simulated s per wall s
+    bool publish_labels = true;
+    int render_threads = 1;
+    int width = 256, height = 256;
+    double fov_deg = 90.0;
+    int shadow_map_px = 2048;
+    double visibility_full_px = 100.0;
+  };
+  void readParameters();
+  void execute(const asg_msgs::RunScenarioGoalConstPtr& goal);
+  void onCommand(const asg_msgs::VehicleCommandConstPtr& msg);
+  void onAck(const asg_msgs::StackAckConstPtr& msg);
+  void publishStatus(uint8_t status, uint32_t scenario_id);
+  void publishState(const ros::Time& stamp);
+  void publishCamera(const ros::Time& stamp, bool labels);
+  bool waitForAcks(uint32_t scenario_id, std::string* missing);
+  // Lockstep: waits for the command answering `stamp`; false on timeout or preemption.
+  bool waitForCommand(uint32_t scenario_id, const ros::Time& stamp, Command* out, std::string* why);
+  void finish(asg_msgs::RunScenarioResult* result, Termination t, const std::string& error);
+
+  ros::NodeHandle nh_, pnh_;
+  Params params_;
+  std::unique_ptr<Renderer> renderer_;
+  std::unique_ptr<ScenarioRunner> runner_;
+  ros::Publisher image_pub_, depth_pub_, info_pub_, labels_pub_, odom_pub_, tf_pub_, tick_pub_,
+      scenario_pub_, status_pub_;
+  ros::Subscriber cmd_sub_, ack_sub_;
+  std::unique_ptr<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>> server_;
+
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  uint32_t current_id_ = 0;
+  std::set<std::string> acks_;
+  bool have_command_ = false;
+  asg_msgs::VehicleCommand latest_;  // lockstep: the one matching the awaited stamp
+  ros::Time awaited_;
+  uint32_t camera_frames_ = 0;
+  ros::Time last_camera_stamp_;
+  CameraFrame frame_;
+};
+
+}  // namespace asg_sim

@@ -1,0 +1,106 @@
+#!/usr/bin/python3
+"""rostest: RunScenario goals through actionlib against real scene workers."""
+import copy
+import math
+import os
+import unittest
+
+import actionlib
+import rospy
+import rostest
+from actionlib_msgs.msg import GoalStatus
+from asg_msgs.msg import RunScenarioAction, RunScenarioResult
+from sensor_msgs.msg import Image
+
+from asg_scenario import load_scenario
+from asg_scenario.convert import to_goal_msg
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", ".."))
+
+
+def short_exp1(scenario_id, sim_timeout=3.0):
+    s = load_scenario(os.path.join(REPO, "scenarios", "exp1.yaml"))
+    s["scenario_id"] = scenario_id
+    s["operational"]["sim_timeout"] = sim_timeout
+    return s
+
+
+class SceneWorkerTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("scene_worker_test")
+        cls.clients = {}
+        for ns in ("worker_0", "worker_1", "worker_2"):
+            c = actionlib.SimpleActionClient(f"/{ns}/run_scenario", RunScenarioAction)
+            assert c.wait_for_server(rospy.Duration(60.0)), f"no action server in {ns}"
+            cls.clients[ns] = c
+        cls.images = []
+        rospy.Subscriber("/worker_0/camera/image", Image, lambda m: cls.images.append(m), queue_size=100)
+        rospy.sleep(1.0)
+
+    def run_goal(self, ns, goal, timeout=120.0):
+        c = self.clients[ns]
+        c.send_goal(goal)
+        self.assertTrue(c.wait_for_result(rospy.Duration(timeout)), "no result")
+        return c.get_state(), c.get_result()
+
+    def test_1_trajectory_and_sensors(self):
+        self.images[:] = []
+        goal = to_goal_msg(short_exp1(11))
+        goal.top_down_px = 64
+        state, r = self.run_goal("worker_0", goal)
+        self.assertEqual(state, GoalStatus.SUCCEEDED, r.error)
+        self.assertEqual(r.termination, RunScenarioResult.SIM_TIMEOUT, r.error)
+        self.assertAlmostEqual(r.sim_time, 3.0, places=6)
+        self.assertEqual(len(r.trajectory), 181)  # 60 Hz, t = 0 .. 3 s
+        self.assertEqual(r.num_control_msgs, 60)  # 20 Hz
+        first, last = r.trajectory[0].pose.position, r.trajectory[-1].pose.position
+        self.assertAlmostEqual(first.x, 20.0, places=1)
+        moved = math.hypot(last.x - first.x, last.y - first.y)
+        self.assertGreater(moved, 3.0)  # it drove under the scripted throttle
+        self.assertEqual(len(r.obstacle_visibility), 8)
+        self.assertEqual((r.top_down.width, r.top_down.height, r.top_down.encoding), (64, 64, "rgb8"))
+        rospy.sleep(0.5)
+        stamps = sorted(m.header.stamp.to_sec() for m in self.images)
+        self.assertEqual(len(stamps), 45)  # 15 Hz over [0, 3) s
+        for k, t in enumerate(stamps):
+            self.assertAlmostEqual(t, k / 15.0, places=6)
+
+    def test_2_same_goal_same_trajectory(self):
+        goal = to_goal_msg(short_exp1(12, sim_timeout=2.0))
+        _, a = self.run_goal("worker_0", goal)
+        goal.scenario_id = 13
+        _, b = self.run_goal("worker_0", goal)
+        self.assertEqual(len(a.trajectory), len(b.trajectory))
+        for sa, sb in zip(a.trajectory, b.trajectory):
+            self.assertEqual(sa.pose, sb.pose)
+            self.assertEqual(sa.twist, sb.twist)
+
+    def test_3_bad_goal_then_good_goal(self):
+        goal = to_goal_msg(short_exp1(14, sim_timeout=1.0))
+        bad = copy.deepcopy(goal)
+        bad.scene.operational.start_x = float("nan")
+        bad.scene.structural.layouts[0].mesh_name = "oak"
+        state, r = self.run_goal("worker_0", bad)
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertEqual(r.termination, RunScenarioResult.ERROR)
+        self.assertIn("operational.start_x", r.error)
+        self.assertIn("unknown mesh", r.error)
+        state, r = self.run_goal("worker_0", goal)
+        self.assertEqual(state, GoalStatus.SUCCEEDED, r.error)
+        self.assertEqual(r.termination, RunScenarioResult.SIM_TIMEOUT)
+
+    def test_4_silent_stack_is_an_error_not_a_hang(self):
+        state, r = self.run_goal("worker_1", to_goal_msg(short_exp1(15)), timeout=60.0)
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertEqual(r.termination, RunScenarioResult.ERROR)
+        self.assertIn("no command from the stack", r.error)
+
+    def test_5_missing_stack_node_is_named(self):
+        state, r = self.run_goal("worker_2", to_goal_msg(short_exp1(16)), timeout=60.0)
+        self.assertEqual(state, GoalStatus.ABORTED)
+        self.assertIn("planner", r.error)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("asg_sim", "scene_worker", SceneWorkerTest)
