@@ -31,6 +31,7 @@ struct VehicleParams {
   double friction_slip = 1.5;
   double roll_influence = 0.1;
   double max_steer = 0.6;            ///< [rad] wheel angle at steering = 1
+  double max_steer_rate = 1.2;       ///< [rad/s] steering actuator slew rate (lock to lock in 1 s)
   double max_engine_force = 3200.0;  ///< [N] total at throttle = 1 (four-wheel drive)
   double max_brake = 60.0;           ///< Bullet brake impulse per wheel at brake = 1
   double rolling_brake = 2.0;        ///< brake applied when throttle and brake are 0 (engine drag)
@@ -81,6 +82,8 @@ class PhysicsWorld {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   VehicleParams params_;
+  double steer_target_ = 0.0;  // [rad] commanded wheel angle
+  double steer_ = 0.0;         // [rad] actual wheel angle, slewing towards the target
 };
 
 }  // namespace asg_sim

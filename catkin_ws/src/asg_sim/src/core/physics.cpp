@@ -154,19 +154,24 @@ void PhysicsWorld::setCommand(const Command& cmd) {
   auto clamp = [](double v, double lo, double hi) { return std::isfinite(v) ? std::clamp(v, lo, hi) : 0.0; };
   const double throttle = clamp(cmd.throttle, 0.0, 1.0);
   const double brake = clamp(cmd.brake, 0.0, 1.0);
-  const double steer = clamp(cmd.steering, -1.0, 1.0) * params_.max_steer;
+  steer_target_ = clamp(cmd.steering, -1.0, 1.0) * params_.max_steer;
   auto* v = impl_->vehicle.get();
   const double rolling = (throttle == 0.0 && brake == 0.0) ? params_.rolling_brake : 0.0;
   for (int i = 0; i < 4; ++i) {
     v->applyEngineForce(throttle * params_.max_engine_force / 4.0, i);
     v->setBrake(brake * params_.max_brake + rolling, i);
-    v->setSteeringValue(i < 2 ? steer : 0.0, i);
   }
 }
 
 void PhysicsWorld::step(double dt, int substeps) {
   const double h = dt / substeps;
-  for (int i = 0; i < substeps; ++i) impl_->world.stepSimulation(h, 0);
+  for (int i = 0; i < substeps; ++i) {
+    const double max_change = params_.max_steer_rate * h;
+    steer_ += std::clamp(steer_target_ - steer_, -max_change, max_change);
+    impl_->vehicle->setSteeringValue(steer_, 0);
+    impl_->vehicle->setSteeringValue(steer_, 1);
+    impl_->world.stepSimulation(h, 0);
+  }
 }
 
 VehicleState PhysicsWorld::state() const {

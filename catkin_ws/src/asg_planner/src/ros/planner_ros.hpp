@@ -1,0 +1,59 @@
+#pragma once
+// PlannerROS: thin ROS adapter of asg_planner::VotingPlanner. Pairs depth and label frames by
+// stamp with the odometry of the same stamp, votes, and answers each lockstep Tick once every
+// frame the worker published up to it has been voted. Topics and parameters: docs/planner.md.
+
+#include <asg_msgs/ScenarioInfo.h>
+#include <asg_msgs/Tick.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <deque>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "asg_planner/voting_planner.hpp"
+
+namespace asg_planner {
+
+class PlannerROS {
+ public:
+  PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh);
+
+ private:
+  void readParameters();
+  void onScenario(const asg_msgs::ScenarioInfoConstPtr& msg);
+  void onDepth(const sensor_msgs::ImageConstPtr& msg);
+  void onLabels(const sensor_msgs::ImageConstPtr& msg);
+  void onInfo(const sensor_msgs::CameraInfoConstPtr& msg);
+  void onOdom(const nav_msgs::OdometryConstPtr& msg);
+  void onTf(const tf2_msgs::TFMessageConstPtr& msg);
+  void onTick(const asg_msgs::TickConstPtr& msg);
+  // Votes every complete frame, then answers pending ticks whose inputs are all in.
+  void process();
+  bool frameValid(const sensor_msgs::Image& depth, const sensor_msgs::Image& labels, std::string* why) const;
+  void publishViz(const ros::Time& stamp);
+
+  ros::NodeHandle nh_, pnh_;
+  PlannerParams params_;
+  std::string ack_name_;
+  bool publish_markers_ = true;
+  std::unique_ptr<VotingPlanner> planner_;
+  ros::Publisher cmd_pub_, ack_pub_, state_pub_, path_pub_, votes_pub_, lookahead_pub_, grid_pub_;
+  ros::Subscriber scenario_sub_, depth_sub_, labels_sub_, info_sub_, odom_sub_, tf_sub_, tick_sub_;
+
+  uint32_t scenario_id_ = 0;
+  bool have_mount_ = false, have_info_ = false;
+  Eigen::Isometry3d T_base_optical_ = Eigen::Isometry3d::Identity();
+  Intrinsics K_;
+  std::map<ros::Time, sensor_msgs::ImageConstPtr> depth_, labels_;
+  std::map<ros::Time, nav_msgs::OdometryConstPtr> odom_;
+  std::deque<asg_msgs::TickConstPtr> ticks_;
+  uint32_t frames_done_ = 0;
+};
+
+}  // namespace asg_planner

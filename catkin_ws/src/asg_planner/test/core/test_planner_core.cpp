@@ -1,0 +1,217 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "asg_planner/astar.hpp"
+#include "asg_planner/path_follower.hpp"
+#include "asg_planner/projection.hpp"
+#include "asg_planner/vote_grid.hpp"
+#include "asg_planner/voting_planner.hpp"
+
+using namespace asg_planner;
+
+namespace {
+
+// Optical frame of a level camera at (x, y, 1.4) looking along map +x.
+Eigen::Isometry3d levelCamera(double x, double y) {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;  // columns: optical x, y, z in map
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() << x, y, 1.4;
+  return T;
+}
+
+struct Frame {
+  int w = 64, h = 64;
+  std::vector<float> depth = std::vector<float>(64 * 64, NAN);
+  std::vector<uint8_t> labels = std::vector<uint8_t>(64 * 64, 0);
+};
+
+Intrinsics K64() { return {32.0, 32.0, 31.5, 31.5}; }  // 90 degrees, 64 px
+
+}  // namespace
+
+TEST(VoteGrid, NearestVertexAndCap) {
+  VoteGrid g(5.0, 50);
+  EXPECT_EQ(g.nearest(12.4, -2.6).i, 2);
+  EXPECT_EQ(g.nearest(12.4, -2.6).j, -1);
+  EXPECT_EQ(g.add({2, 3}, 30), 30u);
+  EXPECT_EQ(g.add({2, 3}, 30), 50u);  // capped
+  EXPECT_EQ(g.add({2, 3}), 50u);
+  EXPECT_EQ(g.votes({2, 3}), 50u);
+  EXPECT_EQ(g.votes({3, 2}), 0u);
+  g.add({-4, 7}, 1);
+  const auto v = g.voted();
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_EQ(v[0].first.i, -4);
+  EXPECT_EQ(v[1].second, 50u);
+  g.clear();
+  EXPECT_TRUE(g.voted().empty());
+}
+
+TEST(Projection, WallVotesLandOnTheRightVertices) {
+  // A wall 20 m ahead of a camera at (30, 50): labelled pixels of rows below the horizon
+  // (world z < 1.4 m) and the columns of the central 16 px. Planar depth 20 m.
+  Frame f;
+  for (int v = 32; v < 64; ++v)
+    for (int u = 24; u < 40; ++u) {
+      f.depth[v * 64 + u] = 20.0f;
+      f.labels[v * 64 + u] = 1;
+    }
+  VoteGrid g(5.0, 50);
+  const size_t n = castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), levelCamera(30, 50),
+                             ProjectionParams(), &g);
+  EXPECT_EQ(n, 32u * 16u);
+  // y = 50 - (u - 31.5) / 32 * 20 spans 45.3 .. 54.7: vertices j = 9, 10, 11; x = 50: i = 10.
+  std::set<int> js;
+  for (const auto& [vx, votes] : g.voted()) {
+    EXPECT_EQ(vx.i, 10);
+    js.insert(vx.j);
+    EXPECT_LE(votes, 50u);
+  }
+  EXPECT_EQ(js, (std::set<int>{9, 10, 11}));
+  EXPECT_EQ(g.votes({10, 10}), 50u);  // many pixels, capped
+}
+
+TEST(Projection, HighPointsAndOtherLabelsDoNotVote) {
+  Frame f;
+  // Rows v < 27 at 20 m are higher than 1.4 + 20 * (31.5 - 27) / 32 = 4.2 m; v = 30 is ~2.3 m.
+  for (int v = 0; v < 31; ++v)
+    for (int u = 0; u < 64; ++u) {
+      f.depth[v * 64 + u] = 20.0f;
+      f.labels[v * 64 + u] = 1;
+    }
+  for (int u = 0; u < 64; ++u) {  // ground and sky labels below
+    f.depth[60 * 64 + u] = 5.0f;
+    f.labels[60 * 64 + u] = (u % 2) ? 0 : 2;
+  }
+  VoteGrid g(1.0, 50);
+  EXPECT_EQ(castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), levelCamera(0, 0),
+                      ProjectionParams(), &g), 0u);
+  EXPECT_TRUE(g.voted().empty());
+}
+
+TEST(AStar, CostFormulaMatchesHandComputedEdge) {
+  VoteGrid g(5.0, 50);
+  g.add({1, 1}, 10);  // vertex (5, 5)
+  g.add({0, 0}, 50);  // vertex (0, 0)
+  AStarParams p;      // alpha 1/50, sigma 2.5
+  // Midpoint (2.5, 0): d^2 = 31.25 and 6.25.
+  const double expected = 5.0 * (1.0 + 10.0 / 50.0 * std::exp(-31.25 / 12.5) +
+                                  50.0 / 50.0 * std::exp(-6.25 / 12.5));
+  EXPECT_NEAR(edgeCost({0, 0}, {5, 0}, g, p), expected, 1e-12);
+  EXPECT_NEAR(expected, 5.0 * (1 + 0.0164170 + 0.6065307), 1e-6);
+  EXPECT_DOUBLE_EQ(edgeCost({0, 0}, {5, 0}, VoteGrid(5.0), p), 5.0);
+}
+
+TEST(AStar, StraightPathOnEmptyGrid) {
+  VoteGrid g(5.0);
+  AStarParams p;
+  const PlannedPath path = planPath(g, p, 100.0, {10, 50}, {90, 50});
+  ASSERT_TRUE(path.found);
+  for (const auto& q : path.points) EXPECT_DOUBLE_EQ(q.y(), 50.0);
+  EXPECT_NEAR(path.cost, 80.0, 1e-9);
+  const PlannedPath diag = planPath(g, p, 100.0, {20, 20}, {80, 80});
+  ASSERT_TRUE(diag.found);
+  for (const auto& q : diag.points) EXPECT_NEAR(q.x(), q.y(), 1e-9);
+  EXPECT_NEAR(diag.cost, 60.0 * M_SQRT2, 1e-9);
+}
+
+TEST(AStar, DetoursAroundAVotedWall) {
+  // A fully voted wall three vertices thick, x = 45 .. 55, y = 35 .. 65, across the straight line.
+  VoteGrid g(5.0);
+  for (int i = 9; i <= 11; ++i)
+    for (int j = 7; j <= 13; ++j) g.add({i, j}, 50);
+  AStarParams p;
+  const PlannedPath path = planPath(g, p, 100.0, {10, 50}, {90, 50});
+  ASSERT_TRUE(path.found);
+  double len = 0;
+  for (size_t i = 1; i < path.points.size(); ++i) len += (path.points[i] - path.points[i - 1]).norm();
+  EXPECT_GT(len, 82.0);  // longer than the straight 80 m
+  for (const auto& q : path.points) {
+    if (std::abs(q.x() - 50.0) <= 5.0) {
+      EXPECT_GE(std::abs(q.y() - 50.0), 20.0) << q.transpose();
+    }
+  }
+  // Cheaper than pushing straight through.
+  double straight = 0;
+  for (int k = 0; k < 16; ++k) straight += edgeCost({10.0 + 5 * k, 50}, {15.0 + 5 * k, 50}, g, p);
+  EXPECT_LT(path.cost, straight);
+}
+
+TEST(AStar, OneVotedVertexIsCheaperToCrossThanAWideDetour) {
+  // Votes are soft costs (alpha = 1/50): a lone voted vertex on the line is driven past closely.
+  VoteGrid g(5.0);
+  g.add({10, 10}, 50);
+  const PlannedPath path = planPath(g, AStarParams(), 100.0, {10, 50}, {90, 50});
+  ASSERT_TRUE(path.found);
+  for (const auto& q : path.points) EXPECT_LE(std::abs(q.y() - 50.0), 5.0 + 1e-9);
+}
+
+TEST(Follower, LookaheadOnPath) {
+  const std::vector<Eigen::Vector2d> path = {{0, 0}, {10, 0}, {10, 10}};
+  const auto la = PathFollower::lookahead(path, {2, 1}, 5.0);
+  EXPECT_NEAR((la - Eigen::Vector2d(2, 1)).norm(), 5.0, 1e-9);
+  EXPECT_NEAR(la.y(), 0.0, 1e-9);
+  EXPECT_GT(la.x(), 2.0);
+  EXPECT_TRUE(PathFollower::lookahead(path, {10, 8}, 5.0).isApprox(Eigen::Vector2d(10, 10)));
+  // Far from the path: the closest point.
+  EXPECT_TRUE(PathFollower::lookahead(path, {5, -30}, 5.0).isApprox(Eigen::Vector2d(5, 0)));
+}
+
+TEST(Follower, ConvergesOntoStraightPathFromOffset) {
+  PathFollower f;
+  f.setPath({{0, 0}, {300, 0}});
+  VehicleState2D s{0.0, 3.0, 0.0, 5.0};
+  const double wheelbase = 2.3, max_steer = 0.6, dt = 0.05;
+  double max_abs_y_late = 0;
+  for (int k = 0; k < 400; ++k) {  // 20 s at 20 Hz, kinematic bicycle at 5 m/s
+    const ControlCommand c = f.update(k * dt, s, 5.0);
+    const double delta = c.steering * max_steer;
+    s.yaw += s.speed / wheelbase * std::tan(delta) * dt;
+    s.x += s.speed * std::cos(s.yaw) * dt;
+    s.y += s.speed * std::sin(s.yaw) * dt;
+    if (k > 200) max_abs_y_late = std::max(max_abs_y_late, std::abs(s.y));
+  }
+  EXPECT_LT(max_abs_y_late, 0.2);
+  EXPECT_LT(std::abs(s.yaw), 0.05);
+}
+
+TEST(Follower, SpeedControlAndStop) {
+  PathFollower f;
+  f.setPath({{0, 0}, {100, 0}});
+  EXPECT_GT(f.update(0.0, {0, 0, 0, 0.0}, 5.0).throttle, 0.5);
+  const auto fast = f.update(0.05, {0, 0, 0, 7.0}, 5.0);
+  EXPECT_EQ(fast.throttle, 0.0);
+  EXPECT_GT(fast.brake, 0.0);
+  PathFollower none;
+  const auto c = none.update(0.0, {}, 5.0);  // no path yet: hold still
+  EXPECT_EQ(c.brake, 1.0);
+  EXPECT_EQ(c.target_speed, 0.0);
+}
+
+TEST(VotingPlanner, ReplansOnTheSimulatedClock) {
+  VotingPlanner p;
+  p.reset({80, 80, 11, 100, 5});
+  Frame f;
+  bool replanned = false;
+  p.tick(0.0, {20, 20, 0, 0}, &replanned);
+  EXPECT_FALSE(replanned);  // no frame yet
+  p.addFrame(0.2, f.depth.data(), f.labels.data(), 64, 64, K64(), levelCamera(20, 20));
+  std::vector<double> plan_times;
+  for (int k = 0; k <= 120; ++k) {  // 6 s of 20 Hz ticks
+    p.tick(k * 0.05, {20, 20, 0, 0}, &replanned);
+    if (replanned) plan_times.push_back(k * 0.05);
+  }
+  ASSERT_EQ(plan_times.size(), 3u);
+  EXPECT_NEAR(plan_times[0], 1.2, 1e-9);
+  EXPECT_NEAR(plan_times[1], 3.2, 1e-9);
+  EXPECT_NEAR(plan_times[2], 5.2, 1e-9);
+  EXPECT_TRUE(p.path().found);
+  p.reset({80, 80, 11, 100, 5});
+  EXPECT_EQ(p.plans(), 0u);
+  EXPECT_FALSE(p.path().found);
+}
