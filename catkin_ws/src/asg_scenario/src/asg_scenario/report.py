@@ -38,8 +38,11 @@ def write_result_yaml(path: str, result: dict):
 
 
 def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: str = "",
-             removed: Optional[set] = None):
-    """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory."""
+             removed: Optional[set] = None, background=None):
+    """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory.
+
+    background: optional HxWx3 uint8 rendering of [0, size]^2 (row 0 at y = size) drawn below.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -49,6 +52,8 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
     size = scenario["structural"]["landscape"]["size"]
     op = scenario["operational"]
     fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
+    if background is not None:
+        ax.imshow(background, extent=(0, size, 0, size), origin="upper", interpolation="bilinear")
     ax.add_patch(plt.Rectangle((0, 0), size, size, fill=False, color="0.4"))
     colors = {"juniper": "darkgreen", "barberry": "firebrick"}
     for i, layout in enumerate(scenario["structural"]["layouts"]):
@@ -58,7 +63,8 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
                 continue
             gone = (i, j) in removed
             ax.add_patch(Circle((inst["x"], inst["y"]), mesh.collision_radius * inst["scale"],
-                                color=colors.get(layout["mesh_name"], "k"), fill=not gone,
+                                color=colors.get(layout["mesh_name"], "k"),
+                                fill=not gone and background is None,
                                 ls="--" if gone else "-", alpha=0.8))
     for (x, y), r, c, label in (((op["start_x"], op["start_y"]), op["safety_radius"], "tab:blue",
                                  "start"), ((op["goal_x"], op["goal_y"]), op["goal_radius"],
@@ -66,7 +72,7 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
         ax.add_patch(Circle((x, y), r, fill=False, color=c, ls=":"))
         ax.plot([x], [y], "o", color=c, label=label)
     if len(xy):
-        ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="tab:purple", lw=1.5,
+        ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="magenta", lw=1.8,
                 label="vehicle")
     ax.set_xlim(-2, size + 2)
     ax.set_ylim(-2, size + 2)

@@ -33,6 +33,8 @@ def main(argv=None):
                         help="wall-clock limit for the whole run [s] (600)")
     parser.add_argument("--scenario-id", type=int, default=None,
                         help="override the file's scenario_id")
+    parser.add_argument("--top-down", type=int, default=768,
+                        help="size of the rendered top-down picture [px] (768; 0: none)")
     args = parser.parse_args(argv)
 
     try:
@@ -65,7 +67,9 @@ def main(argv=None):
 
     print(f"running scenario {scenario['scenario_id']} ({scenario['name'] or args.scenario})",
           flush=True)
-    client.send_goal(to_goal_msg(scenario), feedback_cb=feedback)
+    goal = to_goal_msg(scenario)
+    goal.top_down_px = max(0, args.top_down)
+    client.send_goal(goal, feedback_cb=feedback)
     if not client.wait_for_result(rospy.Duration(args.timeout)):
         client.cancel_goal()
         print(f"error: no result within {args.timeout:g} s", file=sys.stderr)
@@ -94,8 +98,13 @@ def main(argv=None):
     with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
         f.write(dump_scenario(scenario))
     removed = {(int(r.layout_index), int(r.instance_index)) for r in result.removed_obstacles}
+    background = None
+    if result.top_down.width > 0 and result.top_down.encoding == "rgb8":
+        import numpy as np
+        background = np.frombuffer(bytes(result.top_down.data), dtype=np.uint8).reshape(
+            result.top_down.height, result.top_down.width, 3)
     plot_run(os.path.join(args.out, "run.png"), scenario, xy,
-             f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed)
+             f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed, background)
     print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  path {summary['path_length']:.1f} m"
           f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}"
                                                          if result.error else ""))
