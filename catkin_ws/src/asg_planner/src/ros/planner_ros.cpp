@@ -100,6 +100,15 @@ void PlannerROS::readParameters() {
 }
 
 void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
+  asg_msgs::StackAck ack;
+  ack.node = ack_name_;
+  ack.scenario_id = msg->scenario_id;
+  ack.run = msg->run;
+  // The worker repeats the announcement until every stack node has acked: reset once, ack always.
+  if (have_run_ && msg->run == run_) {
+    ack_pub_.publish(ack);
+    return;
+  }
   Task task;
   task.goal_x = msg->goal_x;
   task.goal_y = msg->goal_y;
@@ -108,6 +117,8 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   task.speed = msg->speed;
   planner_->reset(task);
   scenario_id_ = msg->scenario_id;
+  run_ = msg->run;
+  have_run_ = true;
   depth_.clear();
   labels_.clear();
   odom_.clear();
@@ -131,9 +142,6 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
     grid_pub_.publish(grid);
     publishViz(ros::Time());
   }
-  asg_msgs::StackAck ack;
-  ack.node = ack_name_;
-  ack.scenario_id = msg->scenario_id;
   ack_pub_.publish(ack);
 }
 

@@ -47,6 +47,8 @@ class PlannerROS {
   ros::Subscriber scenario_sub_, depth_sub_, labels_sub_, info_sub_, odom_sub_, tf_sub_, tick_sub_;
 
   uint32_t scenario_id_ = 0;
+  uint32_t run_ = 0;
+  bool have_run_ = false;
   bool have_mount_ = false, have_info_ = false;
   Eigen::Isometry3d T_base_optical_ = Eigen::Isometry3d::Identity();
   Intrinsics K_;

@@ -69,12 +69,15 @@ def main(argv=None):
           flush=True)
     goal = to_goal_msg(scenario)
     goal.top_down_px = max(0, args.top_down)
+    import time
+    wall0 = time.monotonic()
     client.send_goal(goal, feedback_cb=feedback)
     if not client.wait_for_result(rospy.Duration(args.timeout)):
         client.cancel_goal()
         print(f"error: no result within {args.timeout:g} s", file=sys.stderr)
         return 4
     result = client.get_result()
+    wall = time.monotonic() - wall0
     samples = _samples(result)
     xy = [(s["x"], s["y"]) for s in samples]
     os.makedirs(args.out, exist_ok=True)
@@ -85,6 +88,7 @@ def main(argv=None):
         "termination": name,
         "error": result.error,
         "sim_time": float(result.sim_time),
+        "wall_time": wall,
         "num_control_msgs": int(result.num_control_msgs),
         "path_length": path_length(xy),
         "trajectory_samples": len(samples),
@@ -105,7 +109,8 @@ def main(argv=None):
             result.top_down.height, result.top_down.width, 3)
     plot_run(os.path.join(args.out, "run.png"), scenario, xy,
              f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed, background)
-    print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  path {summary['path_length']:.1f} m"
+    print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  wall {wall:.2f} s "
+          f"({result.sim_time / max(wall, 1e-9):.1f}x real time)  path {summary['path_length']:.1f} m"
           f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}"
                                                          if result.error else ""))
     print(f"wrote {args.out}/result.yaml, trajectory.csv, scenario.yaml, run.png")

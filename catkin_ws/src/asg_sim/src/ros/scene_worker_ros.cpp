@@ -110,6 +110,8 @@ std::string formatSeconds(double s) {
 
 SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh) {
   readParameters();
+  // Run tokens differ across worker restarts too, so a stack that outlives its worker resets.
+  current_run_ = uint32_t(std::chrono::system_clock::now().time_since_epoch().count() / 1000000) << 8;
   // llvmpipe reads LP_NUM_THREADS when the first context is made; an explicit environment wins.
   setenv("LP_NUM_THREADS", std::to_string(params_.render_threads).c_str(), 0);
   CameraModel cam;
@@ -191,7 +193,7 @@ void SceneWorkerROS::onCommand(const asg_msgs::VehicleCommandConstPtr& msg) {
 
 void SceneWorkerROS::onAck(const asg_msgs::StackAckConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (msg->scenario_id != current_id_) return;
+  if (msg->scenario_id != current_id_ || msg->run != current_run_) return;
   acks_.insert(msg->node);
   cv_.notify_all();
 }
@@ -206,9 +208,16 @@ bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
       if (!acks_.count(n)) return false;
     return true;
   };
+  auto next_announce = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
   while (!all() && std::chrono::steady_clock::now() < deadline) {
     if (!ros::ok() || server_->isPreemptRequested()) return false;
     cv_.wait_for(lock, std::chrono::milliseconds(50));
+    if (std::chrono::steady_clock::now() >= next_announce) {
+      // A stack node that came up late, or whose ack went out before our subscription was
+      // connected, hears the announcement again; acks are idempotent.
+      scenario_pub_.publish(announcement_);
+      next_announce += std::chrono::milliseconds(500);
+    }
   }
   missing->clear();
   for (const auto& n : params_.stack_nodes)
@@ -327,6 +336,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     current_id_ = goal->scenario_id;
+    ++current_run_;
     acks_.clear();
     have_command_ = false;
     awaited_ = ros::Time();
@@ -336,6 +346,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   const auto& op = goal->scene.operational;
   asg_msgs::ScenarioInfo info;
   info.scenario_id = goal->scenario_id;
+  info.run = current_run_;
   info.landscape_size = goal->scene.structural.landscape.size;
   info.goal_x = op.goal_x;
   info.goal_y = op.goal_y;
@@ -344,6 +355,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   info.start_x = op.start_x;
   info.start_y = op.start_y;
   info.start_yaw = op.start_yaw;
+  announcement_ = info;
   scenario_pub_.publish(info);
   std::string missing;
   if (!waitForAcks(goal->scenario_id, &missing))

@@ -7,6 +7,7 @@
 
 #include <actionlib/server/simple_action_server.h>
 #include <asg_msgs/RunScenarioAction.h>
+#include <asg_msgs/ScenarioInfo.h>
 #include <asg_msgs/StackAck.h>
 #include <asg_msgs/VehicleCommand.h>
 #include <ros/ros.h>
@@ -65,6 +66,7 @@ class SceneWorkerROS {
   std::mutex mutex_;
   std::condition_variable cv_;
   uint32_t current_id_ = 0;
+  uint32_t current_run_ = 0;  // goals served so far
   std::set<std::string> acks_;
   bool have_command_ = false;
   asg_msgs::VehicleCommand latest_;  // lockstep: the one matching the awaited stamp
@@ -72,6 +74,7 @@ class SceneWorkerROS {
   uint32_t camera_frames_ = 0;
   ros::Time last_camera_stamp_;
   CameraFrame frame_;
+  asg_msgs::ScenarioInfo announcement_;
 };
 
 }  // namespace asg_sim

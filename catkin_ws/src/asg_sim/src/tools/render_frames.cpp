@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     for (int v = 0; v < h; ++v)
       for (int u = 0; u < w; ++u) {
         const float d = frame.depth.at(u, v);
-        depth.at<uint8_t>(v, u) = std::isfinite(d) ? uint8_t(255.0 * std::min(1.0f, d / 60.0f)) : 255;
+        depth.at<uint8_t>(v, u) = std::isfinite(d) ? uint8_t(255.0 * std::min(1.0f, d / 40.0f)) : 255;
         labels.at<cv::Vec3b>(v, u) = palette[std::min<int>(frame.labels.at(u, v), 2)];
       }
     cv::Mat depth_color;

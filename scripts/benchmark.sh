@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Prints the benchmark figures recorded in docs/benchmarks.md. One core per process
+# (LP_NUM_THREADS=1, taskset), medians over repeats inside each tool; ROS round trips run
+# REPEATS times and print each. Builds first if needed.
+#   bash scripts/benchmark.sh [REPEATS]
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+REPEATS="${1:-3}"
+install_packages
+build_workspace ON
+export LP_NUM_THREADS=1
+BIN="$WS/devel/lib"
+log "simulator core (render, shadow pass, physics, in-process scripted run)"
+for e in 1 3; do taskset -c 0 "$BIN/asg_sim/asg_sim_benchmark" "$REPO/scenarios/exp$e.yaml" 200 7; done
+log "planner core (votes per frame, A* per replan)"
+for e in 1 3; do
+  taskset -c 0 "$BIN/asg_planner/asg_planner_benchmark" "$REPO/scenarios/exp$e.yaml" 5 5 150 7
+  taskset -c 0 "$BIN/asg_planner/asg_planner_benchmark" "$REPO/scenarios/exp$e.yaml" 1 2 150 7
+done
+export ROS_MASTER_URI="http://127.0.0.1:${ASG_BENCH_PORT:-11398}" ROS_HOSTNAME=127.0.0.1
+TMP="$(mktemp -d)"
+export ROS_LOG_DIR="$TMP"
+for launch in scripted_worker worker; do
+  log "ROS round trip, Exp. 1, lockstep, $launch.launch"
+  roslaunch -p "${ROS_MASTER_URI##*:}" "$REPO/launch/$launch.launch" >"$TMP/$launch.log" 2>&1 &
+  pid=$!
+  for i in $(seq "$REPEATS"); do
+    rosrun asg_scenario run_scenario "$REPO/scenarios/exp1.yaml" --out "$TMP/run" --top-down 0 \
+      --scenario-id "$((100 + i))" | grep outcome
+  done
+  kill "$pid"; wait "$pid" 2>/dev/null || true
+  sleep 2
+done
+rm -rf "$TMP"
