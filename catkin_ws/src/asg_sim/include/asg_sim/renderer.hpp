@@ -39,6 +39,7 @@ struct CameraFrame {
   DepthImage depth;
   LabelImage labels;
   InstanceImage instances;
+  LabelImage lit;  ///< 0 (sun fully shadowed) .. 255 (fully lit); with labels only
 };
 
 /// Owns one OSMesa context; one per thread that renders. Not copyable.

@@ -101,7 +101,7 @@ void main() {
   vec3 c = albedo * (uAmbient + uSunIntensity * diffuse * lit);
   oColor = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.6)), 1.0);
   oDepth = vEyeDepth;
-  oLabel = uLabel;
+  oLabel = vec4(uLabel.rgb, lit);  // a: how lit the surface is (0 = full shadow)
 }
 )";
 
@@ -521,13 +521,16 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
     readRows(GL_COLOR_ATTACHMENT2, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
     out->labels.resize(w, h);
     out->instances.resize(w, h);
+    out->lit.resize(w, h);
     for (size_t i = 0, n = size_t(w) * h; i < n; ++i) {
       out->labels.data[i] = gl_->rows8[i * 4];
       out->instances.data[i] = uint16_t(gl_->rows8[i * 4 + 1] | (gl_->rows8[i * 4 + 2] << 8));
+      out->lit.data[i] = gl_->rows8[i * 4 + 3];
     }
   } else {
     out->labels = LabelImage();
     out->instances = InstanceImage();
+    out->lit = LabelImage();
   }
   checkGl("Renderer::renderCamera");
 }

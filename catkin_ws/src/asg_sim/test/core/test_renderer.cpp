@@ -72,6 +72,8 @@ TEST(Renderer, TreeShadowDarkensTheGround) {
   setScene(s);
   renderer().renderCamera(cameraAt(35, 50, 0), true, &shaded);
   ASSERT_EQ(shaded.labels.at(u, v), kTraversable);  // it is ground, not the tree
+  EXPECT_LT(shaded.lit.at(u, v), 30);                // and the shadow mask says so
+  EXPECT_GT(lit.lit.at(u, v), 225);
   EXPECT_LT(brightness(shaded, u, v), 0.75 * brightness(lit, u, v));
   // Ground beside the shadow stays lit.
   EXPECT_NEAR(brightness(shaded, 20, 250), brightness(lit, 20, 250), 3);
