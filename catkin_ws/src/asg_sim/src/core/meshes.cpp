@@ -99,8 +99,9 @@ Mesh makeBarberry() {
              return base * (1.0f + 0.12f * std::sin(4.0f * th + 6.0f * z));
            },
            [](int r, int s) {
+             // Purple-leaved barberry (the common 'Atropurpurea' form): dark red-violet foliage.
              const float v = hash01(r + 100, s);
-             return V3{0.30f + 0.12f * v, 0.22f + 0.06f * v, 0.10f};
+             return V3{0.20f + 0.08f * v, 0.05f + 0.03f * v, 0.08f + 0.03f * v};
            });
   return m;
 }

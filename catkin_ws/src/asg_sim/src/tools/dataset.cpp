@@ -2,7 +2,7 @@
 //   asg_sim_dataset --out DIR --count N [--seed S] [--meshes juniper,barberry]
 //                   [--frames-per-scene 8] [--size 100]
 // Random scenes (deterministic from the seed), sun inclinations cycling through 0, 15, ..., 90
-// degrees, camera poses mostly facing an obstacle at 4..30 m. Writes DIR/images/NNNNNN_{rgb,
+// degrees, 10..30 obstacles per scene, camera poses mostly facing an obstacle at 3..20 m. Writes DIR/images/NNNNNN_{rgb,
 // labels,lit}.png and DIR/manifest.csv (one row per frame). The same arguments give the same
 // files on the same build.
 #include <cmath>
@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
       spec.textural.sun_inclination_deg = 15.0 * (scene % 7);
       spec.textural.sun_yaw_deg = uniform(rng, -180.0, 180.0);
       spec.textural.ground_texture_seed = uint32_t(rng() & 0xFFFF);
-      const int n = 6 + int(uniform(rng, 0, 15));
+      const int n = 10 + int(uniform(rng, 0, 21));
       std::vector<std::pair<double, double>> spots;
       for (const auto& m : a.meshes) spec.layouts.push_back({m, {}});
       for (int k = 0; k < n; ++k) {
@@ -124,12 +124,12 @@ int main(int argc, char** argv) {
       placeObstacles(spec, &placed, &removed);
       renderer.setScene(spec, placed);
       for (int f = 0; f < a.frames_per_scene && index < a.count; ++f) {
-        // Face an obstacle from 4..30 m (70 %), or anywhere.
+        // Face an obstacle from 3..20 m (80 %), or anywhere.
         double x = 0, y = 0, yaw = 0;
         for (int attempt = 0; attempt < 50; ++attempt) {
-          if (!placed.empty() && uniform(rng, 0, 1) < 0.7) {
+          if (!placed.empty() && uniform(rng, 0, 1) < 0.8) {
             const auto& o = placed[size_t(uniform(rng, 0, placed.size()))];
-            const double r = uniform(rng, 4.0, 30.0), th = uniform(rng, -M_PI, M_PI);
+            const double r = uniform(rng, 3.0, 20.0), th = uniform(rng, -M_PI, M_PI);
             x = o.pose.x + r * std::cos(th);
             y = o.pose.y + r * std::sin(th);
             yaw = std::atan2(o.pose.y - y, o.pose.x - x) + uniform(rng, -0.6, 0.6);

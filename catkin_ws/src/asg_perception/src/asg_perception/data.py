@@ -1,0 +1,77 @@
+"""Segmentation datasets written by `asg_sim_dataset` (no rospy).
+
+A dataset folder holds `manifest.csv` and `images/NNNNNN_{rgb,labels,lit}.png`: RGB frames, label
+images (0 traversable, 1 non-traversable, 2 sky) and sun-lit masks (0 shadow .. 255 lit).
+"""
+import csv
+import os
+from dataclasses import dataclass
+from typing import List, Optional
+
+import numpy as np
+
+
+class DatasetError(ValueError):
+    """A dataset folder is missing, malformed or inconsistent."""
+
+
+@dataclass
+class Frames:
+    """Decoded frames held in memory."""
+
+    rgb: np.ndarray     # N x H x W x 3 uint8
+    labels: np.ndarray  # N x H x W uint8
+    lit: np.ndarray     # N x H x W uint8
+    rows: List[dict]    # the manifest rows
+
+    def __len__(self):
+        return len(self.rows)
+
+
+def read_manifest(folder: str) -> List[dict]:
+    path = os.path.join(folder, "manifest.csv")
+    if not os.path.isfile(path):
+        raise DatasetError(f"{folder}: no manifest.csv (make one with asg_sim_dataset)")
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    need = {"index", "rgb", "labels", "lit", "sun_inclination_deg", "meshes"}
+    if rows and not need <= set(rows[0]):
+        raise DatasetError(f"{path}: columns {sorted(need - set(rows[0]))} missing")
+    if not rows:
+        raise DatasetError(f"{path}: no frames")
+    return rows
+
+
+def load_frames(folder: str, limit: Optional[int] = None, progress: bool = False) -> Frames:
+    """Decodes every frame of a dataset folder (or the first `limit`)."""
+    import cv2
+
+    rows = read_manifest(folder)[:limit]
+    rgb, labels, lit = [], [], []
+    it = rows
+    if progress:
+        from tqdm import tqdm
+        it = tqdm(rows, desc=f"loading {os.path.basename(folder.rstrip('/'))}", unit="frame")
+    for r in it:
+        paths = [os.path.join(folder, r[k]) for k in ("rgb", "labels", "lit")]
+        bgr = cv2.imread(paths[0], cv2.IMREAD_COLOR)
+        lab = cv2.imread(paths[1], cv2.IMREAD_UNCHANGED)
+        lt = cv2.imread(paths[2], cv2.IMREAD_UNCHANGED)
+        for p, img in zip(paths, (bgr, lab, lt)):
+            if img is None:
+                raise DatasetError(f"{p}: missing or not an image")
+        if lab.shape != bgr.shape[:2] or lt.shape != bgr.shape[:2]:
+            raise DatasetError(f"frame {r['index']}: image sizes differ")
+        if lab.max() > 2:
+            raise DatasetError(f"{paths[1]}: label {int(lab.max())} outside 0..2")
+        rgb.append(bgr[:, :, ::-1])
+        labels.append(lab)
+        lit.append(lt)
+    return Frames(np.stack(rgb), np.stack(labels), np.stack(lit), rows)
+
+
+def to_tensor(rgb: np.ndarray):
+    """N x H x W x 3 uint8 -> N x 3 x H x W float32 in [0, 1]."""
+    import torch
+
+    return torch.from_numpy(np.ascontiguousarray(rgb)).permute(0, 3, 1, 2).float().div_(255.0)

@@ -1,0 +1,88 @@
+"""Evaluation of U-Net models on a held-apart dataset (no rospy).
+
+    python3 -m asg_perception.evaluate --data DIR MODEL.pt [MODEL.pt ...] [--json OUT] [--panels PNG]
+
+Prints per-class IoU, pixel accuracy and the shadow false-obstacle rate (ground pixels in sun
+shadow predicted non-traversable) of each model, and optionally writes them as JSON and an
+image/label/prediction panel.
+"""
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+from .data import DatasetError, load_frames
+from .model import CLASSES
+from .train import evaluate, load_model, predict
+
+PALETTE = np.array([[80, 160, 80], [200, 40, 40], [140, 200, 230]], np.uint8)  # RGB per class
+
+
+def panels(path: str, frames, models: dict, picks):
+    """Rows: RGB, ground truth, each model's prediction; columns: the picked frames."""
+    from PIL import Image, ImageDraw
+
+    rows = [frames.rgb[picks], PALETTE[frames.labels[picks]]]
+    names = ["camera", "ground truth"]
+    for name, model in models.items():
+        rows.append(PALETTE[predict(model, frames.rgb[picks])])
+        names.append(name)
+    h, w = frames.rgb.shape[1:3]
+    label_w = 110
+    canvas = Image.new("RGB", (label_w + len(picks) * (w + 4), len(rows) * (h + 4)), "white")
+    draw = ImageDraw.Draw(canvas)
+    for r, (imgs, name) in enumerate(zip(rows, names)):
+        draw.text((4, r * (h + 4) + h // 2), name, fill="black")
+        for c, img in enumerate(imgs):
+            canvas.paste(Image.fromarray(img), (label_w + c * (w + 4), r * (h + 4)))
+    canvas.save(path)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="evaluate_unet", description=__doc__.split("\n\n")[0])
+    p.add_argument("models", nargs="+", help="model files (name=path or path)")
+    p.add_argument("--data", required=True, help="held-apart dataset folder")
+    p.add_argument("--limit", type=int, default=0, help="first N frames only (0: all)")
+    p.add_argument("--json", default="", help="write the figures to this JSON file")
+    p.add_argument("--panels", default="", help="write an example panel PNG here")
+    p.add_argument("--threads", type=int, default=2)
+    a = p.parse_args(argv)
+    import torch
+    torch.set_num_threads(a.threads)
+    try:
+        frames = load_frames(a.data, a.limit or None, progress=True)
+        models = {}
+        for spec in a.models:
+            name, _, path = spec.rpartition("=")
+            name = name or os.path.splitext(os.path.basename(path))[0]
+            models[name] = load_model(path)
+    except (DatasetError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    results = {}
+    for name, model in models.items():
+        r = evaluate(model, frames)
+        results[name] = r
+        iou = "  ".join(f"{c} {r['iou'][c]:.3f}" for c in CLASSES)
+        print(f"{name:>8}: IoU {iou}  |  pixel acc {r['pixel_accuracy']:.4f}  |  shadow "
+              f"false-obstacle {r['shadow_false_obstacle_rate']:.4f}  lit false-obstacle "
+              f"{r['lit_false_obstacle_rate']:.4f}")
+    if len(results) == 2:
+        (na, ra), (nb, rb) = results.items()
+        ratio = ra["shadow_false_obstacle_rate"] / max(rb["shadow_false_obstacle_rate"], 1e-9)
+        print(f"shadow false-obstacle ratio {na}/{nb}: {ratio:.1f}")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)
+    if a.panels:
+        # Frames with the most shadowed ground, where the flaw shows.
+        shadow = ((frames.labels == 0) & (frames.lit < 128)).reshape(len(frames), -1).sum(1)
+        picks = np.argsort(-shadow, kind="stable")[:5]
+        panels(a.panels, frames, models, picks)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

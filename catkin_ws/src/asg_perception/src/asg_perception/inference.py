@@ -1,0 +1,53 @@
+"""Fast single-frame inference of the U-Net on CPU (no rospy).
+
+Backends, all giving the plain eager model's labels (checked by `asg_perception.benchmark` and
+the tests):
+- ``eager``: the model as trained, NCHW.
+- ``channels_last``: NHWC memory layout, which oneDNN convolutions run without reorders.
+- ``frozen``: TorchScript, frozen and optimised for inference (conv/activation fusion), NHWC.
+"""
+import numpy as np
+import torch
+
+from .train import load_model
+
+BACKENDS = ("eager", "channels_last", "frozen")
+
+
+class Segmenter:
+    """Labels (H x W uint8: 0 traversable, 1 non-traversable, 2 sky) for RGB frames."""
+
+    def __init__(self, model_path: str, backend: str = "frozen", threads: int = 1,
+                 height: int = 256, width: int = 256):
+        if backend not in BACKENDS:
+            raise ValueError(f"backend {backend!r}: one of {', '.join(BACKENDS)}")
+        if height % 32 or width % 32:
+            raise ValueError(f"frame size {width}x{height}: both must be multiples of 32")
+        torch.set_num_threads(threads)
+        self.backend = backend
+        self.shape = (height, width)
+        model = load_model(model_path)
+        self.channels_last = backend != "eager"
+        if self.channels_last:
+            model = model.to(memory_format=torch.channels_last)
+        if backend == "frozen":
+            example = self._input(np.zeros((height, width, 3), np.uint8))
+            with torch.no_grad():
+                traced = torch.jit.trace(model, example)
+                model = torch.jit.optimize_for_inference(torch.jit.freeze(traced))
+        self.model = model
+        self(np.zeros((height, width, 3), np.uint8))  # warm up (oneDNN primitive caches)
+
+    def _input(self, rgb: np.ndarray) -> torch.Tensor:
+        x = torch.from_numpy(rgb).permute(2, 0, 1).unsqueeze(0).float().div_(255.0)
+        return x.contiguous(memory_format=torch.channels_last) if self.channels_last else x.contiguous()
+
+    def __call__(self, rgb: np.ndarray) -> np.ndarray:
+        if rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
+            raise ValueError(f"expected H x W x 3 uint8 RGB, got {rgb.dtype} {rgb.shape}")
+        if rgb.shape[:2] != self.shape:
+            raise ValueError(f"frame is {rgb.shape[1]}x{rgb.shape[0]}, the segmenter was made "
+                             f"for {self.shape[1]}x{self.shape[0]}")
+        with torch.no_grad():
+            logits = self.model(self._input(rgb))
+        return logits[0].argmax(0).to(torch.uint8).numpy()

@@ -1,0 +1,25 @@
+import os
+import subprocess
+
+import pytest
+
+WS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+DATASET_TOOL = os.path.join(WS, "devel", "lib", "asg_sim", "asg_sim_dataset")
+
+
+def make_dataset(folder, count, seed, meshes="juniper,barberry"):
+    subprocess.run([DATASET_TOOL, "--out", str(folder), "--count", str(count), "--seed", str(seed),
+                    "--meshes", meshes], check=True, capture_output=True,
+                   env=dict(os.environ, LP_NUM_THREADS="1"))
+    return str(folder)
+
+
+@pytest.fixture(scope="session")
+def tiny_dataset(tmp_path_factory):
+    return make_dataset(tmp_path_factory.mktemp("tiny"), 48, 11)
+
+
+@pytest.fixture(scope="session")
+def test_dataset(tmp_path_factory):
+    """Held apart: a seed no shipped model was trained on, both obstacle types."""
+    return make_dataset(tmp_path_factory.mktemp("test"), 160, 3)

@@ -1,0 +1,55 @@
+#!/usr/bin/python3
+"""rostest: the segmenter turns published images into label images with the same stamps."""
+import os
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from asg_msgs.msg import ScenarioInfo, StackAck
+from PIL import Image as PILImage
+from sensor_msgs.msg import Image
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", ".."))
+
+
+class SegmenterTest(unittest.TestCase):
+    def test_labels_keep_stamps_and_order(self):
+        rospy.init_node("segmenter_test")
+        got, acks = [], []
+        rospy.Subscriber("/worker_0/labels", Image, got.append, queue_size=10)
+        rospy.Subscriber("/worker_0/stack_ack", StackAck, acks.append, queue_size=10)
+        pub = rospy.Publisher("/worker_0/camera/image", Image, queue_size=10)
+        ann = rospy.Publisher("/worker_0/scenario", ScenarioInfo, queue_size=1, latch=True)
+        ann.publish(ScenarioInfo(scenario_id=7, run=3))
+        deadline = rospy.Time.now() + rospy.Duration(60)
+        while not acks and rospy.Time.now() < deadline:
+            rospy.sleep(0.1)  # the model is loaded when it acknowledges
+        self.assertTrue(acks, "no acknowledgement from the segmenter")
+        self.assertEqual((acks[0].node, acks[0].scenario_id, acks[0].run), ("segmenter", 7, 3))
+        while pub.get_num_connections() == 0:
+            rospy.sleep(0.05)
+        # A rendered camera frame (left third of the docs panel): sky on top, ground below.
+        rgb = np.asarray(PILImage.open(os.path.join(REPO, "docs", "images", "shadows_panel.png"))
+                         .convert("RGB"))[:256, :256].copy()
+        stamps = [rospy.Time(k / 15.0) for k in range(3)]
+        for st in stamps:
+            msg = Image(height=256, width=256, encoding="rgb8", step=768, data=rgb.tobytes())
+            msg.header.stamp, msg.header.frame_id = st, "camera"
+            pub.publish(msg)
+        bad = Image(height=2, width=2, encoding="bgr8", step=6, data=bytes(12))
+        pub.publish(bad)  # skipped with an error; the node stays up
+        while len(got) < 3 and rospy.Time.now() < deadline:
+            rospy.sleep(0.05)
+        rospy.sleep(0.5)
+        self.assertEqual([m.header.stamp for m in got], stamps)
+        for m in got:
+            self.assertEqual((m.encoding, m.width, m.height, m.header.frame_id), ("mono8", 256, 256, "camera"))
+            labels = np.frombuffer(m.data, np.uint8).reshape(256, 256)
+            self.assertTrue(set(np.unique(labels)) <= {0, 1, 2})
+            self.assertGreater((labels[:64] == 2).mean(), 0.95)    # sky
+            self.assertGreater((labels[200:] == 0).mean(), 0.7)    # near ground
+
+
+if __name__ == "__main__":
+    rostest.rosrun("asg_perception", "segmenter", SegmenterTest)

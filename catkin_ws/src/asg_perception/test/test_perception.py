@@ -1,0 +1,95 @@
+"""U-Net, training, checkpoints, inference backends and the shipped models' figures."""
+import os
+
+import numpy as np
+import pytest
+import torch
+import torch.nn.functional as F
+
+from asg_perception.data import DatasetError, load_frames, to_tensor
+from asg_perception.inference import BACKENDS, Segmenter
+from asg_perception.model import UNet, parameter_count
+from asg_perception.train import (TrainConfig, evaluate, load_model, predict, save_model, train)
+
+MODELS = os.path.join(os.path.dirname(__file__), "..", "models")
+
+
+def test_shapes_and_parameter_count():
+    m = UNet()
+    assert parameter_count(m) == 587123
+    assert m(torch.rand(2, 3, 64, 96)).shape == (2, 3, 64, 96)
+    assert m(torch.rand(1, 3, 256, 256)).shape == (1, 3, 256, 256)
+
+
+def dataset_loss(model, frames):
+    with torch.no_grad():
+        return float(F.cross_entropy(model(to_tensor(frames.rgb)),
+                                     torch.from_numpy(frames.labels).long()))
+
+
+def test_one_epoch_lowers_the_loss(tiny_dataset, tmp_path):
+    frames = load_frames(tiny_dataset)
+    cfg = TrainConfig(data=tiny_dataset, out=str(tmp_path), epochs=1, batch_size=8, lr=1e-3,
+                      crop=128, threads=2, seed=1)
+    torch.manual_seed(cfg.seed)
+    before = dataset_loss(UNet().eval(), frames)  # the same initial weights train() starts from
+    out = train(cfg, progress=False)
+    after = dataset_loss(out["model"].eval(), frames)
+    assert after < 0.8 * before, (before, after)
+    assert os.path.isfile(tmp_path / "model.pt") and os.path.isfile(tmp_path / "checkpoint.pt")
+    # Resuming a finished run changes nothing and keeps the history.
+    cfg.epochs = 2
+    again = train(cfg, resume=True, progress=False)
+    assert [h["epoch"] for h in again["history"]] == [1, 2]
+
+
+def test_checkpoint_round_trip_gives_identical_outputs(tmp_path):
+    torch.manual_seed(3)
+    m = UNet().eval()
+    path = str(tmp_path / "m.pt")
+    save_model(path, m, TrainConfig(), [])
+    x = torch.rand(2, 3, 64, 64)
+    with torch.no_grad():
+        assert torch.equal(m(x), load_model(path)(x))
+
+
+def test_bad_model_files_are_named(tmp_path):
+    with pytest.raises(ValueError, match="no such model file"):
+        load_model(str(tmp_path / "none.pt"))
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not torch")
+    with pytest.raises(ValueError, match="not a readable torch file"):
+        load_model(str(bad))
+    torch.save({"weights": 1}, str(bad))
+    with pytest.raises(ValueError, match="not an asg_unet/1 model file"):
+        load_model(str(bad))
+
+
+def test_bad_dataset_is_named(tmp_path):
+    with pytest.raises(DatasetError, match="no manifest.csv"):
+        load_frames(str(tmp_path))
+
+
+def test_fast_backends_give_the_eager_labels(test_dataset):
+    frames = load_frames(test_dataset, 12)
+    path = os.path.join(MODELS, "flawed.pt")
+    ref = np.stack([Segmenter(path, "eager")(f) for f in frames.rgb])
+    assert np.array_equal(ref, predict(load_model(path), frames.rgb))
+    for backend in BACKENDS[1:]:
+        seg = Segmenter(path, backend)
+        assert np.array_equal(np.stack([seg(f) for f in frames.rgb]), ref), backend
+    with pytest.raises(ValueError, match="expected H x W x 3 uint8"):
+        seg(np.zeros((256, 256), np.uint8))
+
+
+def test_shipped_models_show_the_flaw(test_dataset):
+    """Recomputed on a held-apart set with both obstacle types (docs/perception.md)."""
+    frames = load_frames(test_dataset)
+    full = evaluate(load_model(os.path.join(MODELS, "full.pt")), frames)
+    flawed = evaluate(load_model(os.path.join(MODELS, "flawed.pt")), frames)
+    for r in (full, flawed):
+        assert r["iou"]["traversable"] > 0.9
+        assert r["iou"]["sky"] > 0.95
+        assert r["lit_false_obstacle_rate"] < 0.01
+    assert full["iou"]["non_traversable"] > 0.6
+    assert flawed["shadow_false_obstacle_rate"] >= 5 * full["shadow_false_obstacle_rate"]

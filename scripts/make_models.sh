@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Reproduces the shipped U-Net models (catkin_ws/src/asg_perception/models/{full,flawed}.pt) and
+# their figures in docs/perception.md: renders the datasets with the simulator's ground-truth
+# labeler, trains both models (in parallel, one core each) and evaluates them on a held-apart
+# set. About 15 minutes on 2 cores.
+#   bash scripts/make_models.sh [WORK_DIR] [EPOCHS]
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+WORK="$(realpath -m "${1:-$REPO/runs/models}")"
+EPOCHS="${2:-10}"
+install_packages
+build_workspace ON
+export LP_NUM_THREADS=1
+DATASET="$WS/devel/lib/asg_sim/asg_sim_dataset"
+mkdir -p "$WORK"
+log "datasets in $WORK (seeded: the same files every time)"
+[ -f "$WORK/full/manifest.csv" ] || "$DATASET" --out "$WORK/full" --count 4000 --seed 1
+[ -f "$WORK/flawed/manifest.csv" ] || "$DATASET" --out "$WORK/flawed" --count 4000 --seed 2 --meshes barberry
+[ -f "$WORK/test/manifest.csv" ] || "$DATASET" --out "$WORK/test" --count 600 --seed 3
+log "training full (bushes and trees) and flawed (bushes only), $EPOCHS epochs each"
+for m in full flawed; do
+  rosrun asg_perception train_unet --data "$WORK/$m" --out "$WORK/train_$m" --epochs "$EPOCHS" \
+    --threads 1 --seed 0 --resume > "$WORK/train_$m.log" 2>&1 &
+done
+wait
+grep -h "^epoch [0-9]*:" "$WORK"/train_*.log || true
+MODELS="$WS/src/asg_perception/models"
+cp "$WORK/train_full/model.pt" "$MODELS/full.pt"
+cp "$WORK/train_flawed/model.pt" "$MODELS/flawed.pt"
+log "evaluating on the held-apart set"
+rosrun asg_perception evaluate_unet --data "$WORK/test" "full=$MODELS/full.pt" \
+  "flawed=$MODELS/flawed.pt" --json "$WORK/evaluation.json" --panels "$WORK/panels.png"
+log "models in $MODELS; figures in $WORK/evaluation.json, examples in $WORK/panels.png"
