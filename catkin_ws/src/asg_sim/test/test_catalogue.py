@@ -16,3 +16,4 @@ def test_catalogues_agree():
     for name, info in out.items():
         assert abs(info["height"] - MESHES[name].height) < 1e-9, name
         assert abs(info["collision_radius"] - MESHES[name].collision_radius) < 1e-9, name
+        assert abs(info["shadow_opacity"] - MESHES[name].shadow_opacity) < 1e-9, name

@@ -20,6 +20,7 @@ class MeshInfo:
     name: str
     height: float  #: [m] top of the mesh above the ground
     collision_radius: float  #: [m] radius of the vertical cylinder used for collisions
+    shadow_opacity: float  #: [-] share of sunlight its shadow blocks (dense foliage 1)
     description: str
 
 
@@ -28,13 +29,15 @@ MESHES = {
         "juniper",
         height=4.5,
         collision_radius=1.2,
+        shadow_opacity=1.0,
         description="Juniper tree: conifer, trunk and dense conical foliage",
     ),
     "barberry": MeshInfo(
         "barberry",
         height=1.2,
         collision_radius=0.8,
-        description="Barberry bush: rounded shrub about 1.2 m tall",
+        shadow_opacity=0.55,
+        description="Barberry bush: rounded, sparse-leaved shrub about 1.2 m tall",
     ),
 }
 

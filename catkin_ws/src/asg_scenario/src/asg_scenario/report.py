@@ -38,10 +38,12 @@ def write_result_yaml(path: str, result: dict):
 
 
 def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: str = "",
-             removed: Optional[set] = None, background=None):
+             removed: Optional[set] = None, background=None, votes=None, vote_cell: float = 0.0):
     """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory.
 
     background: optional HxWx3 uint8 rendering of [0, size]^2 (row 0 at y = size) drawn below.
+    votes: optional list of {x, y, weight 0..1} vote-grid vertices, drawn as squares of side
+    vote_cell [m] (yellow to red by weight).
     """
     import matplotlib
     matplotlib.use("Agg")
@@ -66,6 +68,13 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
                                 color=colors.get(layout["mesh_name"], "k"),
                                 fill=not gone and background is None,
                                 ls="--" if gone else "-", alpha=0.8))
+    if votes:
+        from matplotlib.patches import Rectangle
+        side = vote_cell or 1.0
+        for v in votes:
+            w = max(0.0, min(1.0, v["weight"]))
+            ax.add_patch(Rectangle((v["x"] - side / 2, v["y"] - side / 2), side, side,
+                                   color=(1.0, 1.0 - w, 0.0), alpha=0.25 + 0.6 * w, lw=0))
     for (x, y), r, c, label in (((op["start_x"], op["start_y"]), op["safety_radius"], "tab:blue",
                                  "start"), ((op["goal_x"], op["goal_y"]), op["goal_radius"],
                                             "tab:orange", "goal")):

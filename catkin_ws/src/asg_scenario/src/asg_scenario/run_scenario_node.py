@@ -33,6 +33,9 @@ def main(argv=None):
                         help="wall-clock limit for the whole run [s] (600)")
     parser.add_argument("--scenario-id", type=int, default=None,
                         help="override the file's scenario_id")
+    parser.add_argument("--votes", action="store_true",
+                        help="also record the planner's final vote grid (WORKER/planner/votes) "
+                             "into result.yaml and draw it in run.png")
     parser.add_argument("--top-down", type=int, default=768,
                         help="size of the rendered top-down picture [px] (768; 0: none)")
     args = parser.parse_args(argv)
@@ -58,6 +61,16 @@ def main(argv=None):
               file=sys.stderr)
         return 3
     last = [-1.0]
+    votes = {}
+    if args.votes:
+        from visualization_msgs.msg import MarkerArray
+
+        def on_votes(msg):
+            for m in msg.markers:
+                if m.ns == "votes":
+                    votes["cells"] = [(p.x, p.y, c.a) for p, c in zip(m.points, m.colors)]
+                    votes["size"] = m.scale.x
+        rospy.Subscriber(args.worker.rstrip("/") + "/planner/votes", MarkerArray, on_votes)
 
     def feedback(fb):
         if fb.sim_time - last[0] >= 1.0:
@@ -78,6 +91,8 @@ def main(argv=None):
         return 4
     result = client.get_result()
     wall = time.monotonic() - wall0
+    if args.votes:
+        rospy.sleep(0.5)  # the last replan's markers
     samples = _samples(result)
     xy = [(s["x"], s["y"]) for s in samples]
     os.makedirs(args.out, exist_ok=True)
@@ -97,6 +112,10 @@ def main(argv=None):
                                "reason": r.reason} for r in result.removed_obstacles],
         "collision_with": result.collision_with,
     }
+    if args.votes:
+        # Marker alpha is 0.3 + 0.7 votes / max_votes (planner.yaml max_votes: 50).
+        summary["votes"] = [{"x": x, "y": y, "weight": round((a - 0.3) / 0.7, 3)}
+                            for x, y, a in votes.get("cells", [])]
     write_result_yaml(os.path.join(args.out, "result.yaml"), summary)
     write_trajectory_csv(os.path.join(args.out, "trajectory.csv"), samples)
     with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
@@ -108,7 +127,8 @@ def main(argv=None):
         background = np.frombuffer(bytes(result.top_down.data), dtype=np.uint8).reshape(
             result.top_down.height, result.top_down.width, 3)
     plot_run(os.path.join(args.out, "run.png"), scenario, xy,
-             f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed, background)
+             f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed, background,
+             votes=summary.get("votes"), vote_cell=votes.get("size", 0) / 0.6 if votes else 0)
     print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  wall {wall:.2f} s "
           f"({result.sim_time / max(wall, 1e-9):.1f}x real time)  path {summary['path_length']:.1f} m"
           f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}"

@@ -25,6 +25,7 @@ struct MeshInfo {
   std::string name;
   double height;            ///< [m]
   double collision_radius;  ///< [m]
+  double shadow_opacity;    ///< [-] share of sunlight its shadow blocks: dense conifer 1, sparse shrub less
 };
 
 /// Catalogue of obstacle meshes, sorted by name.

@@ -99,9 +99,9 @@ Mesh makeBarberry() {
              return base * (1.0f + 0.12f * std::sin(4.0f * th + 6.0f * z));
            },
            [](int r, int s) {
-             // Purple-leaved barberry (the common 'Atropurpurea' form): dark red-violet foliage.
+             // Dark olive-green barberry foliage.
              const float v = hash01(r + 100, s);
-             return V3{0.20f + 0.08f * v, 0.05f + 0.03f * v, 0.08f + 0.03f * v};
+             return V3{0.12f + 0.05f * v, 0.16f + 0.05f * v, 0.06f + 0.02f * v};
            });
   return m;
 }
@@ -110,8 +110,8 @@ Mesh makeBarberry() {
 
 const std::vector<MeshInfo>& meshCatalogue() {
   static const std::vector<MeshInfo> catalogue = {
-      {"barberry", 1.2, 0.8},
-      {"juniper", 4.5, 1.2},
+      {"barberry", 1.2, 0.8, 0.55},
+      {"juniper", 4.5, 1.2, 1.0},
   };
   return catalogue;
 }

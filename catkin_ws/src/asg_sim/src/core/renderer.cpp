@@ -62,6 +62,7 @@ uniform float uAmbient;
 uniform int uGround;
 uniform float uSeed;
 uniform sampler2DShadow uShadowMap;
+uniform sampler2D uShadowOpacity;  // opacity of the caster nearest the sun (dense vs sparse foliage)
 uniform int uShadows;
 uniform vec4 uLabel;  // r: label / 255, g, b: instance id low, high byte / 255
 layout(location = 0) out vec4 oColor;
@@ -95,7 +96,7 @@ void main() {
   if (uShadows == 1) {
     vec3 p = vLight.xyz / vLight.w * 0.5 + 0.5;
     if (p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0 && p.z < 1.0)
-      lit = texture(uShadowMap, vec3(p.xy, p.z - 0.0015));
+      lit = 1.0 - (1.0 - texture(uShadowMap, vec3(p.xy, p.z - 0.0015))) * texture(uShadowOpacity, p.xy).r;
   }
   float diffuse = max(dot(n, uSunDir), 0.0);
   vec3 c = albedo * (uAmbient + uSunIntensity * diffuse * lit);
@@ -113,7 +114,9 @@ void main() { gl_Position = uLightViewProj * uModel * vec4(aPos, 1.0); }
 )";
 
 const char* kShadowFragmentShader = R"(#version 330 core
-void main() {}
+uniform float uOpacity;
+layout(location = 0) out vec4 oOpacity;
+void main() { oOpacity = vec4(uOpacity); }
 )";
 
 GLuint compile(GLenum type, const char* src) {
@@ -287,7 +290,7 @@ struct Renderer::Gl {
   OSMesaContext ctx = nullptr;
   std::vector<unsigned char> dummy;
   GLuint program = 0, shadow_program = 0;
-  GLuint shadow_fbo = 0, shadow_tex = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0, shadow_opacity = 0;
   Target camera, topdown;
   GpuMesh ground;
   std::map<std::string, GpuMesh> meshes;
@@ -296,6 +299,7 @@ struct Renderer::Gl {
     Mat4 model;
     float label[4];
     bool cast_shadow;
+    float shadow_opacity;
   };
   std::vector<Instance> instances;
   Mat4 light_view_proj = Mat4::Identity();
@@ -327,6 +331,7 @@ struct Renderer::Gl {
     for (const auto& inst : instances) {
       if (shadow_pass && !inst.cast_shadow) continue;
       glUniformMatrix4fv(model_loc, 1, GL_FALSE, inst.model.data());
+      if (shadow_pass) glUniform1f(glGetUniformLocation(prog, "uOpacity"), inst.shadow_opacity);
       if (!shadow_pass) glUniform4fv(label_loc, 1, inst.label);
       const GpuMesh& m = meshes.at(inst.mesh);
       glBindVertexArray(m.vao);
@@ -373,10 +378,14 @@ Renderer::Renderer(const CameraModel& camera, const RenderOptions& options)
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  gl_->shadow_opacity = makeTexture(GL_R8, GL_RED, GL_UNSIGNED_BYTE, s, s);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glGenFramebuffers(1, &gl_->shadow_fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, gl_->shadow_fbo);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, gl_->shadow_tex, 0);
-  glDrawBuffer(GL_NONE);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, gl_->shadow_opacity, 0);
+  glDrawBuffer(GL_COLOR_ATTACHMENT0);
   glReadBuffer(GL_NONE);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw std::runtime_error("shadow framebuffer incomplete");
@@ -394,6 +403,7 @@ Renderer::~Renderer() {
   release(&gl_->ground);
   if (gl_->shadow_fbo) glDeleteFramebuffers(1, &gl_->shadow_fbo);
   if (gl_->shadow_tex) glDeleteTextures(1, &gl_->shadow_tex);
+  if (gl_->shadow_opacity) glDeleteTextures(1, &gl_->shadow_opacity);
   release(&gl_->topdown);
   release(&gl_->camera);
   glDeleteProgram(gl_->shadow_program);
@@ -414,7 +424,9 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
     m.translate(Eigen::Vector3f(p.pose.x, p.pose.y, groundHeight(p.pose.x, p.pose.y)));
     m.rotate(Eigen::AngleAxisf(p.pose.yaw, Eigen::Vector3f::UnitZ()));
     m.scale(float(p.pose.scale));
-    Gl::Instance inst{p.mesh_name, m.matrix(), {}, p.pose.cast_shadow};
+    const MeshInfo* info = findMesh(p.mesh_name);
+    Gl::Instance inst{p.mesh_name, m.matrix(), {}, p.pose.cast_shadow,
+                      info ? float(info->shadow_opacity) : 1.0f};
     inst.label[0] = (p.traversable ? kTraversable : kNonTraversable) / 255.0f;
     inst.label[1] = (p.id & 0xFF) / 255.0f;
     inst.label[2] = ((p.id >> 8) & 0xFF) / 255.0f;
@@ -451,6 +463,8 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
   const auto t0 = std::chrono::steady_clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, gl_->shadow_fbo);
   glViewport(0, 0, options_.shadow_map_px, options_.shadow_map_px);
+  const float no_caster[] = {0, 0, 0, 0};
+  glClearBufferfv(GL_COLOR, 0, no_caster);
   glClear(GL_DEPTH_BUFFER_BIT);
   if (options_.shadows) {
     glUseProgram(gl_->shadow_program);
@@ -471,7 +485,7 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
 namespace {
 void setCommonUniforms(GLuint prog, const Mat4& view, const Mat4& proj, const Mat4& light,
                        const Eigen::Vector3d& sun, float intensity, float seed, bool shadows,
-                       GLuint shadow_tex) {
+                       GLuint shadow_tex, GLuint shadow_opacity) {
   glUseProgram(prog);
   glUniformMatrix4fv(glGetUniformLocation(prog, "uView"), 1, GL_FALSE, view.data());
   glUniformMatrix4fv(glGetUniformLocation(prog, "uProj"), 1, GL_FALSE, proj.data());
@@ -484,6 +498,10 @@ void setCommonUniforms(GLuint prog, const Mat4& view, const Mat4& proj, const Ma
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, shadow_tex);
   glUniform1i(glGetUniformLocation(prog, "uShadowMap"), 0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, shadow_opacity);
+  glUniform1i(glGetUniformLocation(prog, "uShadowOpacity"), 1);
+  glActiveTexture(GL_TEXTURE0);
 }
 }  // namespace
 
@@ -508,7 +526,7 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
   if (with_labels) glClearBufferfv(GL_COLOR, 2, sky_label);
   glClear(GL_DEPTH_BUFFER_BIT);
   setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
-                    gl_->seed, options_.shadows, gl_->shadow_tex);
+                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity);
   gl_->drawScene(gl_->program, false, true);
 
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
@@ -552,7 +570,7 @@ void Renderer::renderTopDown(int px, RgbImage* out) {
   glClearColor(0.62f, 0.75f, 0.90f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
-                    gl_->seed, options_.shadows, gl_->shadow_tex);
+                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity);
   gl_->drawScene(gl_->program, false, true);
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, px, px, 4, &gl_->rows8, &gl_->scratch8);
   out->resize(px, px);
