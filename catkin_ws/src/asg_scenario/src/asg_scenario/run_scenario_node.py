@@ -21,6 +21,23 @@ def _samples(result):
     return out
 
 
+def removed_set(result):
+    return {(int(r.layout_index), int(r.instance_index)) for r in result.removed_obstacles}
+
+
+def phantom_votes(scenario, votes, cell, removed):
+    """Voted vertices with no placed obstacle within its collision radius plus one vote cell:
+    votes that only a perception error can have cast."""
+    import math
+
+    from .catalogue import MESHES
+    obstacles = [(i["x"], i["y"], MESHES[l["mesh_name"]].collision_radius * i["scale"])
+                 for li, l in enumerate(scenario["structural"]["layouts"])
+                 for ii, i in enumerate(l["instances"]) if i["visible"] and (li, ii) not in removed]
+    return sum(1 for v in votes
+               if all(math.hypot(v["x"] - x, v["y"] - y) > r + cell for x, y, r in obstacles))
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(
         prog="run_scenario",
@@ -116,11 +133,13 @@ def main(argv=None):
         # Marker alpha is 0.3 + 0.7 votes / max_votes (planner.yaml max_votes: 50).
         summary["votes"] = [{"x": x, "y": y, "weight": round((a - 0.3) / 0.7, 3)}
                             for x, y, a in votes.get("cells", [])]
+        cell = votes.get("size", 0) / 0.6  # the marker side is 0.6 x the vote spacing
+        summary["phantom_vote_vertices"] = phantom_votes(scenario, summary["votes"], cell, removed_set(result))
     write_result_yaml(os.path.join(args.out, "result.yaml"), summary)
     write_trajectory_csv(os.path.join(args.out, "trajectory.csv"), samples)
     with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
         f.write(dump_scenario(scenario))
-    removed = {(int(r.layout_index), int(r.instance_index)) for r in result.removed_obstacles}
+    removed = removed_set(result)
     background = None
     if result.top_down.width > 0 and result.top_down.encoding == "rgb8":
         import numpy as np
