@@ -21,10 +21,12 @@ class SegmenterTest(unittest.TestCase):
         rospy.Subscriber("/worker_0/stack_ack", StackAck, acks.append, queue_size=10)
         pub = rospy.Publisher("/worker_0/camera/image", Image, queue_size=10)
         ann = rospy.Publisher("/worker_0/scenario", ScenarioInfo, queue_size=1, latch=True)
-        ann.publish(ScenarioInfo(scenario_id=7, run=3))
         deadline = rospy.Time.now() + rospy.Duration(60)
         while not acks and rospy.Time.now() < deadline:
-            rospy.sleep(0.1)  # the model is loaded when it acknowledges
+            # Announce as the worker does: again every 0.5 s until acknowledged (an ack sent
+            # before our subscription was connected is lost). The model is loaded by then.
+            ann.publish(ScenarioInfo(scenario_id=7, run=3))
+            rospy.sleep(0.5)
         self.assertTrue(acks, "no acknowledgement from the segmenter")
         self.assertEqual((acks[0].node, acks[0].scenario_id, acks[0].run), ("segmenter", 7, 3))
         while pub.get_num_connections() == 0:
