@@ -70,11 +70,17 @@ def main(argv=None):
               f"false-obstacle {r['shadow_false_obstacle_rate']:.4f} (away from obstacles "
               f"{r['shadow_away_false_obstacle_rate']:.4f})  lit false-obstacle "
               f"{r['lit_false_obstacle_rate']:.4f}")
+        print(f"{'':>8}  low sun (<= {r['low_sun_deg']:g} deg): shadow false-obstacle "
+              f"{r['low_sun']['shadow_false_obstacle_rate']:.4f}; by inclination: "
+              + ", ".join(f"{k}: {v:.4f}" for k, v in r["by_sun"].items()))
     if len(results) == 2:
         (na, ra), (nb, rb) = results.items()
         ratio = ra["shadow_false_obstacle_rate"] / max(rb["shadow_false_obstacle_rate"], 1e-9)
         away = ra["shadow_away_false_obstacle_rate"] / max(rb["shadow_away_false_obstacle_rate"], 1e-9)
-        print(f"shadow false-obstacle ratio {na}/{nb}: {ratio:.1f} (away from obstacles {away:.1f})")
+        low = ra["low_sun"]["shadow_false_obstacle_rate"] / max(
+            rb["low_sun"]["shadow_false_obstacle_rate"], 1e-9)
+        print(f"shadow false-obstacle ratio {na}/{nb}: {ratio:.1f} (away from obstacles {away:.1f}, "
+              f"low sun {low:.1f})")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)

@@ -70,12 +70,26 @@ def predict(model: UNet, rgb: np.ndarray, batch: int = 8) -> np.ndarray:
     return np.concatenate(out)
 
 
-def evaluate(model: UNet, frames, batch: int = 8) -> dict:
-    conf = Confusion()
+def evaluate(model: UNet, frames, batch: int = 8, low_sun_deg: float = 15.0) -> dict:
+    """Figures over all frames, plus `low_sun`: the same over frames whose sun inclination is at
+    most low_sun_deg (long shadows that lie apart from their obstacles), and `by_sun`: the
+    shadow false-obstacle rate per inclination."""
+    conf, low = Confusion(), Confusion()
+    by_sun = {}
+    inc = [float(r.get("sun_inclination_deg", "nan")) for r in frames.rows]
     for i in range(0, len(frames), batch):
         pred = predict(model, frames.rgb[i:i + batch], batch)
-        conf.add(pred, frames.labels[i:i + batch], frames.lit[i:i + batch])
-    return conf.summary()
+        for k in range(len(pred)):
+            args = (pred[k], frames.labels[i + k], frames.lit[i + k])
+            conf.add(*args)
+            by_sun.setdefault(inc[i + k], Confusion()).add(*args)
+            if inc[i + k] <= low_sun_deg:
+                low.add(*args)
+    out = conf.summary()
+    out["low_sun"] = low.summary()
+    out["low_sun_deg"] = low_sun_deg
+    out["by_sun"] = {f"{a:g}": c.shadow_false_obstacle_rate() for a, c in sorted(by_sun.items())}
+    return out
 
 
 def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict:
