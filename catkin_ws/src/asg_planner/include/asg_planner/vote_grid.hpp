@@ -34,6 +34,10 @@ class VoteGrid {
   uint32_t votes(const Vertex& v) const;
   /// Every vertex with at least one vote.
   std::vector<std::pair<Vertex, uint32_t>> voted() const;
+  /// Vertices with at least one vote, kept as votes are added (no tree walk).
+  size_t votedCount() const { return voted_count_; }
+  /// Sum of all votes, kept as votes are added (no tree walk).
+  uint64_t totalVotes() const { return total_votes_; }
   double spacing() const { return spacing_; }
   uint32_t maxVotes() const { return max_votes_; }
   const octomap::CountingOcTree& tree() const { return tree_; }
@@ -43,6 +47,8 @@ class VoteGrid {
   double spacing_;
   uint32_t max_votes_;
   octomap::CountingOcTree tree_;
+  size_t voted_count_ = 0;
+  uint64_t total_votes_ = 0;
 };
 
 }  // namespace asg_planner

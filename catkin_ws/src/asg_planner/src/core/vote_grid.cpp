@@ -15,7 +15,11 @@ VoteGrid::VoteGrid(double spacing, uint32_t max_votes)
   if (!(spacing > 0)) throw std::invalid_argument("vote grid spacing must be > 0 m");
 }
 
-void VoteGrid::clear() { tree_.clear(); }
+void VoteGrid::clear() {
+  tree_.clear();
+  voted_count_ = 0;
+  total_votes_ = 0;
+}
 
 Vertex VoteGrid::nearest(double x, double y) const {
   return {int(std::lround(x / spacing_)), int(std::lround(y / spacing_))};
@@ -36,6 +40,8 @@ uint32_t VoteGrid::add(const Vertex& v, uint32_t n) {
   if (!node) node = tree_.updateNode(k);  // creates the leaf (count 1)
   const uint32_t after = std::min<uint64_t>(uint64_t(before) + n, max_votes_);
   node->setCount(after);
+  if (before == 0) ++voted_count_;
+  total_votes_ += after - before;
   return after;
 }
 

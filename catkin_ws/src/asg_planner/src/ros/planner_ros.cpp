@@ -253,9 +253,9 @@ void PlannerROS::process() {
     st.replanned = replanned;
     st.path_cost = planner_->path().cost;
     st.expansions = planner_->path().expansions;
-    const auto voted = planner_->votes().voted();
-    st.voted_vertices = voted.size();
-    for (const auto& v : voted) st.total_votes += v.second;
+    // O(1) counters: the control tick must not walk the octree (it runs 10 x per replan).
+    st.voted_vertices = planner_->votes().votedCount();
+    st.total_votes = planner_->votes().totalVotes();
     if (replanned)
       for (const auto& p : planner_->path().points) st.path.push_back(point(p.x(), p.y()));
     const auto& la = planner_->follower().lookaheadPoint();

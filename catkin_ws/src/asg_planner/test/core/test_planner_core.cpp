@@ -46,10 +46,14 @@ TEST(VoteGrid, NearestVertexAndCap) {
   g.add({-4, 7}, 1);
   const auto v = g.voted();
   ASSERT_EQ(v.size(), 2u);
+  EXPECT_EQ(g.votedCount(), 2u);  // the running counters agree with the tree
+  EXPECT_EQ(g.totalVotes(), 51u);
   EXPECT_EQ(v[0].first.i, -4);
   EXPECT_EQ(v[1].second, 50u);
   g.clear();
   EXPECT_TRUE(g.voted().empty());
+  EXPECT_EQ(g.votedCount(), 0u);
+  EXPECT_EQ(g.totalVotes(), 0u);
 }
 
 TEST(Projection, WallVotesLandOnTheRightVertices) {
