@@ -1,7 +1,8 @@
 """Segmentation datasets written by `asg_sim_dataset` (no rospy).
 
 A dataset folder holds `manifest.csv` and `images/NNNNNN_{rgb,labels,lit}.png`: RGB frames, label
-images (0 traversable, 1 non-traversable, 2 sky) and sun-lit masks (0 shadow .. 255 lit).
+images (0 traversable, 1 non-traversable, 2 sky, 3 void: ground under an obstacle's canopy) and
+sun-lit masks (0 shadow .. 255 lit).
 """
 import csv
 import os
@@ -9,6 +10,10 @@ from dataclasses import dataclass
 from typing import List, Optional
 
 import numpy as np
+
+#: Dataset label of ground seen beneath an obstacle's canopy: visible ground the vehicle cannot
+#: reach, neither class; ignored by the training loss and left out of every figure.
+VOID = 3
 
 
 class DatasetError(ValueError):
@@ -62,8 +67,9 @@ def load_frames(folder: str, limit: Optional[int] = None, progress: bool = False
                 raise DatasetError(f"{p}: missing or not an image")
         if lab.shape != bgr.shape[:2] or lt.shape != bgr.shape[:2]:
             raise DatasetError(f"frame {r['index']}: image sizes differ")
-        if lab.max() > 2:
-            raise DatasetError(f"{paths[1]}: label {int(lab.max())} outside 0..2")
+        if lab.max() > VOID:
+            raise DatasetError(f"{paths[1]}: label {int(lab.max())} outside 0..{VOID} "
+                               f"(0..2 classes, {VOID} void)")
         rgb.append(bgr[:, :, ::-1])
         labels.append(lab)
         lit.append(lt)

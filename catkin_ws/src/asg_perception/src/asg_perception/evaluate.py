@@ -17,7 +17,8 @@ from .data import DatasetError, load_frames
 from .model import CLASSES
 from .train import evaluate, load_model, predict
 
-PALETTE = np.array([[80, 160, 80], [200, 40, 40], [140, 200, 230]], np.uint8)  # RGB per class
+# RGB per class, then VOID (ground under a canopy) in grey
+PALETTE = np.array([[80, 160, 80], [200, 40, 40], [140, 200, 230], [128, 128, 128]], np.uint8)
 
 
 def panels(path: str, frames, models: dict, picks):
@@ -74,13 +75,16 @@ def main(argv=None):
               f"{r['low_sun']['shadow_false_obstacle_rate']:.4f}; by inclination: "
               + ", ".join(f"{k}: {v:.4f}" for k, v in r["by_sun"].items()))
     if len(results) == 2:
-        (na, ra), (nb, rb) = results.items()
-        ratio = ra["shadow_false_obstacle_rate"] / max(rb["shadow_false_obstacle_rate"], 1e-9)
-        away = ra["shadow_away_false_obstacle_rate"] / max(rb["shadow_away_false_obstacle_rate"], 1e-9)
-        low = ra["low_sun"]["shadow_false_obstacle_rate"] / max(
-            rb["low_sun"]["shadow_false_obstacle_rate"], 1e-9)
-        print(f"shadow false-obstacle ratio {na}/{nb}: {ratio:.1f} (away from obstacles {away:.1f}, "
-              f"low sun {low:.1f})")
+        # The model with more shadow false obstacles over the other (the flaw's size).
+        (na, ra), (nb, rb) = sorted(results.items(), key=lambda kv: -kv[1]["shadow_false_obstacle_rate"])
+
+        def ratio(get):
+            return get(ra) / max(get(rb), 1e-9)
+
+        print(f"shadow false-obstacle rate {na}/{nb}: "
+              f"{ratio(lambda r: r['shadow_false_obstacle_rate']):.1f}x (away from obstacles "
+              f"{ratio(lambda r: r['shadow_away_false_obstacle_rate']):.1f}x, low sun "
+              f"{ratio(lambda r: r['low_sun']['shadow_false_obstacle_rate']):.1f}x)")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)

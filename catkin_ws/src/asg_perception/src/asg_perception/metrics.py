@@ -4,6 +4,7 @@ from typing import Dict
 
 import numpy as np
 
+from .data import VOID
 from .model import CLASSES
 
 #: A ground pixel whose lit value is below this is in shadow.
@@ -37,8 +38,10 @@ class Confusion:
     shadow_away_as_obstacle: int = 0
 
     def add(self, pred: np.ndarray, labels: np.ndarray, lit: np.ndarray = None):
-        """pred, labels: integer arrays of one shape; lit: the sun-lit mask (optional)."""
-        idx = labels.astype(np.int64).ravel() * 3 + pred.astype(np.int64).ravel()
+        """pred, labels: integer arrays of one shape; lit: the sun-lit mask (optional). VOID
+        labels (ground under a canopy) count nowhere."""
+        keep = labels.ravel() != VOID
+        idx = labels.astype(np.int64).ravel()[keep] * 3 + pred.astype(np.int64).ravel()[keep]
         self.matrix += np.bincount(idx, minlength=9).reshape(3, 3)
         if lit is not None:
             ground = labels == 0

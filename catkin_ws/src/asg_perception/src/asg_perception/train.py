@@ -10,7 +10,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .data import DatasetError, load_frames, to_tensor
+from .data import VOID, DatasetError, load_frames, to_tensor
 from .metrics import Confusion
 from .model import CLASSES, UNet, parameter_count
 
@@ -145,7 +145,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
             xt = to_tensor(x)
             yt = torch.from_numpy(np.ascontiguousarray(y)).long()
             opt.zero_grad()
-            loss = F.cross_entropy(model(xt), yt)
+            loss = F.cross_entropy(model(xt), yt, ignore_index=VOID)
             loss.backward()
             opt.step()
             losses.append(float(loss))

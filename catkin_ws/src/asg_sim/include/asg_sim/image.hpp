@@ -7,8 +7,10 @@
 
 namespace asg_sim {
 
-/// Labels of the ground-truth segmentation (same as the U-Net's classes).
-enum Label : uint8_t { kTraversable = 0, kNonTraversable = 1, kSky = 2 };
+/// Labels of the ground-truth segmentation: the U-Net's three classes, plus kUnderCanopy for
+/// ground seen beneath a non-traversable obstacle's canopy (visible ground the vehicle cannot
+/// reach: "void", ignored in training and evaluation, never voted on by the planner).
+enum Label : uint8_t { kTraversable = 0, kNonTraversable = 1, kSky = 2, kUnderCanopy = 3 };
 
 template <class T, int C>
 struct Image {

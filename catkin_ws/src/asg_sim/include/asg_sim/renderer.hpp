@@ -30,6 +30,7 @@ struct CameraModel {
 
 struct RenderOptions {
   int shadow_map_px = 2048;   ///< [px] side of the shadow map (covers landscape + border)
+  int footprint_map_px = 2048;  ///< [px] side of the canopy footprint map (landscape + 5 m)
   bool shadows = true;
 };
 
@@ -52,8 +53,10 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  /// Uploads a scene (ground, placed obstacles, sun) and renders its shadow map: the sun and
-  /// the obstacles are static during a scenario, so this happens once per scene.
+  /// Uploads a scene (ground, placed obstacles, sun) and renders its shadow map and its canopy
+  /// footprint map (ground covered by a non-traversable obstacle, seen from straight above,
+  /// is labelled kUnderCanopy): the sun and the obstacles are static during a scenario, so
+  /// this happens once per scene.
   void setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>& placed);
 
   /// Renders the camera at T_map_optical (optical frame: z forward, x right, y down).
@@ -66,10 +69,11 @@ class Renderer {
   /// Sun direction (unit vector from the ground towards the sun) in map frame.
   Eigen::Vector3d sunDirection() const { return sun_dir_; }
 
-  /// Milliseconds of the last setScene's shadow pass.
+  /// Milliseconds of the last setScene's shadow and footprint passes.
   double lastShadowPassMs() const { return shadow_ms_; }
 
  private:
+  void renderFootprints(double size);
   struct Gl;
   std::unique_ptr<Gl> gl_;
   CameraModel camera_;

@@ -65,6 +65,9 @@ uniform sampler2DShadow uShadowMap;
 uniform sampler2D uShadowOpacity;  // opacity of the caster nearest the sun (dense vs sparse foliage)
 uniform int uShadows;
 uniform vec4 uLabel;  // r: label / 255, g, b: instance id low, high byte / 255
+uniform sampler2D uFootprint;  // ground under a non-traversable obstacle's canopy (top-down)
+uniform vec4 uFootprintBox;    // xy: world corner of the footprint map, zw: 1 / its extent
+uniform int uWithLabels;       // 0: the label target is not drawn, skip its look-ups
 layout(location = 0) out vec4 oColor;
 layout(location = 1) out float oDepth;
 layout(location = 2) out vec4 oLabel;
@@ -102,7 +105,14 @@ void main() {
   vec3 c = albedo * (uAmbient + uSunIntensity * diffuse * lit);
   oColor = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.6)), 1.0);
   oDepth = vEyeDepth;
-  oLabel = vec4(uLabel.rgb, lit);  // a: how lit the surface is (0 = full shadow)
+  vec4 label = uLabel;
+  if (uGround == 1 && uWithLabels == 1) {
+    // Ground under an obstacle's canopy (seen from straight above): void (kUnderCanopy).
+    vec2 q = (vWorld.xy - uFootprintBox.xy) * uFootprintBox.zw;
+    if (q.x > 0.0 && q.x < 1.0 && q.y > 0.0 && q.y < 1.0 && texture(uFootprint, q).r > 0.5)
+      label.r = 3.0 / 255.0;
+  }
+  oLabel = vec4(label.rgb, lit);  // a: how lit the surface is (0 = full shadow)
 }
 )";
 
@@ -291,6 +301,8 @@ struct Renderer::Gl {
   std::vector<unsigned char> dummy;
   GLuint program = 0, shadow_program = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0, shadow_opacity = 0;
+  GLuint footprint_fbo = 0, footprint_tex = 0;
+  float footprint_box[4] = {0, 0, 0, 0};
   Target camera, topdown;
   GpuMesh ground;
   std::map<std::string, GpuMesh> meshes;
@@ -300,6 +312,7 @@ struct Renderer::Gl {
     float label[4];
     bool cast_shadow;
     float shadow_opacity;
+    bool traversable;
   };
   std::vector<Instance> instances;
   Mat4 light_view_proj = Mat4::Identity();
@@ -389,6 +402,19 @@ Renderer::Renderer(const CameraModel& camera, const RenderOptions& options)
   glReadBuffer(GL_NONE);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw std::runtime_error("shadow framebuffer incomplete");
+  const int f = options_.footprint_map_px;
+  gl_->footprint_tex = makeTexture(GL_R8, GL_RED, GL_UNSIGNED_BYTE, f, f);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glGenFramebuffers(1, &gl_->footprint_fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, gl_->footprint_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, gl_->footprint_tex, 0);
+  glDrawBuffer(GL_COLOR_ATTACHMENT0);
+  glReadBuffer(GL_NONE);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("footprint framebuffer incomplete: status " + std::to_string(glCheckFramebufferStatus(GL_FRAMEBUFFER)));
   for (const auto& info : meshCatalogue()) gl_->meshes[info.name] = upload(makeObstacleMesh(info.name));
   glEnable(GL_DEPTH_TEST);
   glEnable(GL_CULL_FACE);
@@ -404,6 +430,8 @@ Renderer::~Renderer() {
   if (gl_->shadow_fbo) glDeleteFramebuffers(1, &gl_->shadow_fbo);
   if (gl_->shadow_tex) glDeleteTextures(1, &gl_->shadow_tex);
   if (gl_->shadow_opacity) glDeleteTextures(1, &gl_->shadow_opacity);
+  if (gl_->footprint_fbo) glDeleteFramebuffers(1, &gl_->footprint_fbo);
+  if (gl_->footprint_tex) glDeleteTextures(1, &gl_->footprint_tex);
   release(&gl_->topdown);
   release(&gl_->camera);
   glDeleteProgram(gl_->shadow_program);
@@ -426,7 +454,7 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
     m.scale(float(p.pose.scale));
     const MeshInfo* info = findMesh(p.mesh_name);
     Gl::Instance inst{p.mesh_name, m.matrix(), {}, p.pose.cast_shadow,
-                      info ? float(info->shadow_opacity) : 1.0f};
+                      info ? float(info->shadow_opacity) : 1.0f, p.traversable};
     inst.label[0] = (p.traversable ? kTraversable : kNonTraversable) / 255.0f;
     inst.label[1] = (p.id & 0xFF) / 255.0f;
     inst.label[2] = ((p.id >> 8) & 0xFF) / 255.0f;
@@ -477,15 +505,52 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
     glDisable(GL_POLYGON_OFFSET_FILL);
     glEnable(GL_CULL_FACE);
   }
+  renderFootprints(L.size);
   glFinish();
   shadow_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   checkGl("Renderer::setScene");
 }
 
+void Renderer::renderFootprints(double size) {
+  // Top-down orthographic coverage of every non-traversable obstacle over the landscape plus a
+  // margin for canopies that overhang its edge: the label pass marks the ground under them
+  // kUnderCanopy.
+  const double margin = 5.0, lo = -margin, hi = size + margin;
+  const Mat4 view = lookAt(Eigen::Vector3d(size / 2, size / 2, 100.0),
+                           Eigen::Vector3d(size / 2, size / 2, 0), Eigen::Vector3d::UnitY());
+  const Mat4 proj = ortho(lo - size / 2, hi - size / 2, lo - size / 2, hi - size / 2, 1.0, 200.0);
+  const Mat4 view_proj = proj * view;
+  gl_->footprint_box[0] = float(lo);
+  gl_->footprint_box[1] = float(lo);
+  gl_->footprint_box[2] = gl_->footprint_box[3] = float(1.0 / (hi - lo));
+  glBindFramebuffer(GL_FRAMEBUFFER, gl_->footprint_fbo);
+  glViewport(0, 0, options_.footprint_map_px, options_.footprint_map_px);
+  const float none[] = {0, 0, 0, 0};
+  glClearBufferfv(GL_COLOR, 0, none);
+  glUseProgram(gl_->shadow_program);
+  glUniformMatrix4fv(glGetUniformLocation(gl_->shadow_program, "uLightViewProj"), 1, GL_FALSE,
+                     view_proj.data());
+  glUniform1f(glGetUniformLocation(gl_->shadow_program, "uOpacity"), 1.0f);
+  const GLint model_loc = glGetUniformLocation(gl_->shadow_program, "uModel");
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  for (const auto& inst : gl_->instances) {
+    if (inst.traversable) continue;
+    glUniformMatrix4fv(model_loc, 1, GL_FALSE, inst.model.data());
+    const GpuMesh& m = gl_->meshes.at(inst.mesh);
+    glBindVertexArray(m.vao);
+    glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+  glEnable(GL_CULL_FACE);
+  glEnable(GL_DEPTH_TEST);
+}
+
 namespace {
 void setCommonUniforms(GLuint prog, const Mat4& view, const Mat4& proj, const Mat4& light,
                        const Eigen::Vector3d& sun, float intensity, float seed, bool shadows,
-                       GLuint shadow_tex, GLuint shadow_opacity) {
+                       GLuint shadow_tex, GLuint shadow_opacity, GLuint footprint_tex,
+                       const float* footprint_box) {
   glUseProgram(prog);
   glUniformMatrix4fv(glGetUniformLocation(prog, "uView"), 1, GL_FALSE, view.data());
   glUniformMatrix4fv(glGetUniformLocation(prog, "uProj"), 1, GL_FALSE, proj.data());
@@ -501,6 +566,10 @@ void setCommonUniforms(GLuint prog, const Mat4& view, const Mat4& proj, const Ma
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, shadow_opacity);
   glUniform1i(glGetUniformLocation(prog, "uShadowOpacity"), 1);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D, footprint_tex);
+  glUniform1i(glGetUniformLocation(prog, "uFootprint"), 2);
+  glUniform4fv(glGetUniformLocation(prog, "uFootprintBox"), 1, footprint_box);
   glActiveTexture(GL_TEXTURE0);
 }
 }  // namespace
@@ -526,7 +595,9 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
   if (with_labels) glClearBufferfv(GL_COLOR, 2, sky_label);
   glClear(GL_DEPTH_BUFFER_BIT);
   setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
-                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity);
+                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
+                    gl_->footprint_tex, gl_->footprint_box);
+  glUniform1i(glGetUniformLocation(gl_->program, "uWithLabels"), with_labels ? 1 : 0);
   gl_->drawScene(gl_->program, false, true);
 
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
@@ -570,7 +641,9 @@ void Renderer::renderTopDown(int px, RgbImage* out) {
   glClearColor(0.62f, 0.75f, 0.90f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
-                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity);
+                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
+                    gl_->footprint_tex, gl_->footprint_box);
+  glUniform1i(glGetUniformLocation(gl_->program, "uWithLabels"), 0);
   gl_->drawScene(gl_->program, false, true);
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, px, px, 4, &gl_->rows8, &gl_->scratch8);
   out->resize(px, px);

@@ -94,6 +94,26 @@ TEST(Renderer, LabelsMarkObstacleGroundAndSky) {
   EXPECT_EQ(f.labels.at(5, 127), kSky);  // beside the tree at the horizon row: sky or ground
 }
 
+TEST(Renderer, GroundUnderACanopyIsVoid) {
+  // Camera at x = 35 (optical centre 36.5, 1.4 m up) facing the juniper at x = 50, whose foliage
+  // skirt (0.5 m up) reaches about 1.3 m from its axis: the ground seen beneath the skirt is
+  // labelled kUnderCanopy (void), the open ground in front of the canopy traversable; both are
+  // ground in the depth image and carry no instance id.
+  auto s = emptyScene();
+  addObstacle(&s, "juniper", 50.0, 50.0);
+  setScene(s);
+  CameraFrame f;
+  renderer().renderCamera(cameraAt(35, 50, 0), true, &f);
+  const auto groundDepth = [](int v) { return 1.4 * 128.0 / (v - 127.5); };
+  const int under = 142;  // ground at x = 48.86, 1.14 m from the axis
+  ASSERT_NEAR(f.depth.at(128, under), groundDepth(under), 0.05);
+  EXPECT_EQ(f.labels.at(128, under), kUnderCanopy);
+  EXPECT_EQ(f.instances.at(128, under), 0);
+  const int open = 145;  // ground at x = 46.74, 3.3 m from the axis
+  ASSERT_NEAR(f.depth.at(128, open), groundDepth(open), 0.05);
+  EXPECT_EQ(f.labels.at(128, open), kTraversable);
+}
+
 TEST(Renderer, TopDownShowsObstacleWhereItIs) {
   auto s = emptyScene();
   addObstacle(&s, "juniper", 25.0, 75.0);
