@@ -21,5 +21,6 @@ def tiny_dataset(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def test_dataset(tmp_path_factory):
-    """Held apart: a seed no shipped model was trained on, both obstacle types."""
-    return make_dataset(tmp_path_factory.mktemp("test"), 160, 3)
+    """Held apart: a seed no shipped model was trained on, both obstacle types; the 600 frames
+    of docs/perception.md (about 5 s to render)."""
+    return make_dataset(tmp_path_factory.mktemp("test"), 600, 3)

@@ -6,7 +6,8 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from asg_perception.data import DatasetError, load_frames, to_tensor
+from asg_perception.data import VOID, DatasetError, load_frames, to_tensor
+from asg_perception.metrics import Confusion
 from asg_perception.inference import BACKENDS, Segmenter
 from asg_perception.model import UNet, parameter_count
 from asg_perception.train import (TrainConfig, evaluate, load_model, predict, save_model, train)
@@ -24,7 +25,7 @@ def test_shapes_and_parameter_count():
 def dataset_loss(model, frames):
     with torch.no_grad():
         return float(F.cross_entropy(model(to_tensor(frames.rgb)),
-                                     torch.from_numpy(frames.labels).long()))
+                                     torch.from_numpy(frames.labels).long(), ignore_index=VOID))
 
 
 def test_one_epoch_lowers_the_loss(tiny_dataset, tmp_path):
@@ -65,9 +66,32 @@ def test_bad_model_files_are_named(tmp_path):
         load_model(str(bad))
 
 
-def test_bad_dataset_is_named(tmp_path):
+def test_void_counts_nowhere(tiny_dataset):
+    """Ground under a canopy (VOID) is in the generated labels, is left out of the confusion
+    matrix and the shadow figures whatever is predicted there."""
+    frames = load_frames(tiny_dataset)
+    assert (frames.labels == VOID).any() and frames.labels.max() == VOID
+    labels = np.array([[0, 1, 2, VOID, VOID]], np.uint8)
+    lit = np.zeros_like(labels)  # all in shadow
+    a, b = Confusion(), Confusion()
+    a.add(np.array([[0, 1, 2, 0, 0]]), labels, lit)
+    b.add(np.array([[0, 1, 2, 1, 2]]), labels, lit)
+    assert a.matrix.sum() == 3 and np.array_equal(a.matrix, b.matrix)
+    assert a.shadow_ground == b.shadow_ground == 1
+    assert a.shadow_ground_as_obstacle == b.shadow_ground_as_obstacle == 0
+
+
+def test_bad_dataset_is_named(tmp_path, tiny_dataset):
     with pytest.raises(DatasetError, match="no manifest.csv"):
         load_frames(str(tmp_path))
+    import shutil
+    import cv2
+    bad = tmp_path / "bad"
+    shutil.copytree(tiny_dataset, bad)
+    lab = bad / "images" / "000000_labels.png"
+    cv2.imwrite(str(lab), np.full((256, 256), 7, np.uint8))
+    with pytest.raises(DatasetError, match=r"000000_labels.png: label 7 outside 0..3"):
+        load_frames(str(bad))
 
 
 def test_fast_backends_give_the_eager_labels(test_dataset):
@@ -83,9 +107,10 @@ def test_fast_backends_give_the_eager_labels(test_dataset):
 
 
 def test_shipped_models_figures(test_dataset):
-    """Recomputed on a held-apart set with both obstacle types (docs/perception.md): both models
-    label lit ground and sky well; the flawed one, never shown a tree, finds far less of the
-    non-traversable class and flags more shadow ground away from obstacles."""
+    """The figures of docs/perception.md, recomputed on the same held-apart set (both obstacle
+    types): both models label lit ground and sky well; the flawed one, never shown a tree, finds
+    far less of the non-traversable class and calls at least 5x as much shadowed ground an
+    obstacle (measured 5.2x; 8.9x under a low sun)."""
     frames = load_frames(test_dataset)
     full = evaluate(load_model(os.path.join(MODELS, "full.pt")), frames)
     flawed = evaluate(load_model(os.path.join(MODELS, "flawed.pt")), frames)
@@ -93,11 +118,8 @@ def test_shipped_models_figures(test_dataset):
         assert r["iou"]["traversable"] > 0.95
         assert r["iou"]["sky"] > 0.97
         assert r["lit_false_obstacle_rate"] < 0.01
-    assert full["iou"]["non_traversable"] > 0.75
-    assert flawed["iou"]["non_traversable"] < full["iou"]["non_traversable"] - 0.15
-    assert flawed["shadow_away_false_obstacle_rate"] > 1.5 * full["shadow_away_false_obstacle_rate"]
-    # Under a low sun (long shadows apart from their trees) the flaw is plain: measured 4.8x here,
-    # 7.6x on the 600-frame set.
-    low_flawed = flawed["low_sun"]["shadow_false_obstacle_rate"]
-    assert low_flawed > 3 * full["low_sun"]["shadow_false_obstacle_rate"]
-    assert low_flawed > 0.02
+    assert full["iou"]["non_traversable"] > 0.8
+    assert flawed["iou"]["non_traversable"] < full["iou"]["non_traversable"] - 0.2
+    assert flawed["shadow_false_obstacle_rate"] >= 5 * full["shadow_false_obstacle_rate"]
+    assert flawed["shadow_false_obstacle_rate"] > 0.05
+    assert flawed["low_sun"]["shadow_false_obstacle_rate"] >= 5 * full["low_sun"]["shadow_false_obstacle_rate"]

@@ -10,6 +10,7 @@ from .convert import to_goal_msg
 from .report import (TERMINATION_NAMES, path_length, plot_run, write_result_yaml,
                      write_trajectory_csv, yaw_of)
 from .schema import ScenarioError, dump_scenario, load_scenario
+from .votes import phantom_votes, shadow_votes
 
 
 def _samples(result):
@@ -23,19 +24,6 @@ def _samples(result):
 
 def removed_set(result):
     return {(int(r.layout_index), int(r.instance_index)) for r in result.removed_obstacles}
-
-
-def phantom_votes(scenario, votes, cell, removed):
-    """Voted vertices with no placed obstacle within its collision radius plus one vote cell:
-    votes that only a perception error can have cast."""
-    import math
-
-    from .catalogue import MESHES
-    obstacles = [(i["x"], i["y"], MESHES[l["mesh_name"]].collision_radius * i["scale"])
-                 for li, l in enumerate(scenario["structural"]["layouts"])
-                 for ii, i in enumerate(l["instances"]) if i["visible"] and (li, ii) not in removed]
-    return sum(1 for v in votes
-               if all(math.hypot(v["x"] - x, v["y"] - y) > r + cell for x, y, r in obstacles))
 
 
 def main(argv=None):
@@ -134,7 +122,11 @@ def main(argv=None):
         summary["votes"] = [{"x": x, "y": y, "weight": round((a - 0.3) / 0.7, 3)}
                             for x, y, a in votes.get("cells", [])]
         cell = votes.get("size", 0) / 0.6  # the marker side is 0.6 x the vote spacing
-        summary["phantom_vote_vertices"] = phantom_votes(scenario, summary["votes"], cell, removed_set(result))
+        removed = removed_set(result)
+        summary["phantom_vote_vertices"] = phantom_votes(scenario, summary["votes"], cell, removed)
+        summary["shadow_vote_vertices"] = shadow_votes(scenario, summary["votes"], cell, removed)
+        print(f"votes: {len(summary['votes'])} vertices, {summary['phantom_vote_vertices']} with no "
+              f"obstacle near, {summary['shadow_vote_vertices']} of those in a cast shadow")
     write_result_yaml(os.path.join(args.out, "result.yaml"), summary)
     write_trajectory_csv(os.path.join(args.out, "trajectory.csv"), samples)
     with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
