@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <stdexcept>
+#include <string>
 
 #include "asg_sim/meshes.hpp"
 
@@ -50,7 +51,10 @@ void main() {
 }
 )";
 
-const char* kFragmentShader = R"(#version 330 core
+// Compiled twice: with LABELS defined (camera frames with labels) and without (RGB + depth
+// only, and the top-down), so frames without labels skip the footprint look-up: llvmpipe runs
+// both sides of a branch on a uniform, so a run-time switch would not save it.
+const char* kFragmentShader = R"(
 in vec3 vWorld;
 in vec3 vNormal;
 in vec3 vColor;
@@ -67,7 +71,6 @@ uniform int uShadows;
 uniform vec4 uLabel;  // r: label / 255, g, b: instance id low, high byte / 255
 uniform sampler2D uFootprint;  // ground under a non-traversable obstacle's canopy (top-down)
 uniform vec4 uFootprintBox;    // xy: world corner of the footprint map, zw: 1 / its extent
-uniform int uWithLabels;       // 0: the label target is not drawn, skip its look-ups
 layout(location = 0) out vec4 oColor;
 layout(location = 1) out float oDepth;
 layout(location = 2) out vec4 oLabel;
@@ -106,12 +109,14 @@ void main() {
   oColor = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.6)), 1.0);
   oDepth = vEyeDepth;
   vec4 label = uLabel;
-  if (uGround == 1 && uWithLabels == 1) {
+#ifdef LABELS
+  if (uGround == 1) {
     // Ground under an obstacle's canopy (seen from straight above): void (kUnderCanopy).
     vec2 q = (vWorld.xy - uFootprintBox.xy) * uFootprintBox.zw;
     if (q.x > 0.0 && q.x < 1.0 && q.y > 0.0 && q.y < 1.0 && texture(uFootprint, q).r > 0.5)
       label.r = 3.0 / 255.0;
   }
+#endif
   oLabel = vec4(label.rgb, lit);  // a: how lit the surface is (0 = full shadow)
 }
 )";
@@ -143,9 +148,9 @@ GLuint compile(GLenum type, const char* src) {
   return s;
 }
 
-GLuint link(const char* vs, const char* fs) {
+GLuint link(const std::string& vs, const std::string& fs) {
   GLuint p = glCreateProgram();
-  GLuint v = compile(GL_VERTEX_SHADER, vs), f = compile(GL_FRAGMENT_SHADER, fs);
+  GLuint v = compile(GL_VERTEX_SHADER, vs.c_str()), f = compile(GL_FRAGMENT_SHADER, fs.c_str());
   glAttachShader(p, v);
   glAttachShader(p, f);
   glLinkProgram(p);
@@ -299,7 +304,7 @@ void readRows(GLenum attachment, GLenum format, GLenum type, int w, int h, int c
 struct Renderer::Gl {
   OSMesaContext ctx = nullptr;
   std::vector<unsigned char> dummy;
-  GLuint program = 0, shadow_program = 0;
+  GLuint program = 0, label_program = 0, shadow_program = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0, shadow_opacity = 0;
   GLuint footprint_fbo = 0, footprint_tex = 0;
   float footprint_box[4] = {0, 0, 0, 0};
@@ -376,7 +381,9 @@ Renderer::Renderer(const CameraModel& camera, const RenderOptions& options)
   if (!gl_->ctx) throw std::runtime_error("OSMesaCreateContextAttribs failed (OpenGL 3.3 core)");
   gl_->dummy.resize(16 * 16 * 4);
   gl_->use();
-  gl_->program = link(kVertexShader, kFragmentShader);
+  gl_->program = link(kVertexShader, std::string("#version 330 core\n") + kFragmentShader);
+  gl_->label_program =
+      link(kVertexShader, std::string("#version 330 core\n#define LABELS\n") + kFragmentShader);
   gl_->shadow_program = link(kShadowVertexShader, kShadowFragmentShader);
   gl_->camera = makeTarget(camera_.width, camera_.height, true);
 
@@ -435,6 +442,7 @@ Renderer::~Renderer() {
   release(&gl_->topdown);
   release(&gl_->camera);
   glDeleteProgram(gl_->shadow_program);
+  glDeleteProgram(gl_->label_program);
   glDeleteProgram(gl_->program);
   OSMesaDestroyContext(gl_->ctx);
 }
@@ -594,11 +602,11 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
   glClearBufferfv(GL_COLOR, 1, nan);
   if (with_labels) glClearBufferfv(GL_COLOR, 2, sky_label);
   glClear(GL_DEPTH_BUFFER_BIT);
-  setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
+  const GLuint prog = with_labels ? gl_->label_program : gl_->program;
+  setCommonUniforms(prog, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
                     gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
                     gl_->footprint_tex, gl_->footprint_box);
-  glUniform1i(glGetUniformLocation(gl_->program, "uWithLabels"), with_labels ? 1 : 0);
-  gl_->drawScene(gl_->program, false, true);
+  gl_->drawScene(prog, false, true);
 
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
   out->rgb.resize(w, h);
@@ -643,7 +651,6 @@ void Renderer::renderTopDown(int px, RgbImage* out) {
   setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
                     gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
                     gl_->footprint_tex, gl_->footprint_box);
-  glUniform1i(glGetUniformLocation(gl_->program, "uWithLabels"), 0);
   gl_->drawScene(gl_->program, false, true);
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, px, px, 4, &gl_->rows8, &gl_->scratch8);
   out->resize(px, px);

@@ -35,12 +35,13 @@ int main(int argc, char** argv) {
     cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
     cv::imwrite(out + "_rgb.png", bgr);
     cv::Mat depth(h, w, CV_8UC1), labels(h, w, CV_8UC3);
-    const cv::Vec3b palette[3] = {{80, 160, 80}, {40, 40, 200}, {230, 200, 140}};  // BGR
+    // BGR per label: traversable, non-traversable, sky, void (ground under a canopy)
+    const cv::Vec3b palette[4] = {{80, 160, 80}, {40, 40, 200}, {230, 200, 140}, {128, 128, 128}};
     for (int v = 0; v < h; ++v)
       for (int u = 0; u < w; ++u) {
         const float d = frame.depth.at(u, v);
         depth.at<uint8_t>(v, u) = std::isfinite(d) ? uint8_t(255.0 * std::min(1.0f, d / 40.0f)) : 255;
-        labels.at<cv::Vec3b>(v, u) = palette[std::min<int>(frame.labels.at(u, v), 2)];
+        labels.at<cv::Vec3b>(v, u) = palette[std::min<int>(frame.labels.at(u, v), 3)];
       }
     cv::Mat depth_color;
     cv::applyColorMap(depth, depth_color, cv::COLORMAP_VIRIDIS);
