@@ -117,12 +117,12 @@ def main(argv=None):
                                "reason": r.reason} for r in result.removed_obstacles],
         "collision_with": result.collision_with,
     }
+    removed = removed_set(result)
+    cell = votes.get("size", 0) / 0.6 if votes else 0  # the marker side is 0.6 x the vote spacing
     if args.votes:
         # Marker alpha is 0.3 + 0.7 votes / max_votes (planner.yaml max_votes: 50).
         summary["votes"] = [{"x": x, "y": y, "weight": round((a - 0.3) / 0.7, 3)}
                             for x, y, a in votes.get("cells", [])]
-        cell = votes.get("size", 0) / 0.6  # the marker side is 0.6 x the vote spacing
-        removed = removed_set(result)
         summary["phantom_vote_vertices"] = phantom_votes(scenario, summary["votes"], cell, removed)
         summary["shadow_vote_vertices"] = shadow_votes(scenario, summary["votes"], cell, removed)
         print(f"votes: {len(summary['votes'])} vertices, {summary['phantom_vote_vertices']} with no "
@@ -131,7 +131,6 @@ def main(argv=None):
     write_trajectory_csv(os.path.join(args.out, "trajectory.csv"), samples)
     with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
         f.write(dump_scenario(scenario))
-    removed = removed_set(result)
     background = None
     if result.top_down.width > 0 and result.top_down.encoding == "rgb8":
         import numpy as np
@@ -139,7 +138,7 @@ def main(argv=None):
             result.top_down.height, result.top_down.width, 3)
     plot_run(os.path.join(args.out, "run.png"), scenario, xy,
              f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed, background,
-             votes=summary.get("votes"), vote_cell=votes.get("size", 0) / 0.6 if votes else 0)
+             votes=summary.get("votes"), vote_cell=cell)
     print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  wall {wall:.2f} s "
           f"({result.sim_time / max(wall, 1e-9):.1f}x real time)  path {summary['path_length']:.1f} m"
           f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}"

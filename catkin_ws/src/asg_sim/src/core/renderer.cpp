@@ -331,26 +331,32 @@ struct Renderer::Gl {
       throw std::runtime_error("OSMesaMakeCurrent failed");
   }
 
-  void drawScene(GLuint prog, bool shadow_pass, bool ground_too) {
+  // kCamera: ground and every obstacle with colour and labels; kShadow: shadow casters with
+  // their opacity; kFootprint: non-traversable obstacles, opaque.
+  enum class Pass { kCamera, kShadow, kFootprint };
+
+  void drawScene(GLuint prog, Pass pass) {
+    const bool camera = pass == Pass::kCamera;
     const GLint model_loc = glGetUniformLocation(prog, "uModel");
-    const GLint ground_loc = shadow_pass ? -1 : glGetUniformLocation(prog, "uGround");
-    const GLint label_loc = shadow_pass ? -1 : glGetUniformLocation(prog, "uLabel");
-    if (ground_too) {
+    const GLint ground_loc = camera ? glGetUniformLocation(prog, "uGround") : -1;
+    const GLint label_loc = camera ? glGetUniformLocation(prog, "uLabel") : -1;
+    const GLint opacity_loc = camera ? -1 : glGetUniformLocation(prog, "uOpacity");
+    if (camera) {
       Mat4 id = Mat4::Identity();
       glUniformMatrix4fv(model_loc, 1, GL_FALSE, id.data());
-      if (!shadow_pass) {
-        glUniform1i(ground_loc, 1);
-        glUniform4f(label_loc, kTraversable / 255.0f, 0, 0, 0);
-      }
+      glUniform1i(ground_loc, 1);
+      glUniform4f(label_loc, kTraversable / 255.0f, 0, 0, 0);
       glBindVertexArray(ground.vao);
       glDrawElements(GL_TRIANGLES, ground.count, GL_UNSIGNED_INT, nullptr);
+      glUniform1i(ground_loc, 0);
     }
-    if (!shadow_pass) glUniform1i(ground_loc, 0);
     for (const auto& inst : instances) {
-      if (shadow_pass && !inst.cast_shadow) continue;
+      if (pass == Pass::kShadow && !inst.cast_shadow) continue;
+      if (pass == Pass::kFootprint && inst.traversable) continue;
       glUniformMatrix4fv(model_loc, 1, GL_FALSE, inst.model.data());
-      if (shadow_pass) glUniform1f(glGetUniformLocation(prog, "uOpacity"), inst.shadow_opacity);
-      if (!shadow_pass) glUniform4fv(label_loc, 1, inst.label);
+      if (pass == Pass::kShadow) glUniform1f(opacity_loc, inst.shadow_opacity);
+      if (pass == Pass::kFootprint) glUniform1f(opacity_loc, 1.0f);
+      if (camera) glUniform4fv(label_loc, 1, inst.label);
       const GpuMesh& m = meshes.at(inst.mesh);
       glBindVertexArray(m.vao);
       glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
@@ -358,6 +364,14 @@ struct Renderer::Gl {
     glBindVertexArray(0);
   }
 };
+
+// Orthographic camera looking straight down on the square [lo, hi]^2 of the ground (x right,
+// y up in the picture).
+void topDownCamera(double lo, double hi, Mat4* view, Mat4* proj) {
+  const double c = (lo + hi) / 2, r = (hi - lo) / 2;
+  *view = lookAt(Eigen::Vector3d(c, c, 100.0), Eigen::Vector3d(c, c, 0), Eigen::Vector3d::UnitY());
+  *proj = ortho(-r, r, -r, r, 1.0, 200.0);
+}
 
 double CameraModel::fx() const { return (width / 2.0) / std::tan(fov_deg * M_PI / 360.0); }
 double CameraModel::fy() const { return fx(); }
@@ -421,7 +435,7 @@ Renderer::Renderer(const CameraModel& camera, const RenderOptions& options)
   glDrawBuffer(GL_COLOR_ATTACHMENT0);
   glReadBuffer(GL_NONE);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw std::runtime_error("footprint framebuffer incomplete: status " + std::to_string(glCheckFramebufferStatus(GL_FRAMEBUFFER)));
+    throw std::runtime_error("footprint framebuffer incomplete");
   for (const auto& info : meshCatalogue()) gl_->meshes[info.name] = upload(makeObstacleMesh(info.name));
   glEnable(GL_DEPTH_TEST);
   glEnable(GL_CULL_FACE);
@@ -509,7 +523,7 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
     glDisable(GL_CULL_FACE);  // thin foliage must cast from both sides
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.5f, 2.0f);
-    gl_->drawScene(gl_->shadow_program, true, false);
+    gl_->drawScene(gl_->shadow_program, Gl::Pass::kShadow);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glEnable(GL_CULL_FACE);
   }
@@ -524,32 +538,21 @@ void Renderer::renderFootprints(double size) {
   // margin for canopies that overhang its edge: the label pass marks the ground under them
   // kUnderCanopy.
   const double margin = 5.0, lo = -margin, hi = size + margin;
-  const Mat4 view = lookAt(Eigen::Vector3d(size / 2, size / 2, 100.0),
-                           Eigen::Vector3d(size / 2, size / 2, 0), Eigen::Vector3d::UnitY());
-  const Mat4 proj = ortho(lo - size / 2, hi - size / 2, lo - size / 2, hi - size / 2, 1.0, 200.0);
-  const Mat4 view_proj = proj * view;
-  gl_->footprint_box[0] = float(lo);
-  gl_->footprint_box[1] = float(lo);
+  gl_->footprint_box[0] = gl_->footprint_box[1] = float(lo);
   gl_->footprint_box[2] = gl_->footprint_box[3] = float(1.0 / (hi - lo));
   glBindFramebuffer(GL_FRAMEBUFFER, gl_->footprint_fbo);
   glViewport(0, 0, options_.footprint_map_px, options_.footprint_map_px);
   const float none[] = {0, 0, 0, 0};
   glClearBufferfv(GL_COLOR, 0, none);
+  Mat4 view, proj;
+  topDownCamera(lo, hi, &view, &proj);
+  const Mat4 view_proj = proj * view;
   glUseProgram(gl_->shadow_program);
   glUniformMatrix4fv(glGetUniformLocation(gl_->shadow_program, "uLightViewProj"), 1, GL_FALSE,
                      view_proj.data());
-  glUniform1f(glGetUniformLocation(gl_->shadow_program, "uOpacity"), 1.0f);
-  const GLint model_loc = glGetUniformLocation(gl_->shadow_program, "uModel");
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
-  for (const auto& inst : gl_->instances) {
-    if (inst.traversable) continue;
-    glUniformMatrix4fv(model_loc, 1, GL_FALSE, inst.model.data());
-    const GpuMesh& m = gl_->meshes.at(inst.mesh);
-    glBindVertexArray(m.vao);
-    glDrawElements(GL_TRIANGLES, m.count, GL_UNSIGNED_INT, nullptr);
-  }
-  glBindVertexArray(0);
+  gl_->drawScene(gl_->shadow_program, Gl::Pass::kFootprint);
   glEnable(GL_CULL_FACE);
   glEnable(GL_DEPTH_TEST);
 }
@@ -606,7 +609,7 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
   setCommonUniforms(prog, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
                     gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
                     gl_->footprint_tex, gl_->footprint_box);
-  gl_->drawScene(prog, false, true);
+  gl_->drawScene(prog, Gl::Pass::kCamera);
 
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
   out->rgb.resize(w, h);
@@ -638,10 +641,8 @@ void Renderer::renderTopDown(int px, RgbImage* out) {
     release(&gl_->topdown);
     gl_->topdown = makeTarget(px, px, false);
   }
-  const double s = scene_size_;
-  const Mat4 view = lookAt(Eigen::Vector3d(s / 2, s / 2, 100.0), Eigen::Vector3d(s / 2, s / 2, 0),
-                           Eigen::Vector3d::UnitY());
-  const Mat4 proj = ortho(-s / 2, s / 2, -s / 2, s / 2, 1.0, 200.0);
+  Mat4 view, proj;
+  topDownCamera(0.0, scene_size_, &view, &proj);
   glBindFramebuffer(GL_FRAMEBUFFER, gl_->topdown.fbo);
   glViewport(0, 0, px, px);
   const GLenum bufs[] = {GL_COLOR_ATTACHMENT0};
@@ -651,7 +652,7 @@ void Renderer::renderTopDown(int px, RgbImage* out) {
   setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
                     gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
                     gl_->footprint_tex, gl_->footprint_box);
-  gl_->drawScene(gl_->program, false, true);
+  gl_->drawScene(gl_->program, Gl::Pass::kCamera);
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, px, px, 4, &gl_->rows8, &gl_->scratch8);
   out->resize(px, px);
   for (size_t i = 0, n = size_t(px) * px; i < n; ++i)
