@@ -48,8 +48,10 @@ def test_defaults_fill_optional_fields():
 
 def test_disable_value_allowed():
     raw = exp1()
-    raw["operational"]["sim_timeout"] = -1
-    assert validate_scenario(raw)["operational"]["sim_timeout"] == -1
+    raw["operational"]["idle_timeout"] = -1
+    assert validate_scenario(raw)["operational"]["idle_timeout"] == -1
+    raw["operational"]["sim_timeout"] = -1  # every run must end: sim_timeout has no disable value
+    assert "operational.sim_timeout" in [p for p, _ in problems_of(raw).problems]
 
 
 @pytest.mark.parametrize("mutate,field,words", [
@@ -72,7 +74,7 @@ def test_disable_value_allowed():
      "structural.landscape.subdivisions", "an integer"),
     (lambda s: s["textural"].__setitem__("sun_inclination_deg", 120.0),
      "textural.sun_inclination_deg", "out of range"),
-    (lambda s: s["operational"].__setitem__("sim_timeout", -5.0), "operational.sim_timeout",
+    (lambda s: s["operational"].__setitem__("idle_timeout", -5.0), "operational.idle_timeout",
      "-1 to disable"),
     (lambda s: s["operational"].__setitem__("colour", "red"), "operational.colour", "unknown field"),
     (lambda s: s["structural"].__setitem__("layouts", {"a": 1}), "structural.layouts", "list"),

@@ -2,13 +2,16 @@
 
 Subscribes `camera/image` (rgb8) and publishes `labels` (mono8, same header): one output per
 input, in order. Acknowledges scenario announcements so that the worker starts only once the
-model is loaded.
+model is loaded. Images stamped outside the current run's window (ScenarioInfo.RUN_WINDOW) are
+dropped before inference and counted; a camera size it was not made for, or a frame it cannot
+label, ends the run at once with a StackError naming this node.
 """
 import os
+import threading
 
 import numpy as np
 import rospy
-from asg_msgs.msg import ScenarioInfo, StackAck
+from asg_msgs.msg import ScenarioInfo, StackAck, StackError
 from sensor_msgs.msg import Image
 
 from .inference import BACKENDS, Segmenter
@@ -42,27 +45,61 @@ class SegmenterNode:
         path = resolve_model(model)
         self.segmenter = Segmenter(path, backend, threads, height, width)
         rospy.loginfo("segmenter: %s (%s backend, %d thread(s))", path, backend, threads)
+        self.width, self.height = width, height
+        self.lock = threading.Lock()
+        self.info = None  # the current run's announcement
+        self.failed = False  # a StackError went out for the current run
+        self.stale_dropped = 0  # images of another run dropped (whole node life)
         self.pub = rospy.Publisher("labels", Image, queue_size=32, tcp_nodelay=True)
         self.ack_pub = rospy.Publisher("stack_ack", StackAck, queue_size=4)
+        self.error_pub = rospy.Publisher("stack_error", StackError, queue_size=4)
         rospy.Subscriber("scenario", ScenarioInfo, self.on_scenario, queue_size=4)
         rospy.Subscriber("camera/image", Image, self.on_image, queue_size=64, tcp_nodelay=True,
                          buff_size=2 ** 24)
 
     def on_scenario(self, info):
-        self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id, run=info.run))
+        with self.lock:
+            if self.info is None or self.info.run != info.run:
+                self.info, self.failed = info, False
+                if (info.camera_width, info.camera_height) != (self.width, self.height):
+                    self.fail(f"camera frames are {info.camera_width}x{info.camera_height}, this "
+                              f"segmenter was made for {self.width}x{self.height} (~width, ~height)")
+            if not self.failed:
+                self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id,
+                                              run=info.run))
+
+    def fail(self, reason):
+        """Ends the current run (the caller holds the lock)."""
+        self.failed = True
+        rospy.logerr(f"segmenter: scenario {self.info.scenario_id}: {reason}")
+        self.error_pub.publish(StackError(node=self.ack_name, scenario_id=self.info.scenario_id,
+                                          run=self.info.run, reason=reason))
+
+    def current(self, stamp) -> bool:
+        info = self.info
+        if info is None:
+            return False
+        base = info.base_stamp
+        return base <= stamp < base + rospy.Duration(ScenarioInfo.RUN_WINDOW)
 
     def on_image(self, msg):
-        if msg.encoding != "rgb8" or msg.step != msg.width * 3 or len(msg.data) != msg.step * msg.height:
-            rospy.logerr_throttle(5.0, f"segmenter: image at t = {msg.header.stamp.to_sec():.3f} s "
-                                       f"skipped: encoding {msg.encoding!r}, {msg.width}x{msg.height}, "
-                                       f"step {msg.step} (expected packed rgb8)")
-            return
-        rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
-        try:
-            labels = self.segmenter(rgb)
-        except ValueError as e:
-            rospy.logerr_throttle(5.0, f"segmenter: image at t = {msg.header.stamp.to_sec():.3f} s skipped: {e}")
-            return
+        with self.lock:
+            if not self.current(msg.header.stamp):
+                self.stale_dropped += 1
+                rospy.logwarn_throttle(5.0, f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
+                                            f"is not of the current run: dropped ({self.stale_dropped} so far)")
+                return
+            if self.failed:
+                return
+            t = (msg.header.stamp - self.info.base_stamp).to_sec()
+            if msg.encoding != "rgb8" or msg.step != msg.width * 3 or len(msg.data) != msg.step * msg.height:
+                return self.fail(f"cannot label the image at t = {t:.3f} s: encoding {msg.encoding!r}, "
+                                 f"{msg.width}x{msg.height}, step {msg.step} (expected packed rgb8)")
+            rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
+            try:
+                labels = self.segmenter(rgb)
+            except (ValueError, RuntimeError) as e:
+                return self.fail(f"cannot label the image at t = {t:.3f} s: {e}")
         out = Image(header=msg.header, height=msg.height, width=msg.width, encoding="mono8",
                     is_bigendian=0, step=msg.width, data=labels.tobytes())
         self.pub.publish(out)

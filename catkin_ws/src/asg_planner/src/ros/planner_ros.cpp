@@ -2,6 +2,7 @@
 
 #include <asg_msgs/PlannerState.h>
 #include <asg_msgs/StackAck.h>
+#include <asg_msgs/StackError.h>
 #include <asg_msgs/VehicleCommand.h>
 #include <geometry_msgs/PointStamped.h>
 #include <nav_msgs/Path.h>
@@ -13,6 +14,8 @@
 
 namespace asg_planner {
 namespace {
+
+constexpr int kMaxVehicleCellsPerSide = 4096;  // [-] 16.8 M A* nodes at most
 
 Eigen::Isometry3d toIso(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -45,6 +48,7 @@ PlannerROS::PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   planner_ = std::make_unique<VotingPlanner>(params_);
   cmd_pub_ = nh_.advertise<asg_msgs::VehicleCommand>("cmd", 16);
   ack_pub_ = nh_.advertise<asg_msgs::StackAck>("stack_ack", 4);
+  error_pub_ = nh_.advertise<asg_msgs::StackError>("stack_error", 4);
   state_pub_ = nh_.advertise<asg_msgs::PlannerState>("planner/state", 64);
   path_pub_ = nh_.advertise<nav_msgs::Path>("planner/path", 4, true);
   votes_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("planner/votes", 4, true);
@@ -106,7 +110,30 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   ack.run = msg->run;
   // The worker repeats the announcement until every stack node has acked: reset once, ack always.
   if (have_run_ && msg->run == run_) {
+    if (failed_) return;
     ack_pub_.publish(ack);
+    return;
+  }
+  scenario_id_ = msg->scenario_id;
+  run_ = msg->run;
+  base_ = msg->base_stamp;
+  have_run_ = true;
+  failed_ = false;
+  stale_dropped_ = 0;
+  depth_.clear();
+  labels_.clear();
+  odom_.clear();
+  ticks_.clear();
+  frames_done_ = 0;
+  // The vehicle grid bounds A*'s memory: refuse a landscape it cannot hold instead of swapping.
+  const double cells = msg->landscape_size / params_.astar.vehicle_spacing;
+  if (!(cells <= kMaxVehicleCellsPerSide)) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "landscape of %.0f m is %.0f vehicle-grid cells per side at %.2f m spacing "
+                  "(at most %d)", msg->landscape_size, cells, params_.astar.vehicle_spacing,
+                  kMaxVehicleCellsPerSide);
+    reportError(buf);
     return;
   }
   Task task;
@@ -116,14 +143,6 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   task.landscape_size = msg->landscape_size;
   task.speed = msg->speed;
   planner_->reset(task);
-  scenario_id_ = msg->scenario_id;
-  run_ = msg->run;
-  have_run_ = true;
-  depth_.clear();
-  labels_.clear();
-  odom_.clear();
-  ticks_.clear();
-  frames_done_ = 0;
   if (publish_markers_) {
     // The vehicle grid, once per scenario.
     visualization_msgs::Marker grid;
@@ -145,20 +164,43 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   ack_pub_.publish(ack);
 }
 
+bool PlannerROS::current(const ros::Time& stamp, const char* what) {
+  if (have_run_ && stamp >= base_ && stamp < base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
+    return true;
+  ++stale_dropped_;
+  ROS_WARN_THROTTLE(5.0, "planner: %s stamped %.3f s is not of the current run (window from %.0f s): dropped",
+                    what, stamp.toSec(), base_.toSec());
+  return false;
+}
+
+void PlannerROS::reportError(const std::string& reason) {
+  failed_ = true;
+  asg_msgs::StackError e;
+  e.node = ack_name_;
+  e.scenario_id = scenario_id_;
+  e.run = run_;
+  e.reason = reason;
+  error_pub_.publish(e);
+  ROS_ERROR("planner: scenario %u: %s", scenario_id_, reason.c_str());
+}
+
 void PlannerROS::onDepth(const sensor_msgs::ImageConstPtr& msg) {
+  if (!current(msg->header.stamp, "depth")) return;
   depth_[msg->header.stamp] = msg;
   process();
 }
 void PlannerROS::onLabels(const sensor_msgs::ImageConstPtr& msg) {
+  if (!current(msg->header.stamp, "labels")) return;
   labels_[msg->header.stamp] = msg;
   process();
 }
 void PlannerROS::onOdom(const nav_msgs::OdometryConstPtr& msg) {
+  if (!current(msg->header.stamp, "odometry")) return;
   odom_[msg->header.stamp] = msg;
   process();
 }
 void PlannerROS::onTick(const asg_msgs::TickConstPtr& msg) {
-  if (msg->scenario_id != scenario_id_) return;
+  if (msg->scenario_id != scenario_id_ || !current(msg->header.stamp, "tick")) return;
   ticks_.push_back(msg);
   process();
 }
@@ -194,7 +236,7 @@ bool PlannerROS::frameValid(const sensor_msgs::Image& d, const sensor_msgs::Imag
 }
 
 void PlannerROS::process() {
-  if (scenario_id_ == 0) return;
+  if (scenario_id_ == 0 || failed_) return;
   // 1. Vote every frame whose depth, labels and odometry (same stamp) are all here.
   while (have_mount_ && have_info_) {
     bool progressed = false;
@@ -204,13 +246,15 @@ void PlannerROS::process() {
       auto oit = odom_.find(stamp);
       if (lit == labels_.end() || oit == odom_.end()) continue;
       std::string why;
-      if (frameValid(*it->second, *lit->second, &why)) {
-        const Eigen::Isometry3d T = toIso(oit->second->pose.pose) * T_base_optical_;
-        planner_->addFrame(stamp.toSec(), reinterpret_cast<const float*>(it->second->data.data()),
-                           lit->second->data.data(), int(it->second->width), int(it->second->height), K_, T);
-      } else {
-        ROS_ERROR_THROTTLE(5.0, "planner: frame at t = %.3f s skipped: %s", stamp.toSec(), why.c_str());
+      if (!frameValid(*it->second, *lit->second, &why)) {
+        char buf[64];
+        std::snprintf(buf, sizeof(buf), "cannot use the frame at t = %.3f s: ", (stamp - base_).toSec());
+        reportError(buf + why);
+        return;
       }
+      const Eigen::Isometry3d T = toIso(oit->second->pose.pose) * T_base_optical_;
+      planner_->addFrame((stamp - base_).toSec(), reinterpret_cast<const float*>(it->second->data.data()),
+                         lit->second->data.data(), int(it->second->width), int(it->second->height), K_, T);
       ++frames_done_;
       depth_.erase(it);
       labels_.erase(lit);
@@ -233,7 +277,7 @@ void PlannerROS::process() {
     s.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
     s.speed = o.twist.twist.linear.x;
     bool replanned = false;
-    const double t = tick.header.stamp.toSec();
+    const double t = (tick.header.stamp - base_).toSec();
     const ControlCommand c = planner_->tick(t, s, &replanned);
     asg_msgs::VehicleCommand cmd;
     cmd.header.stamp = tick.header.stamp;
@@ -265,6 +309,7 @@ void PlannerROS::process() {
     st.steering = c.steering;
     st.brake = c.brake;
     st.target_speed = c.target_speed;
+    st.stale_dropped = stale_dropped_;
     state_pub_.publish(st);
     if (publish_markers_) {
       geometry_msgs::PointStamped lp;

@@ -37,13 +37,17 @@ class PlannerROS {
   void process();
   bool frameValid(const sensor_msgs::Image& depth, const sensor_msgs::Image& labels, std::string* why) const;
   void publishViz(const ros::Time& stamp);
+  /// True if `stamp` lies in the current run's window; counts (and logs) a stale message if not.
+  bool current(const ros::Time& stamp, const char* what);
+  /// Tells the worker this run cannot go on (asg_msgs/StackError).
+  void reportError(const std::string& reason);
 
   ros::NodeHandle nh_, pnh_;
   PlannerParams params_;
   std::string ack_name_;
   bool publish_markers_ = true;
   std::unique_ptr<VotingPlanner> planner_;
-  ros::Publisher cmd_pub_, ack_pub_, state_pub_, path_pub_, votes_pub_, lookahead_pub_, grid_pub_;
+  ros::Publisher cmd_pub_, ack_pub_, error_pub_, state_pub_, path_pub_, votes_pub_, lookahead_pub_, grid_pub_;
   ros::Subscriber scenario_sub_, depth_sub_, labels_sub_, info_sub_, odom_sub_, tf_sub_, tick_sub_;
 
   uint32_t scenario_id_ = 0;
@@ -56,6 +60,9 @@ class PlannerROS {
   std::map<ros::Time, nav_msgs::OdometryConstPtr> odom_;
   std::deque<asg_msgs::TickConstPtr> ticks_;
   uint32_t frames_done_ = 0;
+  ros::Time base_;              // stamp of simulated time 0 in the current run
+  uint32_t stale_dropped_ = 0;  // messages of another run dropped during this run
+  bool failed_ = false;         // a StackError went out for this run: answer nothing more
 };
 
 }  // namespace asg_planner

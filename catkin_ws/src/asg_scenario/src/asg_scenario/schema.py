@@ -16,8 +16,17 @@ from .catalogue import MESHES, TRAVERSABLE_HEIGHT, VEHICLE_HALF_WIDTH
 
 FORMAT_VERSION = 1
 
+# The scene budget (docs/scenario-format.md): what one worker can build and run in bounded memory
+# and time. asg_sim's C++ validator (scene.hpp) enforces the same numbers.
 #: Most obstacle instances one scene may hold (memory and render-time bound).
 MAX_OBSTACLES = 512
+#: [m] largest side of the nominal square and largest border.
+MAX_LANDSCAPE_SIZE = 1000.0
+MAX_BORDER = 1000.0
+#: [-] ground cells per side including the border: subdivisions x (size + 2 border) / size.
+MAX_GROUND_CELLS_PER_SIDE = 2048.0
+#: [s] sim_timeout is required and finite, so every run ends.
+MAX_SIM_TIMEOUT = 3600.0
 
 
 @dataclass(frozen=True)
@@ -56,9 +65,9 @@ TOP_FIELDS = [
 ]
 
 LANDSCAPE_FIELDS = [
-    Field("size", float, "m", 1.0, 10000.0, "Side of the nominal square [0, size]^2."),
+    Field("size", float, "m", 1.0, MAX_LANDSCAPE_SIZE, "Side of the nominal square [0, size]^2."),
     Field("subdivisions", int, "-", 1, 4096, "Ground mesh cells per side.", 64),
-    Field("border", float, "m", 0.0, 10000.0,
+    Field("border", float, "m", 0.0, MAX_BORDER,
           "Ground rendered around the nominal square (horizon, leaving the area).", 50.0),
 ]
 
@@ -89,9 +98,10 @@ OPERATIONAL_FIELDS = [
     Field("safety_radius", float, "m", 0.0, 1000.0,
           "Obstacles closer than this to start or goal are removed.", 11.0),
     Field("speed", float, "m/s", 0.1, 30.0, "Tracking speed of the vehicle under test.", 5.0),
-    Field("sim_timeout", float, "s", 0.1, 86400.0, "Simulated time limit.", 120.0, -1.0),
-    Field("idle_timeout", float, "s", 0.1, 86400.0, "Idling time limit.", 10.0, -1.0),
-    Field("stuck_timeout", float, "s", 0.1, 86400.0, "Stuck time limit.", 10.0, -1.0),
+    Field("sim_timeout", float, "s", 0.1, MAX_SIM_TIMEOUT,
+          "Simulated time limit (required to be finite: every run ends).", 120.0),
+    Field("idle_timeout", float, "s", 0.1, MAX_SIM_TIMEOUT, "Idling time limit.", 10.0, -1.0),
+    Field("stuck_timeout", float, "s", 0.1, MAX_SIM_TIMEOUT, "Stuck time limit.", 10.0, -1.0),
     Field("max_roll_deg", float, "deg", 1.0, 180.0, "Roll beyond this ends the run (FLIPPED).", 70.0),
     Field("max_pitch_deg", float, "deg", 1.0, 180.0, "Pitch beyond this ends the run.", 70.0),
     Field("allow_collisions", bool, "-", None, None, "Contact with obstacles does not end the run.",
@@ -172,12 +182,22 @@ class _Checker:
         if isinstance(v, float) and not math.isfinite(v):
             self.fail(where, f"= {v!r}: must be {f.allowed()}")
             return f.default
-        v = f.kind(v)
+        try:
+            v = f.kind(v)
+        except OverflowError:  # an integer too large for a float
+            self.fail(where, f"= {_short(v)}: out of range, must be {f.allowed()} [{f.unit}]")
+            return f.default
         if f.disable_value is not None and v == f.disable_value:
             return v
         if (f.lo is not None and v < f.lo) or (f.hi is not None and v > f.hi):
-            self.fail(where, f"= {v!r}: out of range, must be {f.allowed()} [{f.unit}]")
+            self.fail(where, f"= {_short(v)}: out of range, must be {f.allowed()} [{f.unit}]")
+            return f.default
         return v
+
+
+def _short(v) -> str:
+    text = repr(v)
+    return text if len(text) <= 40 else text[:20] + "..." + f" ({len(text)} digits)"
 
 
 def _join(path: str, key: str) -> str:
@@ -222,6 +242,9 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
         mesh = raw.get("mesh_name")
         if mesh is None:
             c.fail(f"{lpath}.mesh_name", f"missing required field (one of {', '.join(sorted(MESHES))})")
+        elif not isinstance(mesh, str):
+            c.fail(f"{lpath}.mesh_name", f"= {mesh!r}: wrong type {type(mesh).__name__}, must be a string")
+            mesh = None
         elif mesh not in MESHES:
             c.fail(f"{lpath}.mesh_name", f"= {mesh!r}: unknown mesh (one of {', '.join(sorted(MESHES))})")
         insts = raw.get("instances", [])
@@ -249,8 +272,14 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
 
 
 def _check_geometry(s: dict, c: _Checker):
-    size = s["structural"]["landscape"]["size"]
+    land = s["structural"]["landscape"]
+    size = land["size"]
     op = s["operational"]
+    cells = land["subdivisions"] * (size + 2.0 * land["border"]) / size
+    if cells > MAX_GROUND_CELLS_PER_SIDE:
+        c.fail("structural.landscape.subdivisions",
+               f"= {land['subdivisions']} gives {math.ceil(cells)} ground cells per side with the "
+               f"border: at most {MAX_GROUND_CELLS_PER_SIDE:g} (subdivisions x (size + 2 border) / size)")
 
     def inside(path, x, y):
         ok = True

@@ -66,8 +66,13 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Most obstacle instances one scene may hold.
-constexpr size_t kMaxObstacles = 512;
+/// The scene budget (docs/scenario-format.md): what one worker can build and run in bounded
+/// memory and time. asg_scenario's Python validator enforces the same numbers.
+constexpr size_t kMaxObstacles = 512;          ///< [-] obstacle instances, all layouts
+constexpr double kMaxLandscapeSize = 1000.0;   ///< [m] side of the nominal square
+constexpr double kMaxBorder = 1000.0;          ///< [m]
+constexpr double kMaxGroundCellsPerSide = 2048.0;  ///< [-] subdivisions x (size + 2 border) / size
+constexpr double kMaxSimTimeout = 3600.0;      ///< [s] sim_timeout is required to be finite
 
 /// Throws SceneError listing every problem (NaN, out of range, unknown mesh, too many
 /// obstacles, start inside an obstacle that the safety radius keeps).

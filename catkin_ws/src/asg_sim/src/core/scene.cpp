@@ -56,9 +56,17 @@ size_t instanceCount(const SceneSpec& spec) {
 void validateScene(const SceneSpec& spec) {
   Problems p;
   const auto& L = spec.landscape;
-  p.range("structural.landscape.size", L.size, 1.0, 10000.0, "m");
+  p.range("structural.landscape.size", L.size, 1.0, kMaxLandscapeSize, "m");
   p.range("structural.landscape.subdivisions", L.subdivisions, 1, 4096, "");
-  p.range("structural.landscape.border", L.border, 0.0, 10000.0, "m");
+  p.range("structural.landscape.border", L.border, 0.0, kMaxBorder, "m");
+  if (std::isfinite(L.size) && std::isfinite(L.border) && L.size >= 1.0 && L.border >= 0.0) {
+    const double cells = L.subdivisions * (L.size + 2.0 * L.border) / L.size;
+    if (cells > kMaxGroundCellsPerSide)
+      p.add("structural.landscape.subdivisions",
+            "= " + std::to_string(L.subdivisions) + " gives " + Problems::num(std::ceil(cells)) +
+                " ground cells per side with the border: at most " +
+                Problems::num(kMaxGroundCellsPerSide) + " (subdivisions x (size + 2 border) / size)");
+  }
   const double size = std::isfinite(L.size) ? L.size : 0.0;
   auto inside = [&](const std::string& prefix, double x, double y) {
     bool ok = true;
@@ -81,9 +89,9 @@ void validateScene(const SceneSpec& spec) {
   p.range("operational.goal_radius", O.goal_radius, 0.1, 1000.0, "m");
   p.range("operational.safety_radius", O.safety_radius, 0.0, 1000.0, "m");
   p.range("operational.speed", O.speed, 0.1, 30.0, "m/s");
-  p.range("operational.sim_timeout", O.sim_timeout, 0.1, 86400.0, "s", true);
-  p.range("operational.idle_timeout", O.idle_timeout, 0.1, 86400.0, "s", true);
-  p.range("operational.stuck_timeout", O.stuck_timeout, 0.1, 86400.0, "s", true);
+  p.range("operational.sim_timeout", O.sim_timeout, 0.1, kMaxSimTimeout, "s");
+  p.range("operational.idle_timeout", O.idle_timeout, 0.1, kMaxSimTimeout, "s", true);
+  p.range("operational.stuck_timeout", O.stuck_timeout, 0.1, kMaxSimTimeout, "s", true);
   p.range("operational.max_roll_deg", O.max_roll_deg, 1.0, 180.0, "deg");
   p.range("operational.max_pitch_deg", O.max_pitch_deg, 1.0, 180.0, "deg");
   p.range("textural.sun_inclination_deg", spec.textural.sun_inclination_deg, 0.0, 90.0, "deg");

@@ -2,22 +2,209 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+#include <regex>
+#include <set>
+#include <sstream>
+
 namespace asg_sim {
 namespace {
 
-template <class T>
-void get(const YAML::Node& node, const char* key, T* out, const std::string& where, bool required) {
-  const YAML::Node v = node[key];
-  if (!v) {
-    if (required) throw SceneError(where + "." + key + ": missing required field");
-    return;
+// A plain YAML scalar resolved the way PyYAML (YAML 1.1) resolves it, so that this loader and
+// asg_scenario's Python validator see the same types in the same file: "1e5" is a string and
+// "1.0e+5" a float, "yes"/"off" are booleans, a quoted scalar is always a string.
+struct Scalar {
+  enum Kind { kNull, kBool, kInt, kFloat, kStr, kNotScalar } kind = kNull;
+  bool b = false;
+  long double num = 0;  // kInt and kFloat
+  std::string text;
+};
+
+const char* kindName(Scalar::Kind k) {
+  switch (k) {
+    case Scalar::kNull: return "null";
+    case Scalar::kBool: return "bool";
+    case Scalar::kInt: return "int";
+    case Scalar::kFloat: return "float";
+    case Scalar::kStr: return "str";
+    case Scalar::kNotScalar: return "a mapping or list";
   }
-  try {
-    *out = v.as<T>();
-  } catch (const YAML::Exception&) {
-    throw SceneError(where + "." + key + ": wrong type");
-  }
+  return "?";
 }
+
+std::string stripUnderscores(std::string s) {
+  s.erase(std::remove(s.begin(), s.end(), '_'), s.end());
+  return s;
+}
+
+Scalar resolve(const YAML::Node& n) {
+  Scalar v;
+  if (n.IsNull()) return v;
+  if (!n.IsScalar()) {
+    v.kind = Scalar::kNotScalar;
+    return v;
+  }
+  v.text = n.Scalar();
+  if (n.Tag() == "!") {  // quoted
+    v.kind = Scalar::kStr;
+    return v;
+  }
+  const std::string& t = v.text;
+  static const std::regex null_re("~|null|Null|NULL|");
+  static const std::regex true_re("yes|Yes|YES|true|True|TRUE|on|On|ON");
+  static const std::regex false_re("no|No|NO|false|False|FALSE|off|Off|OFF");
+  static const std::regex dec_re("[-+]?(0|[1-9][0-9_]*)");
+  static const std::regex hex_re("[-+]?0x[0-9a-fA-F_]+");
+  static const std::regex oct_re("[-+]?0[0-7_]+");
+  static const std::regex bin_re("[-+]?0b[0-1_]+");
+  static const std::regex float_re("[-+]?([0-9][0-9_]*)?\\.[0-9_]*([eE][-+][0-9]+)?");
+  static const std::regex inf_re("[-+]?\\.(inf|Inf|INF)");
+  static const std::regex nan_re("\\.(nan|NaN|NAN)");
+  if (std::regex_match(t, null_re)) return v;
+  if (std::regex_match(t, true_re) || std::regex_match(t, false_re)) {
+    v.kind = Scalar::kBool;
+    v.b = std::regex_match(t, true_re);
+    return v;
+  }
+  auto integer = [&](int base, size_t prefix) {
+    std::string digits = stripUnderscores(t);
+    bool neg = false;
+    if (!digits.empty() && (digits[0] == '-' || digits[0] == '+')) {
+      neg = digits[0] == '-';
+      digits = digits.substr(1);
+    }
+    digits = digits.substr(prefix);
+    long double x = 0;
+    for (char c : digits) x = x * base + (std::isdigit(c) ? c - '0' : std::tolower(c) - 'a' + 10);
+    v.kind = Scalar::kInt;
+    v.num = neg ? -x : x;
+  };
+  if (std::regex_match(t, dec_re)) integer(10, 0);
+  else if (std::regex_match(t, hex_re)) integer(16, 2);
+  else if (std::regex_match(t, bin_re)) integer(2, 2);
+  else if (std::regex_match(t, oct_re)) integer(8, 1);
+  else if (std::regex_match(t, inf_re)) {
+    v.kind = Scalar::kFloat;
+    v.num = t[0] == '-' ? -INFINITY : INFINITY;
+  } else if (std::regex_match(t, nan_re)) {
+    v.kind = Scalar::kFloat;
+    v.num = NAN;
+  } else if (t != "." && std::regex_match(t, float_re)) {
+    v.kind = Scalar::kFloat;
+    v.num = std::strtold(stripUnderscores(t).c_str(), nullptr);
+  } else {
+    v.kind = Scalar::kStr;
+  }
+  return v;
+}
+
+// Collects every problem, as the Python validator does, then throws them together.
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  void fail(const std::string& path, const std::string& msg) {
+    out_ << "\n  - " << path << ": " << msg;
+    ++n_;
+  }
+  void raise() const {
+    if (n_) throw SceneError(source_ + ": invalid scene, " + std::to_string(n_) + " problem(s):" + out_.str());
+  }
+
+  /// The node if it is a mapping (nullptr-like empty node otherwise, with a problem).
+  YAML::Node mapping(const YAML::Node& n, const std::string& path, bool required = true) {
+    if (!n || n.IsNull()) {
+      if (required) fail(path, "missing section (a mapping is required)");
+      return YAML::Node(YAML::NodeType::Map);
+    }
+    if (!n.IsMap()) {
+      fail(path, "must be a mapping");
+      return YAML::Node(YAML::NodeType::Map);
+    }
+    return n;
+  }
+
+  void allowOnly(const YAML::Node& map, const std::set<std::string>& keys, const std::string& path) {
+    std::string allowed;
+    for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
+    for (const auto& kv : map) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
+      if (!keys.count(key)) fail(join(path, key), "unknown field (allowed: " + allowed + ")");
+    }
+  }
+
+  void number(const YAML::Node& map, const char* key, double* out, const std::string& path, bool required) {
+    Scalar v;
+    if (!present(map, key, path, required, &v)) return;
+    if (v.kind != Scalar::kInt && v.kind != Scalar::kFloat) {
+      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be a finite number");
+      return;
+    }
+    // Finite values beyond double become +-inf, which validateScene names as not finite.
+    *out = double(v.num);
+    if (v.kind == Scalar::kInt && !std::isfinite(*out)) fail(join(path, key), "= " + v.text + ": out of range");
+  }
+
+  template <class T>
+  void integer(const YAML::Node& map, const char* key, T* out, const std::string& path, bool required,
+               long double lo, long double hi) {
+    Scalar v;
+    if (!present(map, key, path, required, &v)) return;
+    const bool integral = v.kind == Scalar::kInt ||
+                          (v.kind == Scalar::kFloat && std::isfinite(v.num) && v.num == std::floor(v.num));
+    if (!integral) {
+      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be an integer");
+      return;
+    }
+    if (v.num < lo || v.num > hi) {
+      std::ostringstream s;
+      s << "= " << v.text << ": out of range, must be an integer in [" << double(lo) << ", " << double(hi) << "]";
+      fail(join(path, key), s.str());
+      return;
+    }
+    *out = T(v.num);
+  }
+
+  void boolean(const YAML::Node& map, const char* key, bool* out, const std::string& path) {
+    Scalar v;
+    if (!present(map, key, path, false, &v)) return;
+    if (v.kind != Scalar::kBool) {
+      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be true or false");
+      return;
+    }
+    *out = v.b;
+  }
+
+  void string(const YAML::Node& map, const char* key, std::string* out, const std::string& path, bool required) {
+    Scalar v;
+    if (!present(map, key, path, required, &v)) return;
+    if (v.kind != Scalar::kStr) {
+      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be a string");
+      return;
+    }
+    *out = v.text;
+  }
+
+  static std::string join(const std::string& path, const std::string& key) {
+    return path.empty() ? key : path + "." + key;
+  }
+
+ private:
+  bool present(const YAML::Node& map, const char* key, const std::string& path, bool required, Scalar* v) {
+    const YAML::Node n = map[key];
+    if (!n) {
+      if (required) fail(join(path, key), "missing required field");
+      return false;
+    }
+    *v = resolve(n);
+    return true;
+  }
+  static std::string show(const Scalar& v) { return v.kind == Scalar::kNotScalar ? "(not a scalar)" : "'" + v.text + "'"; }
+
+  std::string source_;
+  std::ostringstream out_;
+  int n_ = 0;
+};
 
 }  // namespace
 
@@ -28,61 +215,90 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw SceneError(path + ": " + e.what());
   }
+  Reader r(path);
+  if (!root.IsMap()) {
+    r.fail("<root>", "must be a mapping of sections");
+    r.raise();
+  }
   ScenarioFile f;
-  get(root, "scenario_id", &f.scenario_id, path, false);
-  get(root, "record_labels", &f.record_labels, path, false);
-  get(root, "name", &f.name, path, false);
-  const auto st = root["structural"];
-  const auto ld = st["landscape"];
   auto& s = f.spec;
-  const std::string lw = path + ": structural.landscape";
-  get(ld, "size", &s.landscape.size, lw, true);
-  get(ld, "subdivisions", &s.landscape.subdivisions, lw, false);
-  get(ld, "border", &s.landscape.border, lw, false);
-  if (st["layouts"]) {
-    for (size_t i = 0; i < st["layouts"].size(); ++i) {
-      const auto l = st["layouts"][i];
-      const std::string w = path + ": structural.layouts[" + std::to_string(i) + "]";
+  r.allowOnly(root, {"format_version", "name", "scenario_id", "record_labels", "structural", "textural",
+                     "operational"}, "");
+  int version = 1;
+  r.integer(root, "format_version", &version, "", false, 1, 1);
+  r.integer(root, "scenario_id", &f.scenario_id, "", false, 1, 4294967295.0L);
+  r.boolean(root, "record_labels", &f.record_labels, "");
+  r.string(root, "name", &f.name, "", false);
+
+  const YAML::Node st = r.mapping(root["structural"], "structural");
+  r.allowOnly(st, {"landscape", "layouts"}, "structural");
+  const YAML::Node ld = r.mapping(st["landscape"], "structural.landscape");
+  r.allowOnly(ld, {"size", "subdivisions", "border"}, "structural.landscape");
+  r.number(ld, "size", &s.landscape.size, "structural.landscape", true);
+  r.integer(ld, "subdivisions", &s.landscape.subdivisions, "structural.landscape", false, 1, 4096);
+  r.number(ld, "border", &s.landscape.border, "structural.landscape", false);
+  const YAML::Node layouts = st["layouts"];
+  if (layouts && !layouts.IsNull() && !layouts.IsSequence()) {
+    r.fail("structural.layouts", "must be a list of layouts");
+  } else if (layouts && layouts.IsSequence()) {
+    for (size_t i = 0; i < layouts.size(); ++i) {
+      const std::string lp = "structural.layouts[" + std::to_string(i) + "]";
+      const YAML::Node l = r.mapping(layouts[i], lp);
+      r.allowOnly(l, {"mesh_name", "instances"}, lp);
       ObstacleLayout layout;
-      get(l, "mesh_name", &layout.mesh_name, w, true);
-      for (size_t j = 0; l["instances"] && j < l["instances"].size(); ++j) {
-        const auto n = l["instances"][j];
-        const std::string iw = w + ".instances[" + std::to_string(j) + "]";
-        ObstacleInstance inst;
-        get(n, "visible", &inst.visible, iw, false);
-        get(n, "cast_shadow", &inst.cast_shadow, iw, false);
-        get(n, "x", &inst.x, iw, true);
-        get(n, "y", &inst.y, iw, true);
-        get(n, "yaw", &inst.yaw, iw, false);
-        get(n, "scale", &inst.scale, iw, false);
-        layout.instances.push_back(inst);
+      r.string(l, "mesh_name", &layout.mesh_name, lp, true);
+      const YAML::Node insts = l["instances"];
+      if (insts && !insts.IsNull() && !insts.IsSequence()) {
+        r.fail(lp + ".instances", "must be a list of instances");
+      } else if (insts && insts.IsSequence()) {
+        for (size_t j = 0; j < insts.size(); ++j) {
+          const std::string ip = lp + ".instances[" + std::to_string(j) + "]";
+          const YAML::Node n = r.mapping(insts[j], ip);
+          r.allowOnly(n, {"visible", "cast_shadow", "x", "y", "yaw", "scale"}, ip);
+          ObstacleInstance inst;
+          r.boolean(n, "visible", &inst.visible, ip);
+          r.boolean(n, "cast_shadow", &inst.cast_shadow, ip);
+          r.number(n, "x", &inst.x, ip, true);
+          r.number(n, "y", &inst.y, ip, true);
+          r.number(n, "yaw", &inst.yaw, ip, false);
+          r.number(n, "scale", &inst.scale, ip, false);
+          layout.instances.push_back(inst);
+        }
       }
       s.layouts.push_back(layout);
     }
   }
-  const auto tx = root["textural"];
-  const std::string tw = path + ": textural";
-  get(tx, "sun_inclination_deg", &s.textural.sun_inclination_deg, tw, true);
-  get(tx, "sun_yaw_deg", &s.textural.sun_yaw_deg, tw, false);
-  get(tx, "ground_texture_seed", &s.textural.ground_texture_seed, tw, false);
-  const auto op = root["operational"];
-  const std::string ow = path + ": operational";
+  const YAML::Node tx = r.mapping(root["textural"], "textural");
+  r.allowOnly(tx, {"sun_inclination_deg", "sun_yaw_deg", "ground_texture_seed"}, "textural");
+  r.number(tx, "sun_inclination_deg", &s.textural.sun_inclination_deg, "textural", true);
+  r.number(tx, "sun_yaw_deg", &s.textural.sun_yaw_deg, "textural", false);
+  r.integer(tx, "ground_texture_seed", &s.textural.ground_texture_seed, "textural", false, 0, 4294967295.0L);
+  const YAML::Node op = r.mapping(root["operational"], "operational");
+  const std::string ow = "operational";
+  r.allowOnly(op, {"start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_radius", "safety_radius",
+                   "speed", "sim_timeout", "idle_timeout", "stuck_timeout", "max_roll_deg",
+                   "max_pitch_deg", "allow_collisions"}, ow);
   auto& o = s.operational;
-  get(op, "start_x", &o.start_x, ow, true);
-  get(op, "start_y", &o.start_y, ow, true);
-  get(op, "start_yaw", &o.start_yaw, ow, false);
-  get(op, "goal_x", &o.goal_x, ow, true);
-  get(op, "goal_y", &o.goal_y, ow, true);
-  get(op, "goal_radius", &o.goal_radius, ow, false);
-  get(op, "safety_radius", &o.safety_radius, ow, false);
-  get(op, "speed", &o.speed, ow, false);
-  get(op, "sim_timeout", &o.sim_timeout, ow, false);
-  get(op, "idle_timeout", &o.idle_timeout, ow, false);
-  get(op, "stuck_timeout", &o.stuck_timeout, ow, false);
-  get(op, "max_roll_deg", &o.max_roll_deg, ow, false);
-  get(op, "max_pitch_deg", &o.max_pitch_deg, ow, false);
-  get(op, "allow_collisions", &o.allow_collisions, ow, false);
-  validateScene(s);
+  r.number(op, "start_x", &o.start_x, ow, true);
+  r.number(op, "start_y", &o.start_y, ow, true);
+  r.number(op, "start_yaw", &o.start_yaw, ow, false);
+  r.number(op, "goal_x", &o.goal_x, ow, true);
+  r.number(op, "goal_y", &o.goal_y, ow, true);
+  r.number(op, "goal_radius", &o.goal_radius, ow, false);
+  r.number(op, "safety_radius", &o.safety_radius, ow, false);
+  r.number(op, "speed", &o.speed, ow, false);
+  r.number(op, "sim_timeout", &o.sim_timeout, ow, false);
+  r.number(op, "idle_timeout", &o.idle_timeout, ow, false);
+  r.number(op, "stuck_timeout", &o.stuck_timeout, ow, false);
+  r.number(op, "max_roll_deg", &o.max_roll_deg, ow, false);
+  r.number(op, "max_pitch_deg", &o.max_pitch_deg, ow, false);
+  r.boolean(op, "allow_collisions", &o.allow_collisions, ow);
+  r.raise();
+  try {
+    validateScene(s);
+  } catch (const SceneError& e) {
+    throw SceneError(path + ": " + e.what());
+  }
   return f;
 }
 

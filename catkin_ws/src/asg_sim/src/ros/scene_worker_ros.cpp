@@ -8,6 +8,7 @@
 #include <sensor_msgs/Image.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 #include <cstdlib>
@@ -136,6 +137,9 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   status_pub_ = nh_.advertise<asg_msgs::WorkerStatus>("status", 1, true);
   cmd_sub_ = nh_.subscribe("cmd", 16, &SceneWorkerROS::onCommand, this, ros::TransportHints().tcpNoDelay());
   ack_sub_ = nh_.subscribe("stack_ack", 16, &SceneWorkerROS::onAck, this);
+  error_sub_ = nh_.subscribe("stack_error", 16, &SceneWorkerROS::onStackError, this);
+  if (!params_.labels_node.empty())
+    labels_sub_ = nh_.subscribe("labels", 16, &SceneWorkerROS::onLabels, this, ros::TransportHints().tcpNoDelay());
   server_ = std::make_unique<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>>(
       nh_, "run_scenario", [this](const asg_msgs::RunScenarioGoalConstPtr& g) { execute(g); }, false);
   server_->start();
@@ -159,6 +163,7 @@ void SceneWorkerROS::readParameters() {
   pnh_.param("camera/fov_deg", p.fov_deg, p.fov_deg);
   pnh_.param("shadow_map_px", p.shadow_map_px, p.shadow_map_px);
   pnh_.param("visibility_full_px", p.visibility_full_px, p.visibility_full_px);
+  pnh_.param("labels_node", p.labels_node, p.labels_node);
   auto check = [](bool ok, const std::string& what) {
     if (!ok) throw std::runtime_error("bad parameter " + what);
   };
@@ -171,6 +176,9 @@ void SceneWorkerROS::readParameters() {
   check(p.fov_deg > 1 && p.fov_deg < 179, "~camera/fov_deg: must be in (1, 179)");
   check(p.shadow_map_px >= 256 && p.shadow_map_px <= 8192, "~shadow_map_px: must be 256..8192");
   check(p.visibility_full_px > 0, "~visibility_full_px: must be > 0");
+  check(p.labels_node.empty() ||
+            std::find(p.stack_nodes.begin(), p.stack_nodes.end(), p.labels_node) != p.stack_nodes.end(),
+        "~labels_node: must be one of ~stack_nodes (or empty)");
 }
 
 void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
@@ -185,6 +193,9 @@ void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
 void SceneWorkerROS::onCommand(const asg_msgs::VehicleCommandConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (msg->scenario_id != current_id_) return;  // a late answer from an earlier scenario
+  // Outside this run's stamp window: from an earlier run of the same scenario id.
+  if (msg->header.stamp < base_ || msg->header.stamp >= base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
+    return;
   if (params_.lockstep && msg->header.stamp != awaited_) return;
   latest_ = *msg;
   have_command_ = true;
@@ -196,6 +207,36 @@ void SceneWorkerROS::onAck(const asg_msgs::StackAckConstPtr& msg) {
   if (msg->scenario_id != current_id_ || msg->run != current_run_) return;
   acks_.insert(msg->node);
   cv_.notify_all();
+}
+
+void SceneWorkerROS::onStackError(const asg_msgs::StackErrorConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (msg->scenario_id != current_id_ || msg->run != current_run_ || !stack_error_.empty()) return;
+  stack_error_ = msg->node + ": " + msg->reason;
+  cv_.notify_all();
+}
+
+void SceneWorkerROS::onLabels(const sensor_msgs::ImageConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (current_id_ == 0 || msg->header.stamp < base_ ||
+      msg->header.stamp >= base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
+    return;
+  last_labels_stamp_ = std::max(last_labels_stamp_, msg->header.stamp);
+}
+
+std::string SceneWorkerROS::silentNode(const ros::Time& tick_stamp) const {
+  // The labels node is the one to blame when a frame it had to label is still unlabelled; the
+  // planner otherwise (every stack has a node answering ticks, named "planner" by default).
+  if (!params_.labels_node.empty() && camera_frames_ > 0 && last_labels_stamp_ < last_camera_stamp_) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%s: no labels for the camera frame at t = %.3f s",
+                  params_.labels_node.c_str(), (last_camera_stamp_ - base_).toSec());
+    return buf;
+  }
+  for (const auto& n : params_.stack_nodes)
+    if (n != params_.labels_node) return n + ": no command for control tick t = " +
+                                         std::to_string((tick_stamp - base_).toSec()).substr(0, 8) + " s";
+  return "stack: no command";
 }
 
 bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
@@ -210,7 +251,7 @@ bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
   };
   auto next_announce = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
   while (!all() && std::chrono::steady_clock::now() < deadline) {
-    if (!ros::ok() || server_->isPreemptRequested()) return false;
+    if (!ros::ok() || server_->isPreemptRequested() || !stack_error_.empty()) return false;
     cv_.wait_for(lock, std::chrono::milliseconds(50));
     if (std::chrono::steady_clock::now() >= next_announce) {
       // A stack node that came up late, or whose ack went out before our subscription was
@@ -220,6 +261,10 @@ bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
     }
   }
   missing->clear();
+  if (!stack_error_.empty()) {
+    *missing = stack_error_;
+    return false;
+  }
   for (const auto& n : params_.stack_nodes)
     if (!acks_.count(n)) *missing += (missing->empty() ? "" : ", ") + n;
   (void)scenario_id;
@@ -240,13 +285,15 @@ bool SceneWorkerROS::waitForCommand(uint32_t /*scenario_id*/, const ros::Time& s
       *why = "preempted";
       return false;
     }
+    if (!stack_error_.empty()) {
+      *why = stack_error_;
+      return false;
+    }
     if (std::chrono::steady_clock::now() >= deadline) {
-      char buf[200];
-      std::snprintf(buf, sizeof(buf),
-                    "no command from the stack for control tick t = %.3f s within %.1f s "
-                    "(wall clock); is the planner running in this namespace?",
-                    stamp.toSec(), params_.command_timeout);
-      *why = buf;
+      char buf[120];
+      std::snprintf(buf, sizeof(buf), " within %.1f s (wall clock); has it died or hung?",
+                    params_.command_timeout);
+      *why = silentNode(stamp) + buf;
       return false;
     }
     cv_.wait_for(lock, std::chrono::milliseconds(50));
@@ -275,7 +322,9 @@ void SceneWorkerROS::publishState(const ros::Time& stamp) {
 }
 
 void SceneWorkerROS::publishCamera(const ros::Time& stamp, bool labels) {
-  runner_->renderCamera(labels, &frame_);
+  // The label pass always runs: per-obstacle visibility comes from its instance ids, whatever
+  // labels the stack uses; the labels themselves are published only when asked for.
+  runner_->renderCamera(true, &frame_);
   const int w = frame_.rgb.width, h = frame_.rgb.height;
   sensor_msgs::Image img, depth;
   fillImage(&img, stamp, "rgb8", w, h, 3, frame_.rgb.data);
@@ -314,13 +363,18 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   result.scenario_id = goal->scenario_id;
   const auto wall0 = std::chrono::steady_clock::now();
   auto fail = [&](const std::string& why) {
-    ROS_ERROR("scenario %u: %s", goal->scenario_id, why.c_str());
-    finish(&result, Termination::kError, why);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       current_id_ = 0;
     }
     publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
+    if (server_->isPreemptRequested()) {  // a cancel before the run started is still a cancel
+      finish(&result, Termination::kError, "preempted");
+      server_->setPreempted(result, "preempted");
+      return;
+    }
+    ROS_ERROR("scenario %u: %s", goal->scenario_id, why.c_str());
+    finish(&result, Termination::kError, why);
     server_->setAborted(result, why);
   };
   if (goal->scenario_id == 0) return fail("scenario_id must be > 0");
@@ -337,7 +391,11 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     std::lock_guard<std::mutex> lock(mutex_);
     current_id_ = goal->scenario_id;
     ++current_run_;
+    // Disjoint stamp windows per run (ScenarioInfo.RUN_WINDOW); 2^19 windows fit in ros::Time.
+    base_ = ros::Time(double(current_run_ % 524287u + 1u) * asg_msgs::ScenarioInfo::RUN_WINDOW);
     acks_.clear();
+    stack_error_.clear();
+    last_labels_stamp_ = ros::Time();
     have_command_ = false;
     awaited_ = ros::Time();
   }
@@ -347,6 +405,9 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   asg_msgs::ScenarioInfo info;
   info.scenario_id = goal->scenario_id;
   info.run = current_run_;
+  info.base_stamp = base_;
+  info.camera_width = uint32_t(params_.width);
+  info.camera_height = uint32_t(params_.height);
   info.landscape_size = goal->scene.structural.landscape.size;
   info.goal_x = op.goal_x;
   info.goal_y = op.goal_y;
@@ -359,39 +420,37 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   scenario_pub_.publish(info);
   std::string missing;
   if (!waitForAcks(goal->scenario_id, &missing))
-    return fail(server_->isPreemptRequested() ? "preempted while waiting for the stack"
-                                              : "stack node(s) did not acknowledge the scenario within " +
-                                                    formatSeconds(params_.ack_timeout) + ": " + missing);
+    return fail(!stack_error_.empty() ? stack_error_
+                                      : "stack node(s) did not acknowledge the scenario within " +
+                                            formatSeconds(params_.ack_timeout) + ": " + missing);
 
   Termination term = Termination::kNone;
   std::string error;
-  const bool labels = goal->record_labels || params_.publish_labels;
+  const bool labels = params_.publish_labels;
   const auto start = std::chrono::steady_clock::now();
   while (term == Termination::kNone) {
-    const ros::Time stamp(runner_->time());
-    publishState(stamp);
-    if (runner_->cameraDue()) publishCamera(stamp, labels);
+    const ros::Time now = stamp(runner_->time());
+    publishState(now);
+    if (runner_->cameraDue()) publishCamera(now, labels);
     if (runner_->controlDue()) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        awaited_ = now;
+        if (params_.lockstep && latest_.header.stamp != now) have_command_ = false;
+      }
+      // Ticks go out in both modes: free-running stacks answer them too, the worker just does
+      // not wait for the answer and applies the latest command it has.
+      asg_msgs::Tick tick;
+      tick.header.stamp = now;
+      tick.header.frame_id = "map";
+      tick.scenario_id = goal->scenario_id;
+      tick.tick = runner_->tick() / runner_->config().control_every;
+      tick.last_camera_stamp = last_camera_stamp_;
+      tick.camera_frames = camera_frames_;
+      tick_pub_.publish(tick);
       Command cmd;
       if (params_.lockstep) {
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          awaited_ = stamp;
-          if (latest_.header.stamp != stamp) have_command_ = false;
-        }
-        asg_msgs::Tick tick;
-        tick.header.stamp = stamp;
-        tick.header.frame_id = "map";
-        tick.scenario_id = goal->scenario_id;
-        tick.tick = runner_->tick() / runner_->config().control_every;
-        tick.last_camera_stamp = last_camera_stamp_;
-        tick.camera_frames = camera_frames_;
-        tick_pub_.publish(tick);
-        if (!waitForCommand(goal->scenario_id, stamp, &cmd, &error)) {
-          if (error == "preempted") {
-            finish(&result, Termination::kError, "preempted");
-            break;
-          }
+        if (!waitForCommand(goal->scenario_id, now, &cmd, &error)) {
           term = Termination::kError;
           break;
         }
@@ -418,6 +477,14 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     if (!params_.lockstep) {  // free-running: hold simulated time to wall time x factor
       const auto due = start + std::chrono::duration<double>(runner_->time() / params_.realtime_factor);
       std::this_thread::sleep_until(due);
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (server_->isPreemptRequested()) {
+        term = Termination::kError;
+        error = "preempted";
+      } else if (!stack_error_.empty()) {
+        term = Termination::kError;
+        error = stack_error_;
+      }
     }
     if (!ros::ok()) {
       term = Termination::kError;
@@ -425,7 +492,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     }
   }
   if (term != Termination::kError || error != "preempted")
-    publishState(ros::Time(runner_->time()));
+    publishState(stamp(runner_->time()));
 
   result.sim_time = runner_->time();
   result.num_control_msgs = runner_->commandsReceived();
@@ -449,7 +516,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   if (goal->top_down_px > 0) {
     RgbImage top;
     renderer_->renderTopDown(int(goal->top_down_px), &top);
-    fillImage(&result.top_down, ros::Time(runner_->time()), "rgb8", top.width, top.height, 3, top.data);
+    fillImage(&result.top_down, stamp(runner_->time()), "rgb8", top.width, top.height, 3, top.data);
     result.top_down.header.frame_id = "map";
   }
   {

@@ -9,6 +9,8 @@
 #include <asg_msgs/RunScenarioAction.h>
 #include <asg_msgs/ScenarioInfo.h>
 #include <asg_msgs/StackAck.h>
+#include <asg_msgs/StackError.h>
+#include <sensor_msgs/Image.h>
 #include <asg_msgs/VehicleCommand.h>
 #include <ros/ros.h>
 
@@ -41,11 +43,18 @@ class SceneWorkerROS {
     double fov_deg = 90.0;
     int shadow_map_px = 2048;
     double visibility_full_px = 100.0;
+    std::string labels_node;               // node publishing `labels` (named when it falls silent)
   };
   void readParameters();
   void execute(const asg_msgs::RunScenarioGoalConstPtr& goal);
   void onCommand(const asg_msgs::VehicleCommandConstPtr& msg);
   void onAck(const asg_msgs::StackAckConstPtr& msg);
+  void onStackError(const asg_msgs::StackErrorConstPtr& msg);
+  void onLabels(const sensor_msgs::ImageConstPtr& msg);
+  /// The run's stamp of simulated time t [s].
+  ros::Time stamp(double t) const { return base_ + ros::Duration(t); }
+  /// Names the stack node a command timeout is due to.
+  std::string silentNode(const ros::Time& tick_stamp) const;
   void publishStatus(uint8_t status, uint32_t scenario_id);
   void publishState(const ros::Time& stamp);
   void publishCamera(const ros::Time& stamp, bool labels);
@@ -60,7 +69,7 @@ class SceneWorkerROS {
   std::unique_ptr<ScenarioRunner> runner_;
   ros::Publisher image_pub_, depth_pub_, info_pub_, labels_pub_, odom_pub_, tf_pub_, tick_pub_,
       scenario_pub_, status_pub_;
-  ros::Subscriber cmd_sub_, ack_sub_;
+  ros::Subscriber cmd_sub_, ack_sub_, error_sub_, labels_sub_;
   std::unique_ptr<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>> server_;
 
   std::mutex mutex_;
@@ -75,6 +84,9 @@ class SceneWorkerROS {
   ros::Time last_camera_stamp_;
   CameraFrame frame_;
   asg_msgs::ScenarioInfo announcement_;
+  ros::Time base_;              // stamp of simulated time 0 in the current run
+  std::string stack_error_;     // "node: reason" from a StackError of the current run
+  ros::Time last_labels_stamp_; // newest `labels` frame of the current run (labels_node only)
 };
 
 }  // namespace asg_sim

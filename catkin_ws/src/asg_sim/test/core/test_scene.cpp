@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "asg_sim/meshes.hpp"
 #include "asg_sim/scene.hpp"
@@ -93,4 +96,36 @@ TEST(Meshes, CatalogueAndMeshesAreConsistent) {
     for (uint32_t i : m.indices) ASSERT_LT(i, m.vertices.size());
   }
   EXPECT_THROW(makeObstacleMesh("oak"), std::invalid_argument);
+}
+
+// The shared corpus (scenarios/corpus) judged as asg_scenario's Python validator judges it
+// (test_corpus.py): good files load, each bad file is rejected naming the field its first line
+// names ("# expect: FIELD"), in well under a second (oversized scenes are refused, not built).
+TEST(Scene, SharedCorpus) {
+  const std::string repo = ASG_REPO_DIR;
+  std::vector<std::string> good, bad;
+  for (const auto& dir : {repo + "/scenarios/corpus/good", repo + "/scenarios"})
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      if (e.path().extension() == ".yaml") good.push_back(e.path().string());
+  for (const auto& e : std::filesystem::directory_iterator(repo + "/scenarios/corpus/bad"))
+    if (e.path().extension() == ".yaml") bad.push_back(e.path().string());
+  EXPECT_GE(bad.size(), 30u);
+  for (const auto& path : good) EXPECT_NO_THROW(loadScenarioYaml(path)) << path;
+  for (const auto& path : bad) {
+    std::ifstream in(path);
+    std::string first;
+    std::getline(in, first);
+    ASSERT_EQ(first.rfind("# expect: ", 0), 0u) << path;
+    const std::string field = first.substr(10);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string error;
+    try {
+      loadScenarioYaml(path);
+    } catch (const SceneError& e) {
+      error = e.what();
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0) << path;
+    ASSERT_FALSE(error.empty()) << path << " was accepted";
+    EXPECT_NE(error.find("- " + field + ":"), std::string::npos) << path << "\n" << error;
+  }
 }
