@@ -41,6 +41,8 @@ class Segmenter:
         self(np.zeros((height, width, 3), np.uint8))  # warm up (oneDNN primitive caches)
 
     def _input(self, rgb: np.ndarray) -> torch.Tensor:
+        if not rgb.flags.writeable:  # a message buffer: torch wants memory it may write
+            rgb = rgb.copy()
         x = torch.from_numpy(rgb).permute(2, 0, 1).unsqueeze(0).float().div_(255.0)
         return x.contiguous(memory_format=torch.channels_last) if self.channels_last else x.contiguous()
 

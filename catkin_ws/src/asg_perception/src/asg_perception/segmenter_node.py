@@ -48,7 +48,7 @@ class SegmenterNode:
         self.width, self.height = width, height
         self.lock = threading.Lock()
         self.info = None  # the current run's announcement
-        self.failed = False  # a StackError went out for the current run
+        self.failed = None  # the StackError sent for the current run, if any
         self.stale_dropped = 0  # images of another run dropped (whole node life)
         self.pub = rospy.Publisher("labels", Image, queue_size=32, tcp_nodelay=True)
         self.ack_pub = rospy.Publisher("stack_ack", StackAck, queue_size=4)
@@ -60,20 +60,22 @@ class SegmenterNode:
     def on_scenario(self, info):
         with self.lock:
             if self.info is None or self.info.run != info.run:
-                self.info, self.failed = info, False
+                self.info, self.failed = info, None
                 if (info.camera_width, info.camera_height) != (self.width, self.height):
                     self.fail(f"camera frames are {info.camera_width}x{info.camera_height}, this "
                               f"segmenter was made for {self.width}x{self.height} (~width, ~height)")
-            if not self.failed:
+            if self.failed:  # say it again: the first one may have gone out before the worker listened
+                self.error_pub.publish(self.failed)
+            else:
                 self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id,
                                               run=info.run))
 
     def fail(self, reason):
         """Ends the current run (the caller holds the lock)."""
-        self.failed = True
         rospy.logerr(f"segmenter: scenario {self.info.scenario_id}: {reason}")
-        self.error_pub.publish(StackError(node=self.ack_name, scenario_id=self.info.scenario_id,
-                                          run=self.info.run, reason=reason))
+        self.failed = StackError(node=self.ack_name, scenario_id=self.info.scenario_id,
+                                 run=self.info.run, reason=reason)
+        self.error_pub.publish(self.failed)
 
     def current(self, stamp) -> bool:
         info = self.info

@@ -110,7 +110,10 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   ack.run = msg->run;
   // The worker repeats the announcement until every stack node has acked: reset once, ack always.
   if (have_run_ && msg->run == run_) {
-    if (failed_) return;
+    if (failed_) {  // say it again: the first one may have gone out before the worker listened
+      error_pub_.publish(last_error_);
+      return;
+    }
     ack_pub_.publish(ack);
     return;
   }
@@ -180,6 +183,7 @@ void PlannerROS::reportError(const std::string& reason) {
   e.scenario_id = scenario_id_;
   e.run = run_;
   e.reason = reason;
+  last_error_ = e;
   error_pub_.publish(e);
   ROS_ERROR("planner: scenario %u: %s", scenario_id_, reason.c_str());
 }

@@ -4,6 +4,7 @@
 // frame the worker published up to it has been voted. Topics and parameters: docs/planner.md.
 
 #include <asg_msgs/ScenarioInfo.h>
+#include <asg_msgs/StackError.h>
 #include <asg_msgs/Tick.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
@@ -63,6 +64,7 @@ class PlannerROS {
   ros::Time base_;              // stamp of simulated time 0 in the current run
   uint32_t stale_dropped_ = 0;  // messages of another run dropped during this run
   bool failed_ = false;         // a StackError went out for this run: answer nothing more
+  asg_msgs::StackError last_error_;
 };
 
 }  // namespace asg_planner

@@ -233,10 +233,11 @@ std::string SceneWorkerROS::silentNode(const ros::Time& tick_stamp) const {
                   params_.labels_node.c_str(), (last_camera_stamp_ - base_).toSec());
     return buf;
   }
+  char buf[80];
+  std::snprintf(buf, sizeof(buf), ": no command for control tick t = %.3f s", (tick_stamp - base_).toSec());
   for (const auto& n : params_.stack_nodes)
-    if (n != params_.labels_node) return n + ": no command for control tick t = " +
-                                         std::to_string((tick_stamp - base_).toSec()).substr(0, 8) + " s";
-  return "stack: no command";
+    if (n != params_.labels_node) return n + buf;
+  return "stack" + std::string(buf);
 }
 
 bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {

@@ -9,7 +9,7 @@ import actionlib
 import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
-from asg_msgs.msg import RunScenarioAction, RunScenarioResult
+from asg_msgs.msg import RunScenarioAction, RunScenarioResult, ScenarioInfo
 from sensor_msgs.msg import Image
 
 from asg_scenario import load_scenario
@@ -61,10 +61,13 @@ class SceneWorkerTest(unittest.TestCase):
         self.assertEqual(len(r.obstacle_visibility), 8)
         self.assertEqual((r.top_down.width, r.top_down.height, r.top_down.encoding), (64, 64, "rgb8"))
         rospy.sleep(0.5)
-        stamps = sorted(m.header.stamp.to_sec() for m in self.images)
+        stamps = sorted(m.header.stamp for m in self.images)
         self.assertEqual(len(stamps), 45)  # 15 Hz over [0, 3) s
+        # Stamps are the run's base (a multiple of the run window) + simulated time.
+        base = stamps[0]
+        self.assertEqual((base.secs % ScenarioInfo.RUN_WINDOW, base.nsecs), (0, 0))
         for k, t in enumerate(stamps):
-            self.assertAlmostEqual(t, k / 15.0, places=6)
+            self.assertAlmostEqual((t - base).to_sec(), k / 15.0, places=6)
 
     def test_2_same_goal_same_trajectory(self):
         goal = to_goal_msg(short_exp1(12, sim_timeout=2.0))
@@ -94,7 +97,7 @@ class SceneWorkerTest(unittest.TestCase):
         state, r = self.run_goal("worker_1", to_goal_msg(short_exp1(15)), timeout=60.0)
         self.assertEqual(state, GoalStatus.ABORTED)
         self.assertEqual(r.termination, RunScenarioResult.ERROR)
-        self.assertIn("no command from the stack", r.error)
+        self.assertIn("driver: no command for control tick t = 0.000 s", r.error)
 
     def test_5_missing_stack_node_is_named(self):
         state, r = self.run_goal("worker_2", to_goal_msg(short_exp1(16)), timeout=60.0)

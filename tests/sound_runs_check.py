@@ -1,0 +1,159 @@
+#!/usr/bin/python3
+"""rostest (issue #9): every number a campaign stores is what the simulator really did, with the
+flawed U-Net in the loop, whatever came before the run and however loaded the machine is."""
+import threading
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from asg_msgs.msg import PlannerState, RunScenarioResult, ScenarioInfo
+from sensor_msgs.msg import Image
+
+import stack_util as su
+
+SCENES = 6
+
+
+class SoundRuns(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("sound_runs_test")
+        cls.w0, cls.w1 = su.client("worker_0"), su.client("worker_1")
+        cls.lock = threading.Lock()
+        cls.states, cls.infos = [], []
+        rospy.Subscriber("/worker_0/planner/state", PlannerState, cls.on_state, queue_size=500)
+        rospy.Subscriber("/worker_0/scenario", ScenarioInfo, cls.on_info, queue_size=10)
+        cls.labels_pub = rospy.Publisher("/worker_0/labels", Image, queue_size=4)
+        rospy.sleep(1.0)
+        # The references: 6 seeded random Exp. 1 scenes, in order, on worker_0.
+        cls.scenes = [su.random_exp1(seed, 100 + seed) for seed in range(SCENES)]
+        cls.reference = []
+        for s in cls.scenes:
+            state, r = su.run(cls.w0, s)
+            assert state == su.SUCCEEDED, r.error
+            cls.reference.append(r)
+            rospy.loginfo("scene %d: %s after %.2f s", s["scenario_id"], r.termination_name, r.sim_time)
+
+    @classmethod
+    def on_state(cls, msg):
+        with cls.lock:
+            cls.states.append(msg)
+
+    @classmethod
+    def on_info(cls, msg):
+        with cls.lock:
+            if not cls.infos or cls.infos[-1].run != msg.run:
+                cls.infos.append(msg)
+
+    def assertSameRun(self, a, b, what):
+        self.assertEqual(a.termination_name, b.termination_name, what)
+        self.assertEqual(su.trajectory_key(a), su.trajectory_key(b),
+                         f"{what}: trajectories differ by up to {su.largest_difference(a, b):.3f} m")
+
+    def test_1_reverse_order_on_a_loaded_machine(self):
+        busy = su.busy_cores(2)
+        try:
+            for k in reversed(range(SCENES)):
+                state, r = su.run(self.w1, self.scenes[k])
+                self.assertEqual(state, su.SUCCEEDED, r.error)
+                self.assertSameRun(r, self.reference[k], f"scene {k} on worker_1, reverse order, cores busy")
+        finally:
+            for p in busy:
+                p.kill()
+
+    def test_2_late_labels_of_a_finished_run_are_dropped(self):
+        k = 0
+        with self.lock:
+            del self.states[:]
+            runs_before = len(self.infos)
+        self.w0.send_goal(su.to_goal_msg(self.scenes[k]))
+        # Wait for this run's announcement and first planner state, then inject labels stamped
+        # in the run before it: every pixel an obstacle, at the stamp of a frame of this run.
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            with self.lock:
+                if len(self.infos) > runs_before and self.states:
+                    break
+            time.sleep(0.01)
+        with self.lock:
+            base, prev = self.infos[-1].base_stamp, self.infos[-2].base_stamp
+        self.assertNotEqual(base, prev)
+        for j in range(10, 16):
+            late = Image(height=256, width=256, encoding="mono8", step=256, data=bytes([1]) * 65536)
+            late.header.stamp = prev + rospy.Duration(j / 15.0)
+            late.header.frame_id = "camera"
+            self.labels_pub.publish(late)
+        self.assertTrue(self.w0.wait_for_result(rospy.Duration(300)))
+        r = self.w0.get_result()
+        with self.lock:
+            dropped = max(s.stale_dropped for s in self.states if s.scenario_id == self.scenes[k]["scenario_id"])
+        self.assertGreaterEqual(dropped, 1, "the planner counted no stale message")
+        self.assertSameRun(r, self.reference[k], "scene 0 with late labels injected")
+
+    def test_3_visibility_with_the_unet(self):
+        s = su.exp1(150, sim_timeout=6.0)
+        s["structural"]["layouts"] = [
+            {"mesh_name": "juniper", "instances": [  # on the start-goal line, 21 m ahead
+                {"visible": True, "cast_shadow": True, "x": 35.0, "y": 35.0, "yaw": 0.0, "scale": 1.0}]},
+            {"mesh_name": "barberry", "instances": [  # inside the start's safety radius: removed
+                {"visible": True, "cast_shadow": True, "x": 24.0, "y": 22.0, "yaw": 0.0, "scale": 1.0}]},
+        ]
+        state, r = su.run(self.w0, s)
+        self.assertEqual(state, su.SUCCEEDED, r.error)
+        self.assertGreater(r.obstacle_visibility[0], 0.0)
+        self.assertEqual(r.obstacle_visibility[1], -1.0)
+        self.assertEqual([(o.layout_index, o.reason) for o in r.removed_obstacles], [(1, "start_safety_radius")])
+
+    def test_4_cancel_then_identical_run(self):
+        for i in range(10):
+            cancelled, nxt = self.scenes[i % SCENES], (i + 1) % SCENES
+            self.w0.send_goal(su.to_goal_msg(cancelled))
+            time.sleep(1.0 + 5.0 * i / 9.0)
+            self.w0.cancel_goal()
+            self.assertTrue(self.w0.wait_for_result(rospy.Duration(60)))
+            self.assertIn(self.w0.get_state(), (su.PREEMPTED, su.SUCCEEDED))  # a short run may finish first
+            state, r = su.run(self.w0, self.scenes[nxt])
+            self.assertEqual(state, su.SUCCEEDED, r.error)
+            self.assertSameRun(r, self.reference[nxt], f"try {i}: scene {nxt} after a cancel")
+
+    def test_5_cancel_in_the_first_milliseconds_is_a_cancel(self):
+        # Before the server took the goal: RECALLED; after, while the scene is built or the stack
+        # acknowledges: PREEMPTED. Never ABORTED.
+        for delay, states in ((0.0, (su.PREEMPTED, su.RECALLED)), (0.02, (su.PREEMPTED,)),
+                              (0.2, (su.PREEMPTED,))):
+            self.w0.send_goal(su.to_goal_msg(self.scenes[1]))
+            time.sleep(delay)
+            self.w0.cancel_goal()
+            self.assertTrue(self.w0.wait_for_result(rospy.Duration(60)))
+            self.assertIn(self.w0.get_state(), states, f"cancel after {delay} s")
+
+    def kill_mid_run(self, node, k):
+        c = self.w1
+        c.send_goal(su.to_goal_msg(self.scenes[k]))
+        time.sleep(2.0)
+        self.assertEqual(c.get_state(), su.ACTIVE)
+        t0 = time.time()
+        su.kill9(f"/worker_1/{node}")
+        self.assertTrue(c.wait_for_result(rospy.Duration(60)))
+        waited = time.time() - t0
+        r = c.get_result()
+        self.assertEqual(c.get_state(), su.ABORTED)
+        self.assertEqual(r.termination, RunScenarioResult.ERROR)
+        self.assertTrue(r.error.startswith(node + ":"), r.error)
+        self.assertLess(waited, 5.0 + 1.0)  # the command timeout, plus transport
+        # The node respawns and rejoins at the next goal's handshake; that run is exact.
+        state, r = su.run(c, self.scenes[k + 1])
+        self.assertEqual(state, su.SUCCEEDED, r.error)
+        self.assertSameRun(r, self.reference[k + 1], f"scene {k + 1} after kill -9 of the {node}")
+
+    def test_6_kill_planner_mid_run(self):
+        self.kill_mid_run("planner", 2)
+
+    def test_7_kill_segmenter_mid_run(self):
+        self.kill_mid_run("segmenter", 3)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("asg_tests", "sound_runs", SoundRuns)

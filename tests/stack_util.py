@@ -1,0 +1,86 @@
+"""Helpers shared by the end-to-end checks (rospy; not a test themselves)."""
+import math
+import os
+import signal
+import subprocess
+import xmlrpc.client
+
+import actionlib
+import rosgraph
+import rospy
+from actionlib_msgs.msg import GoalStatus
+from asg_msgs.msg import RunScenarioAction
+
+from asg_scenario import load_scenario
+from asg_scenario.convert import to_goal_msg
+from asg_scenario.layout import random_scene
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+
+
+def exp1(scenario_id, sim_timeout=30.0):
+    s = load_scenario(os.path.join(REPO, "scenarios", "exp1.yaml"))
+    s["scenario_id"] = scenario_id
+    s["operational"]["sim_timeout"] = sim_timeout
+    return s
+
+
+def random_exp1(seed, scenario_id, sim_timeout=30.0):
+    """A seeded random Exp. 1 layout (4 junipers, 4 barberries anywhere on the landscape)."""
+    return random_scene(exp1(scenario_id, sim_timeout), seed)
+
+
+def client(ns, timeout=90.0):
+    c = actionlib.SimpleActionClient(f"/{ns}/run_scenario", RunScenarioAction)
+    assert c.wait_for_server(rospy.Duration(timeout)), f"no action server in /{ns}"
+    return c
+
+
+def run(c, scenario, timeout=300.0):
+    """Sends a scenario, waits; (goal state, result)."""
+    c.send_goal(to_goal_msg(scenario))
+    assert c.wait_for_result(rospy.Duration(timeout)), f"no result for scenario {scenario['scenario_id']}"
+    return c.get_state(), c.get_result()
+
+
+def trajectory_key(result):
+    """Everything a run produced that must repeat bit for bit."""
+    return (result.termination, result.num_control_msgs,
+            tuple((s.t, s.pose.position.x, s.pose.position.y, s.pose.position.z,
+                   s.pose.orientation.x, s.pose.orientation.y, s.pose.orientation.z,
+                   s.pose.orientation.w, s.twist.linear.x, s.twist.angular.z)
+                  for s in result.trajectory))
+
+
+def largest_difference(a, b):
+    """[m] largest position difference between two trajectories (inf if lengths differ)."""
+    if len(a.trajectory) != len(b.trajectory):
+        return math.inf
+    return max((math.dist((p.pose.position.x, p.pose.position.y), (q.pose.position.x, q.pose.position.y))
+                for p, q in zip(a.trajectory, b.trajectory)), default=0.0)
+
+
+def node_pid(name):
+    """pid of a running ROS node, through its XML-RPC API."""
+    try:
+        uri = rosgraph.Master("/asg_tests").lookupNode(name)
+    except rosgraph.MasterError:
+        return None
+    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/asg_tests")
+    return pid if code == 1 else None
+
+
+def kill9(name):
+    pid = node_pid(name)
+    assert pid, f"node {name} is not running"
+    os.kill(pid, signal.SIGKILL)
+    return pid
+
+
+def busy_cores(n=2):
+    """n processes spinning on the CPU (the caller terminates them)."""
+    return [subprocess.Popen(["/usr/bin/python3", "-c", "while True: pass"]) for _ in range(n)]
+
+
+SUCCEEDED, ABORTED, PREEMPTED, ACTIVE, RECALLED = (
+    GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.PREEMPTED, GoalStatus.ACTIVE, GoalStatus.RECALLED)
