@@ -109,8 +109,10 @@ def test_fast_backends_give_the_eager_labels(test_dataset):
 def test_shipped_models_figures(test_dataset):
     """The figures of docs/perception.md, recomputed on the same held-apart set (both obstacle
     types): both models label lit ground and sky well; the flawed one, never shown a tree, finds
-    far less of the non-traversable class and calls at least 5x as much shadowed ground an
-    obstacle (measured 5.2x; 8.9x under a low sun)."""
+    far less of the non-traversable class and calls at least 3x as much shadowed ground an
+    obstacle, 5x under a low sun. Those are the claims that hold on every held-apart set
+    measured (seeds 3-8: 3.6x to 5.5x overall, 6.2x to 12.0x under a low sun;
+    scripts/perception_spread.sh); this set (seed 3) gives 5.2x and 8.9x."""
     frames = load_frames(test_dataset)
     full = evaluate(load_model(os.path.join(MODELS, "full.pt")), frames)
     flawed = evaluate(load_model(os.path.join(MODELS, "flawed.pt")), frames)
@@ -120,6 +122,6 @@ def test_shipped_models_figures(test_dataset):
         assert r["lit_false_obstacle_rate"] < 0.01
     assert full["iou"]["non_traversable"] > 0.8
     assert flawed["iou"]["non_traversable"] < full["iou"]["non_traversable"] - 0.2
-    assert flawed["shadow_false_obstacle_rate"] >= 5 * full["shadow_false_obstacle_rate"]
+    assert flawed["shadow_false_obstacle_rate"] >= 3 * full["shadow_false_obstacle_rate"]
     assert flawed["shadow_false_obstacle_rate"] > 0.05
     assert flawed["low_sun"]["shadow_false_obstacle_rate"] >= 5 * full["low_sun"]["shadow_false_obstacle_rate"]

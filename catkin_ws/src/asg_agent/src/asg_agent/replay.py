@@ -3,7 +3,7 @@
 A sum tree holds one priority p_i = (|delta_i| + eps)^alpha per transition; sampling draws
 transition i with probability P(i) = p_i / sum_k p_k by splitting [0, total) into `batch` equal
 strata and drawing one point in each; importance weights w_i = (N P(i))^-beta / max_j w_j correct
-the bias, with beta annealed from beta0 to 1 over `beta_steps` samples. New transitions get the
+the bias (normalised by the largest possible weight, that of the smallest priority), with beta annealed from beta0 to 1 over `beta_steps` samples. New transitions get the
 largest priority seen so far, so each is replayed at least once soon.
 """
 from typing import Dict
@@ -108,8 +108,10 @@ class PrioritizedReplay:
                         for k in range(batch)])
         p = np.array([self.tree.get(i) for i in idx]) / total
         beta = self.beta()
-        w = (self.count * p) ** (-beta)
-        w /= w.max()
+        # Normalised by the largest weight any stored transition could get (the smallest priority).
+        leaves = self.tree.tree[self.tree.size:self.tree.size + self.count]
+        p_min = leaves[leaves > 0].min() / total
+        w = (self.count * p) ** (-beta) / (self.count * p_min) ** (-beta)
         self.samples += 1
         return {"index": idx, "weight": w.astype(np.float32)[:, None], "state": self.state[idx],
                 "action": self.action[idx], "reward": self.reward[idx], "next_state": self.next_state[idx],

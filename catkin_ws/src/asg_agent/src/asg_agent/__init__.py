@@ -1,0 +1,1 @@
+"""Adversarial scene generator: search methods, proxy, optimal path, store, campaigns (no rospy)."""

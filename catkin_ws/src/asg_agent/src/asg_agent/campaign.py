@@ -1,0 +1,274 @@
+"""The campaign loop (no ROS imports): proposals to free workers, results back in any order,
+applied in proposal order, every scenario stored as it finishes, checkpoints, resume.
+
+W = `slots` episodes run side by side (one per slot). Job j belongs to slot j mod W at first;
+after a job's result is applied, its slot's next proposal becomes the next job. Results are
+applied strictly in job order (a result that arrives early waits), so the method sees the same
+sequence whatever the workers' speeds: a campaign is a function of its experiment, method and
+seed. With W larger than the number of workers a free worker always finds a proposal waiting.
+
+Resume: a checkpoint (written atomically at episode ends) holds the method (networks,
+optimisers, replay buffer, generators), the slots and the proposals not yet applied. `resume`
+loads it and applies, in job order, the results already in the store after it (the same
+computation the interrupted run did), then submits what is missing. No scenario is run for
+nothing twice and none is stored twice (the store's (campaign, job) key).
+"""
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+
+from asg_scenario.schema import dump_scenario
+
+from .experiment import Experiment
+from .proxy import ProxyConfig, compute
+from .search import SearchMethod
+from .store import Store, pack_trajectory, unpack_trajectory
+from .td3 import load_checked, save_atomic
+
+
+@dataclass
+class Outcome:
+    """What a pool returns for a job: the result as plain values."""
+
+    job: int
+    worker: str
+    termination: str
+    error: str = ""
+    sim_time: float = 0.0
+    num_control_msgs: int = 0
+    trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 5), np.float32))  # t, x, y, yaw, yaw rate
+    visibility: List[float] = field(default_factory=list)
+    removed: List[list] = field(default_factory=list)  # [layout, instance, reason]
+    collision_with: str = ""
+    wall_time: float = 0.0
+
+
+class Pool:
+    """Workers that run scenario requests (the ROS adapter is pool_ros.WorkerPool)."""
+
+    def free(self) -> List[str]:
+        raise NotImplementedError
+
+    def submit(self, worker: str, job: int, request: dict):
+        raise NotImplementedError
+
+    def poll(self, timeout: float) -> List[Outcome]:
+        raise NotImplementedError
+
+
+@dataclass
+class Job:
+    job: int
+    slot: int
+    episode: int
+    step: int
+    state: np.ndarray
+    action: np.ndarray
+    request: dict
+    attempts: int = 0
+    avoid: str = ""  # the worker that failed it last
+
+
+class Campaign:
+    def __init__(self, name: str, experiment: Experiment, method: SearchMethod, store: Store, pool: Pool,
+                 total: int, seed: int, checkpoint: str, slots: int = 4, max_attempts: int = 3,
+                 checkpoint_every: int = 10, proxy_config: ProxyConfig = ProxyConfig(),
+                 progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None):
+        if total < 1 or slots < 1:
+            raise ValueError("total and slots must be >= 1")
+        self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
+        self.total, self.seed, self.checkpoint_path, self.slots = total, seed, checkpoint, slots
+        self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, checkpoint_every, proxy_config
+        self.progress, self.settings = progress, settings or {}
+        self.pending: Dict[int, Job] = {}  # proposed, not applied
+        self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
+        self.queue: List[int] = []  # proposed jobs waiting for a worker
+        self.running: Dict[int, str] = {}
+        self.slot_state: List[Optional[dict]] = [None] * slots
+        self.next_job = 0
+        self.next_apply = 0
+        self.next_episode = 0
+        self.episodes_done = 0
+        self.stats = {"best": -math.inf, "ge3": 0, "ge4": 0, "errors": 0, "retries": 0}
+        self.t0 = time.time()
+        self.done_at_start = 0
+
+    # -- setup ----------------------------------------------------------------------------------
+    def start(self):
+        self.store.create_campaign(self.name, self.method.name, self.exp.name, self.exp.text, self.seed,
+                                   dict(self.settings, total=self.total, slots=self.slots,
+                                        method_config=self.method.config()))
+        for s in range(self.slots):
+            self._new_episode(s)
+        for s in range(self.slots):
+            self._propose(s)
+
+    def resume(self):
+        if self.store.campaign(self.name) is None:
+            raise ValueError(f"no campaign {self.name!r} in {self.store.path} to resume")
+        try:
+            ck = load_checked(self.checkpoint_path)
+        except FileNotFoundError:
+            ck = None
+        if ck is None:  # killed before the first checkpoint: start over from the stored rows
+            for s in range(self.slots):
+                self._new_episode(s)
+            for s in range(self.slots):
+                self._propose(s)
+        else:
+            self.method.load_state_dict(ck["method"])
+            for key in ("next_job", "next_apply", "next_episode", "episodes_done", "stats"):
+                setattr(self, key, ck[key])
+            self.slot_state = ck["slot_state"]
+            self.pending = {j["job"]: Job(**j) for j in ck["pending"]}
+            self.queue = sorted(self.pending)
+        # Results stored after the checkpoint are applied as the interrupted run applied them.
+        for row in self.store.rows(self.name, self.next_apply - 1):
+            self.finished[row["job"]] = dict(row)
+            if row["job"] in self.queue:
+                self.queue.remove(row["job"])
+        self.done_at_start = self.store.count(self.name)
+        summary = self.store.summary(self.name, top=0)
+        self.stats.update(best=summary["max_proxy"] if summary["max_proxy"] is not None else -math.inf,
+                          ge3=summary["proxy_ge_3"], ge4=summary["proxy_ge_4"],
+                          errors=summary["terminations"].get("ERROR", 0))
+        self._apply_ready()
+
+    # -- episodes and proposals -----------------------------------------------------------------
+    def _new_episode(self, slot: int):
+        ep = self.next_episode
+        self.next_episode += 1
+        self.slot_state[slot] = {"episode": ep, "step": 0, "state": self.method.initial_state(ep)}
+
+    def _propose(self, slot: int):
+        if self.next_job >= self.total:
+            return
+        st = self.slot_state[slot]
+        j = self.next_job
+        self.next_job += 1
+        action = np.asarray(self.method.propose(j, st["episode"], st["step"], st["state"]), np.float32)
+        request = self.exp.request(action, scenario_id=j + 1)
+        self.pending[j] = Job(j, slot, st["episode"], st["step"], st["state"], action, request)
+        if j not in self.finished:
+            self.queue.append(j)
+
+    # -- the loop -------------------------------------------------------------------------------
+    def run(self, poll_timeout: float = 0.2, deadline: Optional[float] = None) -> dict:
+        while self.next_apply < self.total:
+            if deadline is not None and time.time() > deadline:
+                break
+            self._dispatch()
+            for outcome in self.pool.poll(poll_timeout):
+                self._on_outcome(outcome)
+            self._apply_ready()
+        if self.next_apply >= self.total:
+            self._checkpoint()
+            self.store.finish_campaign(self.name)
+        return self.store.summary(self.name)
+
+    def _dispatch(self):
+        free = self.pool.free()
+        for worker in free:
+            pick = None
+            for j in self.queue:
+                if self.pending[j].avoid != worker or len(free) == 1:
+                    pick = j
+                    break
+            if pick is None:
+                continue
+            self.queue.remove(pick)
+            job = self.pending[pick]
+            job.attempts += 1
+            self.running[pick] = worker
+            self.pool.submit(worker, pick, job.request)
+
+    def _on_outcome(self, o: Outcome):
+        job = self.pending.get(o.job)
+        if job is None or self.running.get(o.job) != o.worker:
+            return  # a late answer for a job already re-queued elsewhere: never counted twice
+        del self.running[o.job]
+        if o.termination == "ERROR" and job.attempts < self.max_attempts:
+            self.stats["retries"] += 1
+            job.avoid = o.worker
+            self.queue.insert(0, o.job)
+            print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
+            return
+        placed = [True] * len(o.visibility) if o.visibility else None
+        for layout, inst, _ in o.removed:
+            k = sum(len(l["instances"]) for l in job.request["structural"]["layouts"][:layout]) + inst
+            if placed is not None and k < len(placed):
+                placed[k] = False
+        traj = np.asarray(o.trajectory, np.float32).reshape(-1, 5)
+        terms = None
+        if o.termination != "ERROR" and len(traj):
+            terms = compute(job.request, traj[:, 0], traj[:, 1:3], traj[:, 4], o.visibility, o.termination,
+                            placed, self.proxy_config)
+        row = {"campaign": self.name, "job": o.job, "method": self.method.name, "episode": job.episode,
+               "step": job.step, "worker": o.worker, "attempts": job.attempts, "scenario_id": job.request["scenario_id"],
+               "request": json.dumps(job.request, sort_keys=True), "termination": o.termination, "error": o.error,
+               "proxy": terms.proxy if terms else None, "vis": terms.vis if terms else None,
+               "yaw_term": terms.yaw_term if terms else None, "plr": terms.plr if terms else None,
+               "path_length": terms.path_length if terms else None,
+               "optimal_length": terms.optimal_length if terms else None, "sim_time": o.sim_time,
+               "num_control_msgs": o.num_control_msgs, "visibility": json.dumps([float(v) for v in o.visibility]),
+               "removed": json.dumps(o.removed), "collision_with": o.collision_with,
+               "trajectory": pack_trajectory(traj), "samples": len(traj), "wall_time": o.wall_time,
+               "finished": time.time()}
+        self.store.add(row)
+        self.finished[o.job] = row
+        if terms:
+            self.stats["best"] = max(self.stats["best"], terms.proxy)
+            self.stats["ge3"] += terms.proxy >= 3
+            self.stats["ge4"] += terms.proxy >= 4
+        else:
+            self.stats["errors"] += 1
+        if self.progress:
+            self.progress(self.status())
+
+    def _apply_ready(self):
+        while self.next_apply in self.finished:
+            row = self.finished.pop(self.next_apply)
+            job = self.pending.pop(self.next_apply)
+            self.next_apply += 1
+            slot = self.slot_state[job.slot]
+            done = job.step >= self.exp.episode_steps - 1
+            reward = row["proxy"]
+            if reward is None:  # ERROR after every attempt: no transition, the episode ends here
+                self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)
+                self._end_episode(job.slot)
+            else:
+                traj = unpack_trajectory(row["trajectory"])
+                next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
+                self.method.observe(job.job, job.episode, job.step, job.state, job.action, float(reward),
+                                    next_state, done)
+                if done:
+                    self._end_episode(job.slot)
+                else:
+                    slot.update(step=job.step + 1, state=next_state)
+            self._propose(job.slot)
+
+    def _end_episode(self, slot: int):
+        self.episodes_done += 1
+        self._new_episode(slot)
+        if self.episodes_done % self.checkpoint_every == 0:
+            self._checkpoint()
+
+    def _checkpoint(self):
+        pending = [dict(job=j.job, slot=j.slot, episode=j.episode, step=j.step, state=j.state, action=j.action,
+                        request=j.request, attempts=0, avoid="") for j in self.pending.values()]
+        save_atomic({"method": self.method.state_dict(), "next_job": self.next_job, "next_apply": self.next_apply,
+                     "next_episode": self.next_episode, "episodes_done": self.episodes_done,
+                     "stats": self.stats, "slot_state": self.slot_state, "pending": pending},
+                    self.checkpoint_path)
+
+    def status(self) -> dict:
+        stored = self.store.count(self.name)
+        elapsed = max(1e-6, time.time() - self.t0)
+        return {"done": stored, "total": self.total, "rate_per_hour": (stored - self.done_at_start) / elapsed * 3600,
+                "best": self.stats["best"], "ge3": self.stats["ge3"], "ge4": self.stats["ge4"],
+                "errors": self.stats["errors"], "retries": self.stats["retries"]}

@@ -1,0 +1,113 @@
+"""Experiment files: the fixed attributes of a search and its variable ones (no ROS imports).
+
+An experiment file (YAML, `experiments/expN.yaml`) names a scenario file holding every fixed
+attribute (landscape, sun, start, goal, speed, meshes and their counts, timeouts) and how the
+search varies it. The action is the x, y of every obstacle instance, each scaled from [-1, 1] to
+[0, landscape size]. Keys (docs/agent.md):
+
+    name: exp1
+    scenario: ../scenarios/exp1.yaml   # relative to this file
+    perception: unet                   # unet or ground_truth (the stack the workers must run)
+    model: flawed                      # unet only: shipped model name or path
+    planner_config: planner.yaml       # a file of asg_planner/config, or a path
+    episode_steps: 5
+    sim_timeout: 60.0                  # [s] overrides the scenario's
+"""
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+import yaml
+
+from asg_scenario import ScenarioError, load_scenario
+from asg_scenario.layout import instance_count, positions, with_positions
+
+
+class ExperimentError(ValueError):
+    pass
+
+
+KEYS = {"name", "scenario", "perception", "model", "planner_config", "episode_steps", "sim_timeout",
+        "description"}
+
+
+@dataclass
+class Experiment:
+    name: str
+    scenario: dict  #: the fixed attributes, validated
+    perception: str = "unet"
+    model: str = "flawed"
+    planner_config: str = "planner.yaml"
+    episode_steps: int = 5
+    source: str = ""
+    text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
+
+    @property
+    def size(self) -> float:
+        return float(self.scenario["structural"]["landscape"]["size"])
+
+    @property
+    def action_dim(self) -> int:
+        return 2 * instance_count(self.scenario)
+
+    def to_positions(self, action) -> np.ndarray:
+        """[-1, 1]^(2n) -> (n, 2) positions [m], rounded to 1 mm."""
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1, 2), -1.0, 1.0)
+        return np.round((a + 1.0) * 0.5 * self.size, 3)
+
+    def to_action(self, xy) -> np.ndarray:
+        return (np.asarray(xy, dtype=np.float64).reshape(-1) / self.size * 2.0 - 1.0).astype(np.float32)
+
+    def request(self, action, scenario_id: int) -> dict:
+        s = with_positions(self.scenario, self.to_positions(action))
+        s["scenario_id"] = int(scenario_id)
+        s["name"] = f"{self.name}-{scenario_id}"
+        return s
+
+
+def load_experiment(path: str) -> Experiment:
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError as e:
+        raise ExperimentError(f"{path}: cannot read ({e.strerror})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise ExperimentError(f"{path}: not valid YAML ({e})") from None
+    if not isinstance(data, dict):
+        raise ExperimentError(f"{path}: must be a mapping")
+    problems = [f"{k}: unknown key (allowed: {', '.join(sorted(KEYS))})" for k in data if k not in KEYS]
+    for key in ("name", "scenario"):
+        if not isinstance(data.get(key), str) or not data.get(key):
+            problems.append(f"{key}: required, a non-empty string")
+    if data.get("perception", "unet") not in ("unet", "ground_truth"):
+        problems.append(f"perception: {data.get('perception')!r}, must be unet or ground_truth")
+    steps = data.get("episode_steps", 5)
+    if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 100:
+        problems.append(f"episode_steps: {steps!r}, must be an integer in [1, 100]")
+    timeout = data.get("sim_timeout")
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
+                                or not math.isfinite(timeout) or not 0.1 <= timeout <= 3600):
+        problems.append(f"sim_timeout: {timeout!r}, must be a number in [0.1, 3600] s")
+    for key in ("model", "planner_config", "description"):
+        if key in data and not isinstance(data[key], str):
+            problems.append(f"{key}: must be a string")
+    if problems:
+        raise ExperimentError(f"{path}: " + "; ".join(problems))
+    spath = data["scenario"]
+    if not os.path.isabs(spath):
+        spath = os.path.join(os.path.dirname(os.path.abspath(path)), spath)
+    try:
+        scenario = load_scenario(spath)
+    except ScenarioError as e:
+        raise ExperimentError(f"{path}: scenario {spath}: {e}") from None
+    if timeout is not None:
+        scenario["operational"]["sim_timeout"] = float(timeout)
+    if instance_count(scenario) == 0:
+        raise ExperimentError(f"{path}: the scenario has no obstacle to place")
+    return Experiment(name=data["name"], scenario=scenario, perception=data.get("perception", "unet"),
+                      model=data.get("model", "flawed"), planner_config=data.get("planner_config", "planner.yaml"),
+                      episode_steps=steps, source=os.path.abspath(path), text=text)

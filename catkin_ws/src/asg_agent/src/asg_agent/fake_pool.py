@@ -1,0 +1,72 @@
+"""An in-process stand-in for the worker pool (tests, dry runs; no ROS, no simulator).
+
+It "drives" the optimal path with a lateral wiggle that grows near obstacles, so proxies vary
+with the layout, and returns results out of order after a seeded random number of polls, like
+real workers of uneven speed. Everything is a function of the request: the same request gives
+the same outcome, whichever fake worker runs it.
+"""
+import math
+from typing import Dict, List
+
+import numpy as np
+
+from .campaign import Outcome, Pool
+from .optimal_path import obstacle_discs, shortest_path
+from .proxy import resample_path
+
+
+def fake_run(request: dict) -> Outcome:
+    op = request["operational"]
+    discs = obstacle_discs(request, 0.75)
+    path = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"], discs)
+    pts = np.asarray(path.points if path.points else [(op["start_x"], op["start_y"])], np.float64)
+    n = max(2, int(path.length / (op["speed"] / 60.0))) if math.isfinite(path.length) else 2
+    xy = resample_path(pts, n)
+    # A wiggle whose amplitude grows with the number of obstacles near the path.
+    near = sum(1 for d in discs if np.min(np.hypot(xy[:, 0] - d.x, xy[:, 1] - d.y)) < 8.0)
+    s = np.linspace(0.0, 1.0, n)
+    normal = np.array([-(op["goal_y"] - op["start_y"]), op["goal_x"] - op["start_x"]])
+    normal /= np.linalg.norm(normal)
+    xy = xy + np.outer(0.8 * near * np.sin(np.pi * s) * np.sin(6 * np.pi * s), normal)
+    t = np.arange(n) / 60.0
+    yaw = np.unwrap(np.arctan2(np.gradient(xy[:, 1]), np.gradient(xy[:, 0])))
+    traj = np.stack([t, xy[:, 0], xy[:, 1], yaw, np.gradient(yaw, t) if n > 1 else 0 * t], axis=1)
+    vis = [1.0 if math.hypot(i["x"] - 50, i["y"] - 50) < 40 else 0.3
+           for l in request["structural"]["layouts"] for i in l["instances"]]
+    term = "SUCCESS" if math.isfinite(path.length) else "STUCK_TIMEOUT"
+    return Outcome(job=-1, worker="", termination=term, sim_time=float(t[-1]), num_control_msgs=int(t[-1] * 20),
+                   trajectory=traj.astype(np.float32), visibility=vis)
+
+
+class FakePool(Pool):
+    def __init__(self, workers: int = 2, seed: int = 0, fail_jobs=()):
+        self.names = [f"/fake_{i}" for i in range(workers)]
+        self.busy: Dict[str, tuple] = {}
+        self.rng = np.random.default_rng(seed)
+        self.fail_jobs = set(fail_jobs)  # these jobs answer ERROR on their first attempt
+        self.failed_once = set()
+        self.submitted: List[int] = []
+
+    def free(self):
+        return [w for w in self.names if w not in self.busy]
+
+    def submit(self, worker, job, request):
+        self.submitted.append(job)
+        self.busy[worker] = (job, request, int(self.rng.integers(0, 4)))
+
+    def poll(self, timeout):
+        out = []
+        for w in list(self.busy):
+            job, request, left = self.busy[w]
+            if left > 0:
+                self.busy[w] = (job, request, left - 1)
+                continue
+            del self.busy[w]
+            if job in self.fail_jobs and job not in self.failed_once:
+                self.failed_once.add(job)
+                out.append(Outcome(job=job, worker=w, termination="ERROR", error="planner: fake failure"))
+                continue
+            o = fake_run(request)
+            o.job, o.worker = job, w
+            out.append(o)
+        return out

@@ -1,0 +1,171 @@
+"""Search methods behind one small interface, chosen by name (no ROS imports).
+
+Every method sees the campaign as the paper frames it: episodes of `episode_steps` steps, each
+step one simulated scenario. A method proposes an action (the x, y of every obstacle in
+[-1, 1]) from the current state and observes (state, action, reward, next state, done) once the
+scenario has run; the campaign applies results strictly in proposal order, so a method's
+decisions (and with them the whole store) depend on the seed alone, not on which worker
+finished first.
+
+State = the current layout (2n values in [-1, 1]) + the trajectory of the last run resampled to
+N_path points by arc length (2 N_path values, positions scaled to [-1, 1]) + the step's fraction
+of the episode. An episode starts from a seeded random layout and the straight start-goal line
+(what a run without obstacles drives).
+
+Methods: `td3-per-asp` (the paper's), its ablations `td3-per`, `td3-asp`, `td3`, and the
+baselines `random` (uniform layouts) and `annealing` (simulated annealing, a prior method the
+paper names).
+"""
+import math
+from typing import Dict, Optional
+
+import numpy as np
+
+from .experiment import Experiment
+from .proxy import resample_path
+from .td3 import TD3Agent, TD3Config
+
+METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing")
+
+
+def _rng(seed: int, *keys: int) -> np.random.Generator:
+    return np.random.default_rng([seed, *keys])
+
+
+class StateBuilder:
+    def __init__(self, experiment: Experiment, n_path: int = 250):
+        self.exp, self.n_path = experiment, n_path
+        op = experiment.scenario["operational"]
+        self.start, self.goal = (op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"])
+
+    @property
+    def dim(self) -> int:
+        return self.exp.action_dim + 2 * self.n_path + 1
+
+    def straight_line(self) -> np.ndarray:
+        return np.array([self.start, self.goal], dtype=np.float64)
+
+    def build(self, action, path_xy, step: int) -> np.ndarray:
+        path = resample_path(path_xy, self.n_path) / self.exp.size * 2.0 - 1.0
+        return np.concatenate([np.asarray(action, np.float32).ravel(), path.ravel().astype(np.float32),
+                               [step / self.exp.episode_steps]]).astype(np.float32)
+
+
+class SearchMethod:
+    name = "base"
+
+    def __init__(self, experiment: Experiment, seed: int):
+        self.exp, self.seed = experiment, seed
+        self.states = StateBuilder(experiment)
+
+    def initial_state(self, episode: int) -> np.ndarray:
+        a0 = _rng(self.seed, 1, episode).uniform(-1.0, 1.0, self.exp.action_dim)
+        return self.states.build(a0, self.states.straight_line(), 0)
+
+    def propose(self, job: int, episode: int, step: int, state: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def observe(self, job, episode, step, state, action, reward: Optional[float], next_state, done: bool) -> Dict:
+        return {}
+
+    def config(self) -> dict:
+        return {}
+
+    def state_dict(self) -> dict:
+        return {}
+
+    def load_state_dict(self, d: dict):
+        pass
+
+
+class RandomSearch(SearchMethod):
+    """Uniform random layouts, one per job, seeded by (seed, job)."""
+    name = "random"
+
+    def propose(self, job, episode, step, state):
+        return _rng(self.seed, 2, job).uniform(-1.0, 1.0, self.exp.action_dim).astype(np.float32)
+
+
+class Annealing(SearchMethod):
+    """Simulated annealing on the layout (maximising the proxy): a Gaussian step from the
+    incumbent, Metropolis acceptance at a temperature falling geometrically from t0 to t1 over
+    the campaign's budget; the step size falls from sigma0 to sigma1 likewise. Results are
+    accepted in job order, so with W jobs in flight proposals use an incumbent W results old."""
+    name = "annealing"
+
+    def __init__(self, experiment, seed, budget: int = 1000, t0: float = 0.5, t1: float = 0.01,
+                 sigma0: float = 0.3, sigma1: float = 0.03):
+        super().__init__(experiment, seed)
+        self.budget, self.t0, self.t1, self.sigma0, self.sigma1 = budget, t0, t1, sigma0, sigma1
+        self.current = _rng(seed, 3).uniform(-1.0, 1.0, experiment.action_dim).astype(np.float32)
+        self.current_value = -math.inf
+        self.accepted = 0
+
+    def _frac(self, job):
+        return min(1.0, job / max(1, self.budget))
+
+    def propose(self, job, episode, step, state):
+        f = self._frac(job)
+        sigma = self.sigma0 * (self.sigma1 / self.sigma0) ** f
+        step_ = _rng(self.seed, 4, job).normal(0.0, sigma, self.exp.action_dim)
+        return np.clip(self.current + step_, -1.0, 1.0).astype(np.float32)
+
+    def observe(self, job, episode, step, state, action, reward, next_state, done):
+        if reward is None:
+            return {}
+        temp = self.t0 * (self.t1 / self.t0) ** self._frac(job)
+        u = _rng(self.seed, 5, job).uniform()
+        if reward >= self.current_value or u < math.exp((reward - self.current_value) / temp):
+            self.current, self.current_value = np.asarray(action, np.float32), float(reward)
+            self.accepted += 1
+        return {"temperature": temp, "incumbent": self.current_value}
+
+    def config(self):
+        return {"budget": self.budget, "t0": self.t0, "t1": self.t1, "sigma0": self.sigma0, "sigma1": self.sigma1}
+
+    def state_dict(self):
+        return {"current": self.current, "current_value": self.current_value, "accepted": self.accepted}
+
+    def load_state_dict(self, d):
+        self.current, self.current_value, self.accepted = d["current"], d["current_value"], d["accepted"]
+
+
+class TD3Search(SearchMethod):
+    """TD3 with or without PER and the saturation penalty (td3.py)."""
+
+    def __init__(self, experiment, seed, per=True, asp=True, config: Optional[TD3Config] = None):
+        super().__init__(experiment, seed)
+        cfg = config or TD3Config()
+        cfg.per, cfg.asp, cfg.seed = per, asp, seed
+        self.name = "td3" + ("-per" if per else "") + ("-asp" if asp else "")
+        self.agent = TD3Agent(self.states.dim, experiment.action_dim, cfg)
+
+    def propose(self, job, episode, step, state):
+        return self.agent.act(state)
+
+    def observe(self, job, episode, step, state, action, reward, next_state, done):
+        if reward is None:
+            return {}
+        self.agent.observe(state, action, reward, next_state, done)
+        return self.agent.update() or {}
+
+    def config(self):
+        from dataclasses import asdict
+        return asdict(self.agent.config)
+
+    def state_dict(self):
+        return {"agent": self.agent.state_dict()}
+
+    def load_state_dict(self, d):
+        self.agent.load_state_dict(d["agent"])
+
+
+def make_method(name: str, experiment: Experiment, seed: int, budget: int = 1000,
+                td3_config: Optional[TD3Config] = None) -> SearchMethod:
+    if name == "random":
+        return RandomSearch(experiment, seed)
+    if name == "annealing":
+        return Annealing(experiment, seed, budget=budget)
+    if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
+        return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config)
+    raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")

@@ -1,0 +1,153 @@
+"""Scenario store: SQLite in WAL mode, one row per scenario written as it finishes (no ROS).
+
+Tables (docs/agent.md has every column):
+- campaigns: one row per campaign (name, experiment file text, method, seed, settings).
+- scenarios: one row per finished scenario. (campaign, job) is unique: a campaign can never
+  count a scenario twice, also across resumes. The trajectory is stored compressed (zlib of
+  float32 columns t, x, y, yaw, yaw rate), the request as canonical JSON, so any row can be
+  replayed exactly and every figure recomputed without simulating.
+"""
+import json
+import os
+import sqlite3
+import time
+import zlib
+from typing import Dict, Iterator, List, Optional
+
+import numpy as np
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS campaigns (
+  name TEXT PRIMARY KEY,
+  method TEXT NOT NULL,
+  experiment TEXT NOT NULL,        -- the experiment file's name field
+  experiment_text TEXT NOT NULL,   -- the experiment file as read
+  seed INTEGER NOT NULL,
+  settings TEXT NOT NULL,          -- JSON: total, workers, method config, stack
+  created REAL NOT NULL,
+  finished REAL
+);
+CREATE TABLE IF NOT EXISTS scenarios (
+  id INTEGER PRIMARY KEY AUTOINCREMENT,
+  campaign TEXT NOT NULL REFERENCES campaigns(name),
+  job INTEGER NOT NULL,            -- 0-based sequence number of the proposal in its campaign
+  method TEXT NOT NULL,
+  episode INTEGER NOT NULL,
+  step INTEGER NOT NULL,
+  worker TEXT NOT NULL,
+  attempts INTEGER NOT NULL,       -- runs it took (> 1 after an ERROR retried elsewhere)
+  scenario_id INTEGER NOT NULL,
+  request TEXT NOT NULL,           -- canonical scenario JSON, exactly what was sent
+  termination TEXT NOT NULL,       -- SUCCESS, COLLISION, ..., ERROR
+  error TEXT NOT NULL,
+  proxy REAL, vis REAL, yaw_term REAL, plr REAL,
+  path_length REAL, optimal_length REAL,
+  sim_time REAL NOT NULL,
+  num_control_msgs INTEGER NOT NULL,
+  visibility TEXT NOT NULL,        -- JSON list, per instance
+  removed TEXT NOT NULL,           -- JSON list of [layout, instance, reason]
+  collision_with TEXT NOT NULL,
+  trajectory BLOB NOT NULL,        -- zlib(float32[n, 5]: t, x, y, yaw, yaw rate)
+  samples INTEGER NOT NULL,
+  wall_time REAL NOT NULL,         -- [s] goal sent to result received (last attempt)
+  finished REAL NOT NULL,          -- unix time
+  UNIQUE (campaign, job)
+);
+CREATE INDEX IF NOT EXISTS scenarios_proxy ON scenarios (campaign, proxy);
+"""
+
+COLUMNS = ("campaign", "job", "method", "episode", "step", "worker", "attempts", "scenario_id", "request",
+           "termination", "error", "proxy", "vis", "yaw_term", "plr", "path_length", "optimal_length", "sim_time",
+           "num_control_msgs", "visibility", "removed", "collision_with", "trajectory", "samples", "wall_time",
+           "finished")
+
+
+class StoreError(RuntimeError):
+    pass
+
+
+def pack_trajectory(traj: np.ndarray) -> bytes:
+    traj = np.asarray(traj, dtype=np.float32).reshape(-1, 5)
+    return zlib.compress(traj.tobytes(), 6)
+
+
+def unpack_trajectory(blob: bytes) -> np.ndarray:
+    return np.frombuffer(zlib.decompress(blob), dtype=np.float32).reshape(-1, 5)
+
+
+class Store:
+    def __init__(self, path: str):
+        self.path = path
+        folder = os.path.dirname(os.path.abspath(path))
+        os.makedirs(folder, exist_ok=True)
+        try:
+            self.db = sqlite3.connect(path, timeout=30.0, isolation_level=None)
+            self.db.row_factory = sqlite3.Row
+            self.db.execute("PRAGMA journal_mode=WAL")
+            self.db.execute("PRAGMA synchronous=NORMAL")
+            self.db.executescript(SCHEMA)
+        except sqlite3.DatabaseError as e:
+            raise StoreError(f"{path}: not a usable scenario store ({e})") from None
+
+    def close(self):
+        self.db.close()
+
+    def integrity_ok(self) -> bool:
+        return self.db.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+
+    # -- campaigns ------------------------------------------------------------------------------
+    def campaign(self, name: str) -> Optional[dict]:
+        row = self.db.execute("SELECT * FROM campaigns WHERE name = ?", (name,)).fetchone()
+        return dict(row) if row else None
+
+    def create_campaign(self, name, method, experiment, experiment_text, seed, settings: dict):
+        try:
+            self.db.execute("INSERT INTO campaigns VALUES (?, ?, ?, ?, ?, ?, ?, NULL)",
+                            (name, method, experiment, experiment_text, seed, json.dumps(settings, sort_keys=True),
+                             time.time()))
+        except sqlite3.IntegrityError:
+            raise StoreError(f"campaign {name!r} already exists in {self.path}: --resume it or choose another "
+                             f"--name") from None
+
+    def finish_campaign(self, name):
+        self.db.execute("UPDATE campaigns SET finished = ? WHERE name = ?", (time.time(), name))
+
+    # -- scenarios ------------------------------------------------------------------------------
+    def add(self, row: Dict):
+        """Writes one finished scenario (one transaction). A second row for the same job raises."""
+        values = [row[c] for c in COLUMNS]
+        try:
+            self.db.execute(f"INSERT INTO scenarios ({', '.join(COLUMNS)}) VALUES ({', '.join('?' * len(COLUMNS))})",
+                            values)
+        except sqlite3.IntegrityError:
+            raise StoreError(f"campaign {row['campaign']!r} already holds job {row['job']}") from None
+
+    def rows(self, campaign: str, after_job: int = -1) -> Iterator[sqlite3.Row]:
+        yield from self.db.execute("SELECT * FROM scenarios WHERE campaign = ? AND job > ? ORDER BY job",
+                                   (campaign, after_job))
+
+    def jobs(self, campaign: str) -> List[int]:
+        return [r[0] for r in self.db.execute("SELECT job FROM scenarios WHERE campaign = ? ORDER BY job", (campaign,))]
+
+    def count(self, campaign: str) -> int:
+        return self.db.execute("SELECT COUNT(*) FROM scenarios WHERE campaign = ?", (campaign,)).fetchone()[0]
+
+    def summary(self, campaign: str, top: int = 10) -> dict:
+        q = self.db.execute
+        n = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ?", (campaign,)).fetchone()[0]
+        c3 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= 3", (campaign,)).fetchone()[0]
+        c4 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= 4", (campaign,)).fetchone()[0]
+        best = q("SELECT MAX(proxy) FROM scenarios WHERE campaign = ?", (campaign,)).fetchone()[0]
+        terms = dict(q("SELECT termination, COUNT(*) FROM scenarios WHERE campaign = ? GROUP BY termination",
+                       (campaign,)).fetchall())
+        tops = [dict(r) for r in q("SELECT id, job, episode, step, scenario_id, proxy, vis, yaw_term, plr, termination "
+                                   "FROM scenarios WHERE campaign = ? AND proxy IS NOT NULL ORDER BY proxy DESC, "
+                                   "job LIMIT ?", (campaign, top))]
+        return {"scenarios": n, "proxy_ge_3": c3, "proxy_ge_4": c4, "max_proxy": best, "terminations": terms,
+                "top": tops}
+
+    def content_digest(self, campaign: str) -> List[tuple]:
+        """What must repeat between two runs of a campaign with one seed (no workers, no times)."""
+        return [tuple(r) for r in self.db.execute(
+            "SELECT job, episode, step, scenario_id, request, termination, proxy, vis, yaw_term, plr, sim_time, "
+            "num_control_msgs, trajectory FROM scenarios WHERE campaign = ? ORDER BY job", (campaign,))]
