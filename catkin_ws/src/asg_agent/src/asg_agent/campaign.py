@@ -240,23 +240,22 @@ class Campaign:
             reward = row["proxy"]
             if reward is None:  # ERROR after every attempt: no transition, the episode ends here
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)
-                self._end_episode(job.slot)
+                done = True
             else:
                 traj = unpack_trajectory(row["trajectory"])
                 next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, float(reward),
                                     next_state, done)
-                if done:
-                    self._end_episode(job.slot)
-                else:
+                if not done:
                     slot.update(step=job.step + 1, state=next_state)
+            if done:
+                self.episodes_done += 1
+                self._new_episode(job.slot)
             self._propose(job.slot)
-
-    def _end_episode(self, slot: int):
-        self.episodes_done += 1
-        self._new_episode(slot)
-        if self.episodes_done % self.checkpoint_every == 0:
-            self._checkpoint()
+            # At episode ends, once the slot's next proposal is made: the checkpoint then holds
+            # every proposal not yet applied.
+            if done and self.episodes_done % self.checkpoint_every == 0:
+                self._checkpoint()
 
     def _checkpoint(self):
         pending = [dict(job=j.job, slot=j.slot, episode=j.episode, step=j.step, state=j.state, action=j.action,

@@ -1,0 +1,150 @@
+"""campaign: run (or resume) a scene-generation campaign against running scene workers.
+
+    campaign EXPERIMENT.yaml [--method td3-per-asp] [--scenarios 500] [--workers 2]
+             [--store results/campaigns.sqlite] [--name NAME] [--seed 0] [--resume]
+
+Workers are the namespaces /worker_0 .. /worker_{N-1} (or a comma-separated list of
+namespaces), started by `roslaunch launch/worker.launch ns:=worker_i ...` on this host or any
+other host of the same ROS master, or by launch/train.launch. `--fake-workers N` runs an
+in-process stand-in instead (no ROS, no simulator: a smoke test of the loop). Prints a progress
+bar and ends with a summary (counts of proxy >= 3 and >= 4, the largest proxy, the top 10).
+"""
+import argparse
+import json
+import math
+import os
+import signal
+import sys
+import time
+
+from .campaign import Campaign
+from .experiment import ExperimentError, load_experiment
+from .search import METHODS, make_method
+from .store import Store, StoreError
+from .td3 import TD3Config
+
+
+def parse(argv):
+    p = argparse.ArgumentParser(prog="campaign", description=__doc__.split("\n\n")[0])
+    p.add_argument("experiment", help="experiment file (experiments/expN.yaml)")
+    p.add_argument("--method", default="td3-per-asp", choices=METHODS)
+    p.add_argument("--scenarios", type=int, default=500, help="scenarios to run in all (default 500)")
+    p.add_argument("--workers", default="2", help="worker count N (/worker_0..N-1) or namespaces, comma-separated")
+    p.add_argument("--store", default="results/campaigns.sqlite", help="SQLite scenario store")
+    p.add_argument("--name", default="", help="campaign name (default: EXPERIMENT-METHOD-sSEED)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--resume", action="store_true", help="continue the named campaign from its checkpoint")
+    p.add_argument("--slots", type=int, default=0, help="episodes in flight (default: 2 x workers)")
+    p.add_argument("--checkpoint-every", type=int, default=10, help="checkpoint every N finished episodes")
+    p.add_argument("--answer-timeout", type=float, default=300.0,
+                   help="[s, wall] a worker that has not answered by then is reported and its job re-queued")
+    p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
+    p.add_argument("--no-progress", action="store_true")
+    a = p.parse_args(argv)
+    if a.scenarios < 1:
+        p.error("--scenarios must be >= 1")
+    return a
+
+
+def worker_names(spec: str):
+    if spec.isdigit():
+        n = int(spec)
+        if n < 1:
+            raise ValueError("--workers must be >= 1")
+        return [f"/worker_{i}" for i in range(n)]
+    return ["/" + s.strip().strip("/") for s in spec.split(",") if s.strip()]
+
+
+def print_summary(store, name, out=sys.stdout):
+    s = store.summary(name)
+    best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
+    print(f"\ncampaign {name}: {s['scenarios']} scenarios, proxy >= 3: {s['proxy_ge_3']}, "
+          f">= 4: {s['proxy_ge_4']}, largest proxy {best}", file=out)
+    print("terminations: " + ", ".join(f"{k} {v}" for k, v in sorted(s["terminations"].items())), file=out)
+    print("top 10 (store row id, job, episode.step, proxy = 0.1 vis + yaw term + PLR^2):", file=out)
+    for r in s["top"]:
+        print(f"  id {r['id']:>6}  job {r['job']:>5}  ep {r['episode']}.{r['step']}  proxy {r['proxy']:.3f}  "
+              f"(vis {r['vis']:+.2f}, yaw {r['yaw_term']:.3f}, PLR {r['plr']:.3f}, {r['termination']})", file=out)
+    print(f"store: {os.path.abspath(store.path)}", file=out)
+    return s
+
+
+def main(argv=None):
+    a = parse(sys.argv[1:] if argv is None else argv)
+    try:
+        exp = load_experiment(a.experiment)
+    except ExperimentError as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
+    name = a.name or f"{exp.name}-{a.method}-s{a.seed}"
+    try:
+        workers = [f"fake_{i}" for i in range(a.fake_workers)] if a.fake_workers else worker_names(a.workers)
+    except ValueError as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
+    slots = a.slots or 2 * len(workers)
+    try:
+        store = Store(a.store)
+    except StoreError as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
+    if not a.resume and store.campaign(name) is not None:
+        print(f"campaign: {name!r} already exists in {a.store}: add --resume to continue it, or --name", file=sys.stderr)
+        return 2
+    if a.fake_workers:
+        from .fake_pool import FakePool
+        pool = FakePool(a.fake_workers, seed=int(time.time()))
+    else:
+        import rospy
+        from .pool_ros import WorkerPool
+        rospy.init_node("campaign", anonymous=True, disable_signals=True)
+        try:
+            pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
+        except RuntimeError as e:
+            print(f"campaign: {e}", file=sys.stderr)
+            return 2
+    method = make_method(a.method, exp, a.seed, budget=a.scenarios)
+    checkpoint = os.path.splitext(os.path.abspath(a.store))[0] + f".{name}.ckpt"
+    bar = None
+    if not a.no_progress:
+        from tqdm import tqdm
+        bar = tqdm(total=a.scenarios, unit="scn", dynamic_ncols=True, file=sys.stderr)
+
+    def progress(st):
+        if bar is None:
+            return
+        bar.n = st["done"]
+        best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
+        bar.set_postfix_str(f"{st['rate_per_hour']:.0f}/h best {best} >=3 {st['ge3']} >=4 {st['ge4']}"
+                            + (f" err {st['errors']}" if st["errors"] else ""), refresh=True)
+
+    settings = {"workers": workers, "experiment_file": exp.source, "perception": exp.perception,
+                "model": exp.model, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
+    c = Campaign(name, exp, method, store, pool, a.scenarios, a.seed, checkpoint, slots=slots,
+                 checkpoint_every=a.checkpoint_every, progress=progress, settings=settings)
+    try:
+        if a.resume:
+            c.resume()
+            print(f"campaign {name}: resumed with {store.count(name)} of {a.scenarios} scenarios stored",
+                  file=sys.stderr)
+        else:
+            c.start()
+        progress(c.status())
+        c.run()
+    except (ValueError, StoreError) as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        if bar:
+            bar.close()
+        print(f"\ncampaign {name}: interrupted; `--resume` continues it", file=sys.stderr)
+        return 130
+    if bar:
+        bar.close()
+    print_summary(store, name)
+    print(f"checkpoint: {checkpoint}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,126 @@
+"""Campaign loop with the in-process pool: determinism whatever the workers' order, exactly-once
+storage, retries, resume after an interruption and after kill -9 of the campaign process."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from asg_agent.campaign import Campaign
+from asg_agent.experiment import ExperimentError, load_experiment
+from asg_agent.fake_pool import FakePool
+from asg_agent.search import make_method
+from asg_agent.store import Store
+from asg_agent.td3 import TD3Config
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
+EXP = os.path.join(REPO, "experiments", "exp1.yaml")
+SMALL = dict(hidden=32, batch_size=16, start_steps=20)
+
+
+def campaign(tmp_path, name, pool, total=40, method="td3-per-asp", seed=7, store=None):
+    exp = load_experiment(EXP)
+    store = store or Store(str(tmp_path / "store.sqlite"))
+    m = make_method(method, exp, seed, budget=total, td3_config=TD3Config(**SMALL))
+    return Campaign(name, exp, m, store, pool, total, seed, str(tmp_path / f"{name}.ckpt"), slots=4,
+                    checkpoint_every=1)
+
+
+class Interrupt(Exception):
+    pass
+
+
+class DyingPool(FakePool):
+    """Raises after `die_after` outcomes, as a killed process would stop mid-episode."""
+
+    def __init__(self, die_after, **kw):
+        super().__init__(**kw)
+        self.die_after, self.seen = die_after, 0
+
+    def poll(self, timeout):
+        out = super().poll(timeout)
+        self.seen += len(out)
+        if self.seen > self.die_after:
+            raise Interrupt()
+        return out
+
+
+@pytest.mark.parametrize("method", ["td3-per-asp", "random", "annealing"])
+def test_same_seed_same_store_whatever_the_order(tmp_path, method):
+    a = campaign(tmp_path, "a", FakePool(2, seed=1), method=method)
+    a.start()
+    a.run()
+    b = campaign(tmp_path, "b", FakePool(3, seed=2), method=method, store=a.store)
+    b.start()
+    b.run()
+    da, db = a.store.content_digest("a"), a.store.content_digest("b")
+    assert len(da) == 40 and da == db
+    assert [r[0] for r in da] == list(range(40))
+
+
+def test_error_is_retried_and_counted_once(tmp_path):
+    pool = FakePool(2, seed=3, fail_jobs={5, 6})
+    c = campaign(tmp_path, "r", pool, total=20)
+    c.start()
+    c.run()
+    rows = {r["job"]: r for r in c.store.rows("r")}
+    assert sorted(rows) == list(range(20))
+    assert rows[5]["attempts"] == 2 and rows[5]["termination"] == "SUCCESS"
+    assert pool.submitted.count(5) == 2
+    assert c.status()["retries"] == 2
+
+
+def test_interrupted_mid_episode_and_resumed_equals_uninterrupted(tmp_path):
+    ref = campaign(tmp_path, "ref", FakePool(2, seed=4))
+    ref.start()
+    ref.run()
+    store = ref.store
+    first = campaign(tmp_path, "cut", DyingPool(23, workers=2, seed=5), store=store)
+    first.start()
+    with pytest.raises(Interrupt):
+        first.run()
+    stored = store.count("cut")
+    assert 0 < stored < 40
+    second = campaign(tmp_path, "cut", FakePool(2, seed=6), store=store)
+    second.resume()
+    second.run()
+    jobs = store.jobs("cut")
+    assert jobs == list(range(40))  # every scenario exactly once
+    assert store.content_digest("cut") == store.content_digest("ref")
+
+
+def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
+    env = dict(os.environ, PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src") + os.pathsep
+               + os.environ.get("PYTHONPATH", ""))
+    cmd = [sys.executable, "-m", "asg_agent.cli", EXP, "--fake-workers", "2", "--scenarios", "150",
+           "--store", str(tmp_path / "k.sqlite"), "--name", "k", "--checkpoint-every", "1", "--no-progress"]
+    store = Store(str(tmp_path / "k.sqlite"))
+    for kill_at in (15, 60):  # kill -9 at two moments, resuming in between
+        p = subprocess.Popen(cmd + (["--resume"] if kill_at != 15 else []), env=env, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE)
+        deadline = time.time() + 120
+        while store.count("k") < kill_at and time.time() < deadline and p.poll() is None:
+            time.sleep(0.002)
+        p.send_signal(signal.SIGKILL)
+        p.wait()
+    assert store.integrity_ok()
+    p = subprocess.run(cmd + ["--resume"], env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert store.jobs("k") == list(range(150))
+    assert "proxy >= 3" in p.stdout
+    assert store.integrity_ok()
+
+
+def test_bad_experiment_files_are_named(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nscenario: nowhere.yaml\nepisode_steps: 0\ncolour: red\n")
+    with pytest.raises(ExperimentError) as e:
+        load_experiment(str(bad))
+    assert "colour: unknown key" in str(e.value) and "episode_steps" in str(e.value)
+    bad.write_text("name: x\nscenario: nowhere.yaml\n")
+    with pytest.raises(ExperimentError, match="nowhere.yaml"):
+        load_experiment(str(bad))
+    with pytest.raises(ExperimentError, match="cannot read"):
+        load_experiment(str(tmp_path / "missing.yaml"))
