@@ -9,4 +9,4 @@ RUN bash scripts/setup.sh
 RUN printf '#!/bin/bash\nset -e\nsource /asg/catkin_ws/devel/setup.bash\nexec "$@"\n' \
       > /entrypoint.sh && chmod +x /entrypoint.sh
 ENTRYPOINT ["/entrypoint.sh"]
-CMD ["bash", "scripts/demo.sh"]
+CMD ["bash", "scripts/train.sh"]

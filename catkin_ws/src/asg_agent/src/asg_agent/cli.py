@@ -70,7 +70,8 @@ def print_summary(store, name, out=sys.stdout):
 
 
 def main(argv=None):
-    a = parse(sys.argv[1:] if argv is None else argv)
+    # roslaunch adds remappings (__name:=..., __log:=...): not ours to parse.
+    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv)
     try:
         exp = load_experiment(a.experiment)
     except ExperimentError as e:
