@@ -17,6 +17,7 @@ import actionlib
 import numpy as np
 import rospy
 from actionlib_msgs.msg import GoalStatus
+from actionlib.action_client import CommState
 from asg_msgs.msg import RunScenarioAction
 
 from asg_scenario.convert import to_goal_msg
@@ -41,15 +42,17 @@ def result_to_outcome(job: int, worker: str, result, wall: float) -> Outcome:
 class WorkerPool(Pool):
     def __init__(self, namespaces: List[str], answer_timeout: float = 300.0, connect_timeout: float = 120.0):
         self.answer_timeout = answer_timeout
-        self.clients: Dict[str, actionlib.SimpleActionClient] = {}
-        self.busy: Dict[str, tuple] = {}  # worker -> (job, goal handle token, start time)
+        # The plain ActionClient: one handle per goal, so a late status of an earlier goal can never
+        # be taken for the current one (SimpleActionClient tracks a single goal per client).
+        self.clients: Dict[str, actionlib.ActionClient] = {}
+        self.busy: Dict[str, tuple] = {}  # worker -> (job, goal handle, start time)
+        self.handles = []  # keeps goal handles alive until they are done
         self.down: Dict[str, float] = {}  # worker -> when it went missing
         self.results: "queue.Queue[Outcome]" = queue.Queue()
-        self.lock = threading.Lock()
-        self.token = 0
+        self.lock = threading.RLock()
         for ns in namespaces:
             ns = "/" + ns.strip("/")
-            self.clients[ns] = actionlib.SimpleActionClient(ns + "/run_scenario", RunScenarioAction)
+            self.clients[ns] = actionlib.ActionClient(ns + "/run_scenario", RunScenarioAction)
         deadline = time.time() + connect_timeout
         for ns, c in self.clients.items():
             left = max(0.1, deadline - time.time())
@@ -64,40 +67,54 @@ class WorkerPool(Pool):
 
     def free(self):
         now = time.time()
-        out = []
         with self.lock:
-            for ns, c in self.clients.items():
-                if ns in self.busy:
+            idle = [ns for ns in self.clients if ns not in self.busy]
+            down = dict(self.down)
+        out = []
+        for ns in idle:
+            if ns in down:  # checked outside self.lock (see transition)
+                if now - down[ns] < 5.0 or not self.clients[ns].wait_for_server(rospy.Duration(0.01)):
                     continue
-                if ns in self.down:
-                    if now - self.down[ns] < 5.0 or not c.wait_for_server(rospy.Duration(0.01)):
-                        continue
-                    rospy.logwarn("pool: %s is back", ns)
-                    del self.down[ns]
-                out.append(ns)
+                rospy.logwarn("pool: %s is back", ns)
+                with self.lock:
+                    self.down.pop(ns, None)
+            out.append(ns)
         return out
 
     def submit(self, worker, job, request):
-        with self.lock:
-            self.token += 1
-            token = self.token
-            self.busy[worker] = (job, token, time.time())
         t0 = time.time()
+        state = {"handle": None, "done": False}  # this submission, whatever its goal handle
 
-        def done(state, result):
+        def transition(gh):
+            # Called from actionlib's threads while they hold actionlib's own lock: never call
+            # into actionlib with self.lock held (submit does not), or the two would deadlock.
+            if gh.get_comm_state() != CommState.DONE:
+                return
             with self.lock:
+                if state["done"]:
+                    return
+                state["done"] = True
+                if gh in self.handles:
+                    self.handles.remove(gh)
                 current = self.busy.get(worker)
-                if current is None or current[1] != token:
-                    return  # an answer we stopped waiting for
+                if current is None or current[1] is not state:
+                    return  # an answer we stopped waiting for (timed out and re-queued)
                 del self.busy[worker]
             wall = time.time() - t0
-            if result is None or state not in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED):
+            status, result = gh.get_goal_status(), gh.get_result()
+            if result is None or status not in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED):
                 self.results.put(Outcome(job=job, worker=worker, termination="ERROR", wall_time=wall,
-                                         error=f"{worker}: goal ended {GoalStatus.to_string(state)} without a result"))
+                                         error=f"{worker}: goal ended {GoalStatus.to_string(status)} without a result"))
             else:
                 self.results.put(result_to_outcome(job, worker, result, wall))
 
-        self.clients[worker].send_goal(to_goal_msg(request), done_cb=done)
+        with self.lock:
+            self.busy[worker] = (job, state, t0)
+        gh = self.clients[worker].send_goal(to_goal_msg(request), transition_cb=transition)
+        with self.lock:
+            state["handle"] = gh
+            if not state["done"]:
+                self.handles.append(gh)
 
     def poll(self, timeout):
         out = []
@@ -109,12 +126,16 @@ class WorkerPool(Pool):
             pass
         now = time.time()
         with self.lock:
-            for ns, (job, token, t0) in list(self.busy.items()):
+            stale = []
+            for ns, (job, state, t0) in list(self.busy.items()):
                 if now - t0 > self.answer_timeout:
                     del self.busy[ns]
                     self.down[ns] = now
-                    self.clients[ns].cancel_all_goals()
+                    stale.append(state["handle"])
                     rospy.logerr("pool: %s did not answer job %d within %.0f s: re-queued", ns, job, self.answer_timeout)
                     out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
                                        error=f"{ns} did not answer within {self.answer_timeout:.0f} s"))
+        for gh in stale:  # outside self.lock (see transition)
+            if gh is not None:
+                gh.cancel()
         return out
