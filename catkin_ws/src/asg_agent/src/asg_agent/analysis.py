@@ -1,6 +1,8 @@
 """Reading campaign stores back (no ROS imports): saturation of actions, counts over scenarios.
 
     python3 -m asg_agent.analysis asp-effect [--scenarios 1000] [--seeds 3] [--out PNG] [--json OUT]
+    python3 -m asg_agent.analysis export STORE CAMPAIGN OUT.jsonl.gz
+    python3 -m asg_agent.analysis summary EXPORT.jsonl.gz [...]
 
 `asp-effect` measures what the action saturation penalty does: TD3-PER with and without it,
 run against the in-process stand-in simulator (fake_pool: cheap, so several seeds of 1,000
@@ -16,7 +18,7 @@ from typing import List
 
 import numpy as np
 
-from .store import Store
+from .store import Store, unpack_trajectory
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -32,6 +34,53 @@ def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
 def saturated_fraction(actions: np.ndarray, window: int = 100, edge: float = 0.99) -> List[float]:
     sat = (np.abs(actions) >= edge).mean(axis=1)
     return [float(sat[k:k + window].mean()) for k in range(0, len(sat), window)]
+
+
+def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
+    """A compact export of a campaign (gzip JSON lines, a few hundred bytes a scenario): the
+    campaign row first, then per scenario its job, episode, step, obstacle positions, every proxy
+    term, termination and the trajectory at `hz` (x, y to 1 cm). Enough to recompute every count
+    and draw every figure without the store; the store keeps the full requests and 60 Hz
+    trajectories for exact replays."""
+    import gzip
+    c = store.campaign(campaign)
+    if c is None:
+        raise ValueError(f"no campaign {campaign!r} in {store.path}")
+    n = 0
+    with gzip.open(out, "wt", encoding="utf-8") as f:
+        f.write(json.dumps({"campaign": c}) + "\n")
+        for r in store.rows(campaign):
+            req = json.loads(r["request"])
+            traj = unpack_trajectory(r["trajectory"])
+            step = max(1, int(round(60.0 / hz)))
+            keep = np.r_[traj[::step], traj[-1:]]
+            f.write(json.dumps({
+                "job": r["job"], "episode": r["episode"], "step": r["step"], "worker": r["worker"],
+                "scenario_id": r["scenario_id"], "termination": r["termination"], "error": r["error"],
+                "proxy": r["proxy"], "vis": r["vis"], "yaw_term": r["yaw_term"], "plr": r["plr"],
+                "path_length": r["path_length"], "optimal_length": r["optimal_length"], "sim_time": r["sim_time"],
+                "positions": [[round(i["x"], 3), round(i["y"], 3)] for l in req["structural"]["layouts"]
+                              for i in l["instances"]],
+                "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
+                "visibility": json.loads(r["visibility"]), "wall_time": round(r["wall_time"], 3),
+                "trajectory_xy": np.round(keep[:, 1:3], 2).tolist()}) + "\n")
+            n += 1
+    return n
+
+
+def read_export(path: str):
+    import gzip
+    with gzip.open(path, "rt", encoding="utf-8") as f:
+        head = json.loads(f.readline())
+        rows = [json.loads(line) for line in f]
+    return head["campaign"], rows
+
+
+def counts(rows) -> dict:
+    p = [r["proxy"] for r in rows if r["proxy"] is not None]
+    return {"scenarios": len(rows), "proxy_ge_3": sum(v >= 3 for v in p), "proxy_ge_4": sum(v >= 4 for v in p),
+            "max_proxy": max(p) if p else None,
+            "terminations": {t: sum(r["termination"] == t for r in rows) for t in sorted({r["termination"] for r in rows})}}
 
 
 def asp_effect(scenarios: int, seeds: int, experiment: str):
@@ -66,7 +115,22 @@ def main(argv=None):
                                                          "experiments", "exp1.yaml"))
     a.add_argument("--json", default="")
     a.add_argument("--out", default="", help="PNG of the curves")
+    e = sub.add_parser("export", help="compact gzip JSON-lines export of a campaign")
+    e.add_argument("store")
+    e.add_argument("campaign")
+    e.add_argument("out")
+    sm = sub.add_parser("summary", help="counts of exported campaigns")
+    sm.add_argument("exports", nargs="+")
     args = p.parse_args(argv)
+    if args.cmd == "export":
+        n = export(Store(args.store), args.campaign, args.out)
+        print(f"{args.out}: {n} scenarios")
+        return 0
+    if args.cmd == "summary":
+        for path in args.exports:
+            c, rows = read_export(path)
+            print(json.dumps({"campaign": c["name"], **counts(rows)}))
+        return 0
     curves = asp_effect(args.scenarios, args.seeds, args.experiment)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
