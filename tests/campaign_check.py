@@ -48,6 +48,25 @@ class CampaignEndToEnd(unittest.TestCase):
             self.assertEqual(len(traj), r["samples"])
             self.assertGreater(r["samples"], 60)
         self.assertTrue(store.integrity_ok())
+        # The top scenario replays exactly, and the bag of the replay holds the run's topics.
+        top = store.summary("first", top=1)["top"][0]
+        bag = os.path.join(os.path.dirname(path), "replay.bag")
+        p = subprocess.run(["/usr/bin/python3", "-m", "asg_agent.replay_ros", path, "first", str(top["job"]),
+                            "--worker", "/worker_0", "--bag", bag], capture_output=True, text=True, timeout=300)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr[-2000:])
+        self.assertIn("REPRODUCED", p.stdout)
+        self.assertIn("largest position difference to the stored run: 0.000000 m", p.stdout)
+        import rosbag
+        with rosbag.Bag(bag) as b:
+            counts = {t: i.message_count for t, i in b.get_type_and_topic_info().topics.items()}
+        row = next(r for r in store.rows("first") if r["job"] == top["job"])
+        frames = int(row["sim_time"] * 15) + 1  # 15 Hz from t = 0
+        for topic in ("camera/image", "labels", "camera/depth"):
+            self.assertGreaterEqual(counts.get("/worker_0/" + topic, 0), frames - 1, topic)
+        self.assertEqual(counts.get("/worker_0/odom", 0), row["samples"])  # one per tick, the last included
+        self.assertEqual(counts.get("/worker_0/planner/state", 0), row["num_control_msgs"])
+        self.assertGreater(counts.get("/worker_0/planner/path", 0), 0)
+        self.assertGreater(counts.get("/worker_0/planner/votes", 0), 0)
 
 
 if __name__ == "__main__":

@@ -68,6 +68,30 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
     return n
 
 
+def top_down(store: Store, campaign: str, job: int, out: str):
+    """Top-down summary of one stored scenario, like the paper's Figures 5-8: obstacles by type
+    (removed ones dashed), the driven path, the optimal path dashed, start and goal circles, the
+    proxy and its terms in the title."""
+    from asg_scenario.report import plot_run
+    from .optimal_path import obstacle_discs, shortest_path
+    from .proxy import ProxyConfig
+    row = next((r for r in store.rows(campaign, job - 1) if r["job"] == job), None)
+    if row is None:
+        raise ValueError(f"campaign {campaign!r} has no job {job}")
+    req = json.loads(row["request"])
+    removed = {(l, i) for l, i, _ in json.loads(row["removed"])}
+    counts_ = [len(l["instances"]) for l in req["structural"]["layouts"]]
+    placed = [(li, ii) not in removed for li, n in enumerate(counts_) for ii in range(n)]
+    op = req["operational"]
+    opt = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"],
+                        obstacle_discs(req, ProxyConfig().clearance, placed))
+    traj = unpack_trajectory(row["trajectory"])
+    title = (f"{campaign} job {job} (store id {row['id']})\nproxy {row['proxy']:.2f} = 0.1 x vis {row['vis']:+.2f} "
+             f"+ yaw term {row['yaw_term']:.2f} + PLR {row['plr']:.3f}^2\n{row['termination']} after "
+             f"{row['sim_time']:.1f} s, driven {row['path_length']:.1f} m, optimal {row['optimal_length']:.1f} m")
+    plot_run(out, req, traj[:, 1:3].tolist(), title=title, removed=removed, optimal=opt.points)
+
+
 def read_export(path: str):
     import gzip
     with gzip.open(path, "rt", encoding="utf-8") as f:
@@ -119,12 +143,25 @@ def main(argv=None):
     e.add_argument("store")
     e.add_argument("campaign")
     e.add_argument("out")
+    fg = sub.add_parser("figure", help="top-down PNG of the top-k scenarios of a campaign")
+    fg.add_argument("store")
+    fg.add_argument("campaign")
+    fg.add_argument("--top", type=int, default=1)
+    fg.add_argument("--out", default="figures", help="folder for CAMPAIGN_jobN.png")
     sm = sub.add_parser("summary", help="counts of exported campaigns")
     sm.add_argument("exports", nargs="+")
     args = p.parse_args(argv)
     if args.cmd == "export":
         n = export(Store(args.store), args.campaign, args.out)
         print(f"{args.out}: {n} scenarios")
+        return 0
+    if args.cmd == "figure":
+        store = Store(args.store)
+        os.makedirs(args.out, exist_ok=True)
+        for r in store.summary(args.campaign, top=args.top)["top"]:
+            path = os.path.join(args.out, f"{args.campaign}_job{r['job']}.png")
+            top_down(store, args.campaign, r["job"], path)
+            print(path)
         return 0
     if args.cmd == "summary":
         for path in args.exports:

@@ -38,12 +38,14 @@ def write_result_yaml(path: str, result: dict):
 
 
 def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: str = "",
-             removed: Optional[set] = None, background=None, votes=None, vote_cell: float = 0.0):
+             removed: Optional[set] = None, background=None, votes=None, vote_cell: float = 0.0,
+             optimal: Optional[Sequence[Sequence[float]]] = None):
     """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory.
 
     background: optional HxWx3 uint8 rendering of [0, size]^2 (row 0 at y = size) drawn below.
     votes: optional list of {x, y, weight 0..1} vote-grid vertices, drawn as squares of side
     vote_cell [m] (yellow to red by weight).
+    optimal: optional polyline of the optimal path, drawn dashed.
     """
     import matplotlib
     matplotlib.use("Agg")
@@ -80,6 +82,9 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
                                             "tab:orange", "goal")):
         ax.add_patch(Circle((x, y), r, fill=False, color=c, ls=":"))
         ax.plot([x], [y], "o", color=c, label=label)
+    if optimal is not None and len(optimal):
+        ax.plot([p[0] for p in optimal], [p[1] for p in optimal], "--", color="0.15", lw=1.2,
+                label="optimal path")
     if len(xy):
         ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="magenta", lw=1.8,
                 label="vehicle")
@@ -88,7 +93,7 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(title or scenario.get("name", ""))
+    ax.set_title(title or scenario.get("name", ""), fontsize=9)
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)

@@ -1,0 +1,157 @@
+"""replay: run a stored scenario again on a scene worker and check it reproduces the stored run.
+
+    replay STORE CAMPAIGN JOB [--worker /worker_0] [--bag OUT.bag] [--figure OUT.png]
+    replay --scenario FILE.yaml [--worker ...] [--bag ...]
+
+Sends the stored request (the exact scenario JSON) to a worker, prints the largest position
+difference between the replayed and the stored trajectory and the proxy recomputed beside the
+stored one, and exits 0 only if they match (difference under 1 cm, proxy equal to 1e-6). The
+worker must run the stack the campaign ran (perception, model, planner config: stored with
+the campaign); the command compares what it can read from the parameter server and refuses a
+mismatch. --bag records the worker's topics during the run with rosbag.
+"""
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from asg_scenario import ScenarioError, load_scenario
+
+from .campaign import Outcome
+from .proxy import compute
+from .store import Store, unpack_trajectory
+
+BAG_TOPICS = ["camera/image", "camera/labels_gt", "labels", "camera/depth", "camera/camera_info", "odom", "tf",
+              "tick", "cmd", "planner/state", "planner/path", "planner/votes", "planner/lookahead",
+              "planner/vehicle_grid", "scenario"]
+
+
+def compare(stored: np.ndarray, replayed: np.ndarray) -> float:
+    """[m] largest position difference (inf when the lengths differ)."""
+    if len(stored) != len(replayed):
+        return float("inf")
+    return float(np.max(np.hypot(stored[:, 1] - replayed[:, 1], stored[:, 2] - replayed[:, 2]))) if len(stored) else 0.0
+
+
+def stack_mismatch(worker: str, settings: dict) -> list:
+    import rospy
+    out = []
+    want = settings.get("perception")
+    has_seg = rospy.has_param(f"{worker}/segmenter/model")
+    if want == "unet":
+        if not has_seg:
+            out.append(f"the campaign ran the U-Net, {worker} has no segmenter")
+        else:
+            model = rospy.get_param(f"{worker}/segmenter/model")
+            if os.path.splitext(os.path.basename(str(model)))[0] != os.path.splitext(os.path.basename(settings.get("model", "")))[0]:
+                out.append(f"the campaign ran model {settings.get('model')!r}, {worker} runs {model!r}")
+    elif want == "ground_truth" and has_seg:
+        out.append(f"the campaign ran ground-truth labels, {worker} runs a segmenter")
+    return out
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[0])
+    p.add_argument("store", nargs="?")
+    p.add_argument("campaign", nargs="?")
+    p.add_argument("job", nargs="?", type=int)
+    p.add_argument("--scenario", help="a scenario YAML file instead of a stored scenario")
+    p.add_argument("--worker", default="/worker_0")
+    p.add_argument("--bag", default="", help="record the run's topics into this bag")
+    p.add_argument("--figure", default="", help="write a top-down PNG of the replayed run")
+    p.add_argument("--force", action="store_true", help="replay even if the worker's stack differs")
+    a = p.parse_args([x for x in (sys.argv[1:] if argv is None else argv) if ":=" not in x])
+    row, settings = None, {}
+    if a.scenario:
+        try:
+            request = load_scenario(a.scenario)
+        except ScenarioError as e:
+            print(f"replay: {e}", file=sys.stderr)
+            return 2
+    else:
+        if a.store is None or a.campaign is None or a.job is None:
+            p.error("give STORE CAMPAIGN JOB, or --scenario FILE")
+        if not os.path.isfile(a.store):
+            print(f"replay: {a.store}: no such store", file=sys.stderr)
+            return 2
+        store = Store(a.store)
+        c = store.campaign(a.campaign)
+        if c is None:
+            print(f"replay: no campaign {a.campaign!r} in {a.store}", file=sys.stderr)
+            return 2
+        settings = json.loads(c["settings"])
+        row = next((r for r in store.rows(a.campaign, a.job - 1) if r["job"] == a.job), None)
+        if row is None:
+            print(f"replay: campaign {a.campaign!r} has no job {a.job}", file=sys.stderr)
+            return 2
+        request = json.loads(row["request"])
+    import actionlib
+    import rospy
+    from asg_msgs.msg import RunScenarioAction
+    from asg_scenario.convert import to_goal_msg
+    from .pool_ros import result_to_outcome
+    rospy.init_node("replay", anonymous=True, disable_signals=True)
+    worker = "/" + a.worker.strip("/")
+    if settings and not a.force:
+        problems = stack_mismatch(worker, settings)
+        if problems:
+            print("replay: the worker's stack is not the campaign's: " + "; ".join(problems)
+                  + " (launch worker.launch with the campaign's perception and model, or --force)", file=sys.stderr)
+            return 2
+    client = actionlib.SimpleActionClient(worker + "/run_scenario", RunScenarioAction)
+    if not client.wait_for_server(rospy.Duration(60)):
+        print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
+        return 2
+    bag = None
+    if a.bag:
+        topics = [f"{worker}/{t}" for t in BAG_TOPICS]
+        bag = subprocess.Popen(["rosbag", "record", "-O", a.bag, "--lz4"] + topics, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
+        time.sleep(2.0)  # let rosbag subscribe before the run starts
+    t0 = time.time()
+    client.send_goal(to_goal_msg(request))
+    client.wait_for_result()
+    result = client.get_result()
+    if bag:
+        time.sleep(1.0)
+        os.killpg(os.getpgid(bag.pid), signal.SIGINT)
+        bag.wait(timeout=30)
+    if result is None:
+        print("replay: the worker returned no result", file=sys.stderr)
+        return 1
+    o: Outcome = result_to_outcome(0, worker, result, time.time() - t0)
+    print(f"replayed {request.get('name', '')} on {worker}: {o.termination} after {o.sim_time:.2f} s "
+          f"({o.wall_time:.1f} s wall){': ' + o.error if o.error else ''}")
+    if a.figure:
+        from asg_scenario.report import plot_run
+        plot_run(a.figure, request, o.trajectory[:, 1:3].tolist(), title=f"replay of {request.get('name', '')}")
+    if row is None:
+        return 0 if o.termination != "ERROR" else 1
+    stored = unpack_trajectory(row["trajectory"])
+    diff = compare(stored, o.trajectory)
+    placed = [True] * len(o.visibility)
+    for layout, inst, _ in o.removed:
+        k = sum(len(l["instances"]) for l in request["structural"]["layouts"][:layout]) + inst
+        placed[k] = False
+    terms = compute(request, o.trajectory[:, 0], o.trajectory[:, 1:3], o.trajectory[:, 4], o.visibility,
+                    o.termination, placed) if o.termination != "ERROR" else None
+    proxy = terms.proxy if terms else None
+    same_proxy = (proxy is None and row["proxy"] is None) or (
+        proxy is not None and row["proxy"] is not None and abs(proxy - row["proxy"]) <= 1e-6)
+    print(f"largest position difference to the stored run: {diff:.6f} m ({len(o.trajectory)} vs {len(stored)} samples)")
+    print(f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored "
+          f"{row['proxy'] if row['proxy'] is None else round(row['proxy'], 6)}")
+    if a.bag:
+        print(f"bag: {os.path.abspath(a.bag)}")
+    ok = diff < 0.01 and same_proxy and o.termination == row["termination"]
+    print("REPRODUCED" if ok else "NOT REPRODUCED")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
