@@ -20,8 +20,9 @@ EXPECTED = [
 def main(ws, out):
     prefix = os.path.join(ws, "build", "install_check")
     t0 = time.time()
-    cmd = ["catkin_make", "install", f"-DCMAKE_INSTALL_PREFIX={prefix}", "-DPYTHON_EXECUTABLE=/usr/bin/python3",
-           "-j2"]
+    # -C: catkin_make takes its base path from $PWD, not from the process's working directory.
+    cmd = ["catkin_make", "-C", ws, "install", f"-DCMAKE_INSTALL_PREFIX={prefix}",
+           "-DPYTHON_EXECUTABLE=/usr/bin/python3", "-j2"]
     proc = subprocess.run(cmd, cwd=ws, capture_output=True, text=True)
     problem = ""
     if proc.returncode != 0:
@@ -31,8 +32,8 @@ def main(ws, out):
         if missing:
             problem = "not installed: " + ", ".join(missing)
     # Back to the devel-space install prefix, so later builds do not install here.
-    subprocess.run(["catkin_make", "-DCMAKE_INSTALL_PREFIX=" + os.path.join(ws, "install"), "-j2"], cwd=ws,
-                   capture_output=True)
+    subprocess.run(["catkin_make", "-C", ws, "-DCMAKE_INSTALL_PREFIX=" + os.path.join(ws, "install"), "-j2"],
+                   cwd=ws, capture_output=True)
     body = f'<failure message="install failed">{escape(problem)}</failure>' if problem else ""
     os.makedirs(os.path.dirname(out), exist_ok=True)
     with open(out, "w") as f:

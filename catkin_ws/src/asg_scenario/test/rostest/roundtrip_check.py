@@ -24,7 +24,7 @@ class RoundTrip(unittest.TestCase):
 
     def run_goal(self, goal):
         self.client.send_goal(goal)
-        self.assertTrue(self.client.wait_for_result(rospy.Duration(30.0)))
+        self.assertTrue(self.client.wait_for_result(rospy.Duration(120.0)))
         return self.client.get_result()
 
     def test_good_goal(self):
