@@ -59,6 +59,7 @@ class TD3Config:
     asp_lambda0: float = 1.0  #: its initial weight
     asp_u0: float = 2.0  #: pre-squash magnitude where it starts
     asp_tau: float = 3000.0  #: updates over which its weight falls by e
+    normalize_q: bool = True  #: divide the actor's -Q by its batch mean |Q| (scale-free objective)
     seed: int = 0  #: seeds torch and numpy generators of this agent
 
 
@@ -166,7 +167,13 @@ class TD3Agent:
         out = {"critic_loss": float(critic_loss), "q": float(q1.mean())}
         if self.updates % c.policy_delay == 0:
             u = self.actor.pre_squash(s)
-            actor_loss = -self.critic(s, torch.tanh(u))[0].mean()
+            q = self.critic(s, torch.tanh(u))[0]
+            # Scale-free policy objective: -Q divided by the batch's mean |Q| (not differentiated),
+            # so the penalty's weight means the same whatever the reward scale (the proxy is
+            # 1 to 8, Q ten times that): without it the critic's gradient swamped the penalty and
+            # the first Exp. 1 campaign's actor went to the landscape's edges (docs/agent.md).
+            scale = q.abs().mean().detach() + 1e-6 if c.normalize_q else 1.0
+            actor_loss = -q.mean() / scale
             asp = (F.relu(u.abs() - c.asp_u0).pow(2)).mean()
             loss = actor_loss + self.asp_weight() * asp
             self.actor_opt.zero_grad()
@@ -207,7 +214,9 @@ class TD3Agent:
     def load(cls, path: str) -> "TD3Agent":
         d = load_checked(path)
         known = {f.name for f in fields(TD3Config)}
-        agent = cls(*d["dims"], TD3Config(**{k: v for k, v in d["config"].items() if k in known}))
+        cfg = {k: v for k, v in d["config"].items() if k in known}
+        cfg.setdefault("normalize_q", False)  # checkpoints from before the option trained without it
+        agent = cls(*d["dims"], TD3Config(**cfg))
         agent.load_state_dict(d)
         return agent
 
