@@ -67,6 +67,17 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertEqual(counts.get("/worker_0/planner/state", 0), row["num_control_msgs"])
         self.assertGreater(counts.get("/worker_0/planner/path", 0), 0)
         self.assertGreater(counts.get("/worker_0/planner/votes", 0), 0)
+        for topic in ("replay/scene", "replay/optimal_path", "replay/trajectory"):
+            self.assertEqual(counts.get("/worker_0/" + topic, 0), 1, topic)
+        self.assertEqual(counts.get("/worker_0/replay/labels_rgb", 0), counts["/worker_0/labels"])
+        # rviz with rviz/replay.rviz on that bag, under Xvfb: the vote grid, the plan and the
+        # driven path are drawn (a blank view or an error panel has none of their colours).
+        from asg_agent.replay_view import screenshot
+        shot = os.path.join(os.path.dirname(path), "replay.png")
+        px = screenshot(bag, shot, "worker_0", at=0.7)
+        self.assertGreater(px["votes"], 300, px)
+        self.assertGreater(px["plan"], 50, px)
+        self.assertGreater(px["trajectory"], 100, px)
 
 
 if __name__ == "__main__":

@@ -55,6 +55,47 @@ def stack_mismatch(worker: str, settings: dict) -> list:
     return out
 
 
+def add_scene_to_bag(path, worker, request, o: Outcome):
+    """Writes the scene, optimal path, driven trajectory and fading earlier plans into the bag."""
+    import rosbag
+    import rospy
+    from .bag_scene import plans_fading, scene_messages
+    from .optimal_path import obstacle_discs, shortest_path
+    from .proxy import ProxyConfig
+    removed = {(l, i) for l, i, _ in o.removed}
+    counts = [len(l["instances"]) for l in request["structural"]["layouts"]]
+    placed = [(li, ii) not in removed for li, n in enumerate(counts) for ii in range(n)]
+    op = request["operational"]
+    opt = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"],
+                        obstacle_discs(request, ProxyConfig().clearance, placed))
+    with rosbag.Bag(path, "a") as bag:
+        start = bag.get_start_time()
+        plans, first_stamp, times = [], None, {}
+        for _, msg, t in bag.read_messages(topics=[f"{worker}/planner/path"]):
+            if msg.poses:
+                plans.append((msg.header.stamp, [(p.pose.position.x, p.pose.position.y) for p in msg.poses]))
+                times[msg.header.stamp] = t
+        for _, msg, t in bag.read_messages(topics=[f"{worker}/scenario"]):
+            first_stamp = msg.base_stamp
+        when = rospy.Time.from_sec(start)
+        for suffix, msg in scene_messages(request, removed, opt.points, o.trajectory[::6, 1:3].tolist(),
+                                          first_stamp or rospy.Time()):
+            bag.write(f"{worker}/{suffix}", msg, when)
+        # Labels in colour (ground tan, obstacle red, sky blue, void grey) for the image panel.
+        palette = np.array([[170, 150, 110], [220, 40, 40], [110, 160, 230], [128, 128, 128]], np.uint8)
+        coloured = []
+        for _, msg, t in bag.read_messages(topics=[f"{worker}/labels", f"{worker}/camera/labels_gt"]):
+            lab = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width)
+            img = type(msg)(header=msg.header, height=msg.height, width=msg.width, encoding="rgb8",
+                            is_bigendian=0, step=msg.width * 3, data=palette[np.minimum(lab, 3)].tobytes())
+            coloured.append((img, t))
+        for img, t in coloured:
+            bag.write(f"{worker}/replay/labels_rgb", img, t)
+        # Earlier plans: written at the bag time of the plan they accompany.
+        for stamp, arr in plans_fading(plans):
+            bag.write(f"{worker}/replay/earlier_plans", arr, times.get(stamp, when))
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[0])
     p.add_argument("store", nargs="?")
@@ -125,6 +166,8 @@ def main(argv=None):
         print("replay: the worker returned no result", file=sys.stderr)
         return 1
     o: Outcome = result_to_outcome(0, worker, result, time.time() - t0)
+    if a.bag:
+        add_scene_to_bag(a.bag, worker, request, o)
     print(f"replayed {request.get('name', '')} on {worker}: {o.termination} after {o.sim_time:.2f} s "
           f"({o.wall_time:.1f} s wall){': ' + o.error if o.error else ''}")
     if a.figure:

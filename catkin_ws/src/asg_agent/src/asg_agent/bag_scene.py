@@ -1,0 +1,84 @@
+"""Adds what a replay bag needs for rviz beyond the worker's own topics (rospy messages, no node):
+the obstacles by type, start and goal circles, the optimal path, the driven trajectory and the
+planner's earlier plans fading, all in the map frame under `<ns>/replay/...`."""
+import math
+
+from geometry_msgs.msg import Point, PoseStamped
+from nav_msgs.msg import Path
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
+
+from asg_scenario.catalogue import MESHES
+
+COLOURS = {"juniper": (0.1, 0.5, 0.15), "barberry": (0.7, 0.15, 0.15)}
+
+
+def _path(points, stamp, z=0.15):
+    p = Path()
+    p.header.frame_id, p.header.stamp = "map", stamp
+    for x, y in points:
+        ps = PoseStamped()
+        ps.header = p.header
+        ps.pose.position.x, ps.pose.position.y, ps.pose.position.z = x, y, z
+        ps.pose.orientation.w = 1.0
+        p.poses.append(ps)
+    return p
+
+
+def _circle(mid, ns, x, y, r, rgb, stamp):
+    m = Marker(ns=ns, id=mid, type=Marker.LINE_STRIP, action=Marker.ADD)
+    m.header.frame_id, m.header.stamp = "map", stamp
+    m.pose.orientation.w = 1.0
+    m.scale.x = 0.3
+    m.color = ColorRGBA(*rgb, 1.0)
+    m.points = [Point(x + r * math.cos(a * math.pi / 32), y + r * math.sin(a * math.pi / 32), 0.1) for a in range(65)]
+    return m
+
+
+def scene_messages(request, removed, optimal_points, trajectory_xy, stamp):
+    """(topic suffix, message) pairs describing the scene of a run."""
+    arr = MarkerArray()
+    k = 0
+    for li, layout in enumerate(request["structural"]["layouts"]):
+        mesh = MESHES[layout["mesh_name"]]
+        for ii, inst in enumerate(layout["instances"]):
+            if not inst["visible"]:
+                continue
+            m = Marker(ns="obstacles", id=k, type=Marker.CYLINDER, action=Marker.ADD)
+            k += 1
+            m.header.frame_id, m.header.stamp = "map", stamp
+            h = mesh.height * inst["scale"]
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = inst["x"], inst["y"], h / 2
+            m.pose.orientation.w = 1.0
+            m.scale.x = m.scale.y = 2 * mesh.collision_radius * inst["scale"]
+            m.scale.z = h
+            gone = (li, ii) in removed
+            m.color = ColorRGBA(*((0.6, 0.6, 0.6) if gone else COLOURS.get(layout["mesh_name"], (0.3, 0.3, 0.3))),
+                                0.35 if gone else 0.9)
+            arr.markers.append(m)
+    op = request["operational"]
+    arr.markers.append(_circle(0, "start", op["start_x"], op["start_y"], op["safety_radius"], (0.1, 0.4, 1.0), stamp))
+    arr.markers.append(_circle(0, "goal", op["goal_x"], op["goal_y"], op["goal_radius"], (1.0, 0.6, 0.0), stamp))
+    return [("replay/scene", arr), ("replay/optimal_path", _path(optimal_points, stamp, 0.2)),
+            ("replay/trajectory", _path(trajectory_xy, stamp, 0.25))]
+
+
+def plans_fading(plans, max_kept=8):
+    """For each (stamp, path points) replan, a MarkerArray of the earlier plans, older ones fainter."""
+    out = []
+    for n, (stamp, _) in enumerate(plans):
+        arr = MarkerArray()
+        earlier = plans[max(0, n - max_kept):n]
+        for j, (_, pts) in enumerate(earlier):
+            m = Marker(ns="earlier_plans", id=j, type=Marker.LINE_STRIP, action=Marker.ADD)
+            m.header.frame_id, m.header.stamp = "map", stamp
+            m.pose.orientation.w = 1.0
+            m.scale.x = 0.25
+            age = len(earlier) - j
+            m.color = ColorRGBA(0.2, 0.8, 1.0, max(0.1, 0.7 - 0.08 * age))
+            m.points = [Point(x, y, 0.12) for x, y in pts]
+            arr.markers.append(m)
+        for j in range(len(earlier), max_kept):
+            arr.markers.append(Marker(ns="earlier_plans", id=j, action=Marker.DELETE))
+        out.append((stamp, arr))
+    return out

@@ -1,0 +1,90 @@
+"""Screenshot of a replay bag in rviz without a display (Xvfb), and the pixel check the tests use.
+
+    python3 -m asg_agent.replay_view RUN.bag OUT.png [--ns worker_0] [--at 0.8]
+
+Plays the bag into rviz with rviz/replay.rviz on a virtual display and grabs the screen when
+the given fraction of the bag has played (default: the end). Needs a ROS master (roscore).
+"""
+import argparse
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+RVIZ_CONFIG = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "rviz",
+                                           "replay.rviz"))
+
+
+def colour_counts(png: str) -> dict:
+    """Pixels of the replay's colours: votes (yellow to red), current plan (green), driven
+    trajectory (magenta), obstacles (dark green, dark red)."""
+    from PIL import Image
+    a = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    r, g, b = a[..., 0], a[..., 1], a[..., 2]
+    return {
+        "votes": int(((r > 180) & (b < 80) & (g > 40) & (r - g > 20)).sum() + ((r > 200) & (g > 200) & (b < 60)).sum()),
+        "plan": int(((g > 200) & (r < 120) & (b < 100)).sum()),
+        "trajectory": int(((r > 200) & (b > 200) & (g < 130)).sum()),
+        "size": a.shape[0] * a.shape[1],
+    }
+
+
+def screenshot(bag: str, out: str, ns: str = "worker_0", at: float = 1.0, display: str = ":71",
+               size=(1280, 860)) -> dict:
+    import rosbag
+    from PIL import ImageGrab
+    with rosbag.Bag(bag) as b:
+        duration = b.get_end_time() - b.get_start_time()
+    xvfb = subprocess.Popen(["Xvfb", display, "-screen", "0", f"{size[0]}x{size[1]}x24", "-nolisten", "tcp"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    procs = [xvfb]
+    try:
+        time.sleep(1.5)
+        env = dict(os.environ, DISPLAY=display, LIBGL_ALWAYS_SOFTWARE="1")
+        rviz = subprocess.Popen(["rosrun", "rviz", "rviz", "-d", RVIZ_CONFIG, f"/tf:=/{ns}/tf",
+                                 "__name:=replay_view_rviz"], env=env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
+        procs.append(rviz)
+        time.sleep(8.0)  # rviz up and subscribed
+        play = subprocess.Popen(["rosbag", "play", bag], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                preexec_fn=os.setsid)
+        procs.append(play)
+        if at >= 1.0:
+            play.wait(timeout=duration * 3 + 60)
+            time.sleep(2.0)
+        else:
+            time.sleep(duration * at + 0.5)
+            os.killpg(os.getpgid(play.pid), signal.SIGSTOP)  # hold the view at that moment
+            time.sleep(2.0)
+        ImageGrab.grab(xdisplay=display).save(out)
+    finally:
+        for p in reversed(procs):
+            try:
+                os.killpg(os.getpgid(p.pid), signal.SIGKILL) if p is not xvfb else p.kill()
+            except (ProcessLookupError, PermissionError):
+                pass
+            p.wait()
+    return colour_counts(out)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="asg_agent.replay_view", description=__doc__.split("\n\n")[0])
+    p.add_argument("bag")
+    p.add_argument("out")
+    p.add_argument("--ns", default="worker_0")
+    p.add_argument("--at", type=float, default=1.0, help="fraction of the bag played when the picture is taken")
+    a = p.parse_args(argv)
+    if shutil.which("Xvfb") is None:
+        print("replay_view: Xvfb is not installed (Debian package xvfb)", file=sys.stderr)
+        return 2
+    counts = screenshot(a.bag, a.out, a.ns, a.at)
+    print(f"{a.out}: {counts}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
