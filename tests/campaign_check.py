@@ -78,6 +78,13 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertGreater(px["votes"], 300, px)
         self.assertGreater(px["plan"], 50, px)
         self.assertGreater(px["trajectory"], 100, px)
+        # A planner snapshot from the bag and the campaign's HTML report.
+        from asg_agent.report import campaign_report, snapshot
+        snap = os.path.join(os.path.dirname(path), "snapshot.png")
+        snapshot(bag, snap, row["sim_time"] / 2)
+        self.assertGreater(os.path.getsize(snap), 10000)
+        page = open(campaign_report(path, "first", os.path.join(os.path.dirname(path), "report"), top=3)).read()
+        self.assertIn(f"<td>{SCENARIOS}</td>", page)
 
 
 if __name__ == "__main__":

@@ -124,3 +124,23 @@ def test_bad_experiment_files_are_named(tmp_path):
         load_experiment(str(bad))
     with pytest.raises(ExperimentError, match="cannot read"):
         load_experiment(str(tmp_path / "missing.yaml"))
+
+
+def test_export_summary_and_report_agree_with_the_store(tmp_path):
+    from asg_agent.analysis import counts, export, read_export
+    from asg_agent.report import campaign_report
+    c = campaign(tmp_path, "rep", FakePool(2, seed=8), total=30, method="random")
+    c.start()
+    c.run()
+    out = str(tmp_path / "rep.jsonl.gz")
+    assert export(c.store, "rep", out) == 30
+    head, rows = read_export(out)
+    s = c.store.summary("rep")
+    k = counts(rows)
+    assert head["name"] == "rep"
+    assert (k["scenarios"], k["proxy_ge_3"], k["proxy_ge_4"]) == (s["scenarios"], s["proxy_ge_3"], s["proxy_ge_4"])
+    assert abs(k["max_proxy"] - s["max_proxy"]) < 1e-12
+    page = open(campaign_report(c.store.path, "rep", str(tmp_path / "report"), top=3)).read()
+    assert f"<td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>" in page
+    assert page.count("rosrun asg_agent replay") == 3
+    assert os.path.isfile(tmp_path / "report" / "curves.png")

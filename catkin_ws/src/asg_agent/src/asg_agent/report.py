@@ -1,0 +1,188 @@
+"""Figures and a report from campaigns and bags, without a display (no rospy node).
+
+    python3 -m asg_agent.report snapshot RUN.bag OUT.png --time 6.0 [--ns worker_0]
+    python3 -m asg_agent.report campaign STORE CAMPAIGN OUT_DIR [--top 10]
+
+`snapshot` draws what the planner believed at a simulated time: the vote grid (yellow to red by
+votes), the plan in force, earlier plans, the vehicle and its look-ahead point, the obstacles,
+start and goal. `campaign` writes OUT_DIR/index.html (open it from disk, no server): the
+Table-2-style counts, the proxy over scenarios with its running best and the counts >= 3 as the
+campaign went on, terminations, and the top-k table with each scenario's top-down figure and
+its replay command.
+"""
+import argparse
+import html
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+
+def snapshot(bag_path: str, out: str, t: float, ns: str = "worker_0"):
+    import rosbag
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle, Rectangle
+    w = "/" + ns.strip("/")
+    base, votes, plans, state, odom, scene = None, None, [], None, None, None
+    with rosbag.Bag(bag_path) as bag:
+        for topic, msg, _ in bag.read_messages(topics=[f"{w}/scenario"]):
+            base = msg.base_stamp.to_sec()
+        if base is None:
+            raise ValueError(f"{bag_path}: no {w}/scenario message (not a replay bag of {w}?)")
+        until = base + t
+        for topic, msg, _ in bag.read_messages(topics=[f"{w}/planner/votes", f"{w}/planner/path",
+                                                       f"{w}/planner/state", f"{w}/odom", f"{w}/replay/scene"]):
+            stamp = msg.header.stamp.to_sec() if hasattr(msg, "header") else (
+                msg.markers[0].header.stamp.to_sec() if msg.markers else 0.0)
+            if topic.endswith("replay/scene"):
+                scene = msg
+            elif stamp > until + 1e-9:
+                continue
+            elif topic.endswith("votes"):
+                votes = msg
+            elif topic.endswith("path") and msg.poses:
+                plans.append([(p.pose.position.x, p.pose.position.y) for p in msg.poses])
+            elif topic.endswith("state"):
+                state = msg
+            elif topic.endswith("odom"):
+                odom = msg
+    fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
+    if votes:
+        for m in votes.markers:
+            side = m.scale.x
+            for p, c in zip(m.points, m.colors):
+                ax.add_patch(Rectangle((p.x - side / 2, p.y - side / 2), side, side, color=(c.r, c.g, c.b),
+                                       alpha=max(0.2, c.a), lw=0))
+    if scene:
+        for m in scene.markers:
+            if m.ns == "obstacles":
+                ax.add_patch(Circle((m.pose.position.x, m.pose.position.y), m.scale.x / 2,
+                                    color=(m.color.r, m.color.g, m.color.b), alpha=m.color.a))
+            else:
+                ax.plot([p.x for p in m.points], [p.y for p in m.points], ":",
+                        color=(m.color.r, m.color.g, m.color.b))
+    for k, pts in enumerate(plans[:-1][-6:]):
+        ax.plot(*zip(*pts), "-", color="tab:cyan", alpha=0.25 + 0.1 * k, lw=1)
+    if plans:
+        ax.plot(*zip(*plans[-1]), "-", color="tab:green", lw=2, label="plan in force")
+    if odom:
+        p, q = odom.pose.pose.position, odom.pose.pose.orientation
+        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        ax.arrow(p.x, p.y, 3 * math.cos(yaw), 3 * math.sin(yaw), width=0.6, color="magenta", label="vehicle")
+    if state:
+        ax.plot([state.lookahead.x], [state.lookahead.y], "o", color="purple", label="look-ahead")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    title = f"planner at t = {t:.2f} s"
+    if state:
+        title += f": {state.frames} frames voted, {state.voted_vertices} voted vertices, {state.plan_count} plans"
+    ax.set_title(title, fontsize=9)
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out)
+    plt.close(fig)
+
+
+def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10) -> str:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from .analysis import top_down
+    from .store import Store
+    store = Store(store_path)
+    c = store.campaign(campaign)
+    if c is None:
+        raise ValueError(f"no campaign {campaign!r} in {store_path}")
+    s = store.summary(campaign, top=top)
+    rows = list(store.db.execute("SELECT job, proxy, termination FROM scenarios WHERE campaign = ? ORDER BY job",
+                                 (campaign,)))
+    os.makedirs(out_dir, exist_ok=True)
+    proxy = np.array([r[1] if r[1] is not None else np.nan for r in rows])
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.4))
+    axes[0].plot(proxy, ".", ms=3, color="0.4", label="proxy")
+    axes[0].plot(np.fmax.accumulate(np.nan_to_num(proxy, nan=-np.inf)), "-", color="tab:red", label="best so far")
+    window = 50
+    if len(proxy) >= window:
+        axes[0].plot(np.arange(window - 1, len(proxy)), np.convolve(np.nan_to_num(proxy), np.ones(window) / window,
+                                                                     "valid"), color="tab:blue", label=f"mean of {window}")
+    axes[0].axhline(3, color="0.7", ls=":")
+    axes[0].set_xlabel("scenario (job)")
+    axes[0].set_ylabel("proxy")
+    axes[0].legend(fontsize=8)
+    axes[1].plot(np.cumsum(np.nan_to_num(proxy) >= 3), label=">= 3")
+    axes[1].plot(np.cumsum(np.nan_to_num(proxy) >= 4), label=">= 4")
+    axes[1].set_xlabel("scenarios spent")
+    axes[1].set_ylabel("count found")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "curves.png"), dpi=100)
+    plt.close(fig)
+    n = max(1, s["scenarios"])
+    items = []
+    for r in s["top"]:
+        png = f"job{r['job']}.png"
+        top_down(store, campaign, r["job"], os.path.join(out_dir, png))
+        cmd = f"rosrun asg_agent replay {os.path.abspath(store_path)} {campaign} {r['job']}"
+        items.append(f"<tr><td>{r['job']}</td><td>{r['id']}</td><td>{r['episode']}.{r['step']}</td>"
+                     f"<td><b>{r['proxy']:.3f}</b></td><td>{r['vis']:+.2f}</td><td>{r['yaw_term']:.3f}</td>"
+                     f"<td>{r['plr']:.3f}</td><td>{html.escape(r['termination'])}</td>"
+                     f"<td><a href='{png}'><img src='{png}' width='220'></a></td><td><code>{html.escape(cmd)}</code></td></tr>")
+    terms = "".join(f"<tr><td>{html.escape(k)}</td><td>{v}</td></tr>" for k, v in sorted(s["terminations"].items()))
+    settings = json.loads(c["settings"])
+    best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
+    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
+<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;
+padding:4px 8px;text-align:right}}code{{font-size:85%}}</style></head><body>
+<h1>Campaign {html.escape(campaign)}</h1>
+<p>method <b>{html.escape(c['method'])}</b>, experiment <b>{html.escape(c['experiment'])}</b>, seed {c['seed']},
+stack: {html.escape(str(settings.get('perception')))} / {html.escape(str(settings.get('model')))},
+workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html.escape(os.path.abspath(store_path))}</code></p>
+<h2>Counts (as in the paper's Table 2)</h2>
+<table><tr><th>scenarios</th><th>proxy &gt;= 3</th><th>proxy &gt;= 4</th><th>per 1,000: &gt;= 3 / &gt;= 4</th><th>largest proxy</th></tr>
+<tr><td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>
+<td>{1000 * s['proxy_ge_3'] / n:.0f} / {1000 * s['proxy_ge_4'] / n:.0f}</td><td>{best}</td></tr></table>
+<h2>Proxy over the campaign</h2><img src="curves.png" width="900">
+<h2>Terminations</h2><table>{terms}</table>
+<h2>Top {len(items)}</h2>
+<table><tr><th>job</th><th>store id</th><th>episode.step</th><th>proxy</th><th>vis</th><th>yaw term</th><th>PLR</th>
+<th>termination</th><th>top-down</th><th>replay</th></tr>{''.join(items)}</table>
+</body></html>"""
+    path = os.path.join(out_dir, "index.html")
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(page)
+    return path
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="asg_agent.report", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    a = sub.add_parser("snapshot")
+    a.add_argument("bag")
+    a.add_argument("out")
+    a.add_argument("--time", type=float, required=True, help="[s] simulated time of the snapshot")
+    a.add_argument("--ns", default="worker_0")
+    b = sub.add_parser("campaign")
+    b.add_argument("store")
+    b.add_argument("campaign")
+    b.add_argument("out_dir")
+    b.add_argument("--top", type=int, default=10)
+    args = p.parse_args(argv)
+    try:
+        if args.cmd == "snapshot":
+            snapshot(args.bag, args.out, args.time, args.ns)
+            print(args.out)
+        else:
+            print(campaign_report(args.store, args.campaign, args.out_dir, args.top))
+    except (ValueError, OSError) as e:
+        print(f"report: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
