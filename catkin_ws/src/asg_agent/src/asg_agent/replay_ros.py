@@ -1,14 +1,18 @@
 """replay: run a stored scenario again on a scene worker and check it reproduces the stored run.
 
-    replay STORE CAMPAIGN JOB [--worker /worker_0] [--bag OUT.bag] [--figure OUT.png]
-    replay --scenario FILE.yaml [--worker ...] [--bag ...]
+    replay STORE CAMPAIGN JOB [--bag OUT.bag] [--figure OUT.png]       (brings up its own worker)
+    replay STORE CAMPAIGN JOB --worker /worker_0 [...]                  (uses a running worker)
+    replay --scenario FILE.yaml [--perception unet --model flawed] [...]
 
 Sends the stored request (the exact scenario JSON) to a worker, prints the largest position
 difference between the replayed and the stored trajectory and the proxy recomputed beside the
 stored one, and exits 0 only if they match (difference under 1 cm, proxy equal to 1e-6). The
 worker must run the stack the campaign ran (perception, model, planner config: stored with
-the campaign); the command compares what it can read from the parameter server and refuses a
-mismatch. --bag records the worker's topics during the run with rosbag.
+the campaign). Without --worker, replay brings one up itself with the stored stack
+configuration (roslaunch launch/worker.launch on a private ROS master on loopback, port 11390
+by default) and shuts it down afterwards; with --worker it uses a running one, compares what it
+can read from the parameter server and refuses a mismatch. --bag records the worker's topics
+during the run with rosbag.
 """
 import argparse
 import json
@@ -102,7 +106,10 @@ def main(argv=None):
     p.add_argument("campaign", nargs="?")
     p.add_argument("job", nargs="?", type=int)
     p.add_argument("--scenario", help="a scenario YAML file instead of a stored scenario")
-    p.add_argument("--worker", default="/worker_0")
+    p.add_argument("--worker", default="", help="a running worker's namespace (default: bring one up)")
+    p.add_argument("--perception", default="", help="with --scenario: unet or ground_truth (default unet)")
+    p.add_argument("--model", default="", help="with --scenario: the U-Net model (default flawed)")
+    p.add_argument("--port", type=int, default=11390, help="ROS master port of the worker replay brings up")
     p.add_argument("--bag", default="", help="record the run's topics into this bag")
     p.add_argument("--figure", default="", help="write a top-down PNG of the replayed run")
     p.add_argument("--force", action="store_true", help="replay even if the worker's stack differs")
@@ -131,6 +138,41 @@ def main(argv=None):
             print(f"replay: campaign {a.campaign!r} has no job {a.job}", file=sys.stderr)
             return 2
         request = json.loads(row["request"])
+    launched = None
+    if not a.worker:
+        stack = {"perception": a.perception or settings.get("perception", "unet"),
+                 "model": a.model or settings.get("model", "flawed"),
+                 "planner_config": settings.get("planner_config", "planner.yaml")}
+        launched = bring_up_worker(stack, a.port)
+        settings = {}  # the worker is the stored stack by construction
+        a.worker = "/replay_worker"
+    try:
+        return run_replay(a, request, row, settings)
+    finally:
+        if launched is not None:
+            os.killpg(os.getpgid(launched.pid), signal.SIGINT)
+            try:
+                launched.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(os.getpgid(launched.pid), signal.SIGKILL)
+
+
+def bring_up_worker(stack: dict, port: int):
+    """roslaunch launch/worker.launch with the stack of the stored run, on a private master."""
+    repo = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", ".."))
+    planner = stack["planner_config"]
+    if os.sep not in planner:
+        import rospkg
+        planner = os.path.join(rospkg.RosPack().get_path("asg_planner"), "config", planner)
+    os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+    os.environ.setdefault("ROS_HOSTNAME", "127.0.0.1")
+    cmd = ["roslaunch", "-p", str(port), os.path.join(repo, "launch", "worker.launch"), "ns:=replay_worker",
+           f"perception:={stack['perception']}", f"model:={stack['model']}", f"planner_config:={planner}"]
+    print(f"replay: bringing up a worker: {' '.join(cmd[3:])}", file=sys.stderr)
+    return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
+
+
+def run_replay(a, request, row, settings) -> int:
     import actionlib
     import rospy
     from asg_msgs.msg import RunScenarioAction
@@ -145,7 +187,7 @@ def main(argv=None):
                   + " (launch worker.launch with the campaign's perception and model, or --force)", file=sys.stderr)
             return 2
     client = actionlib.SimpleActionClient(worker + "/run_scenario", RunScenarioAction)
-    if not client.wait_for_server(rospy.Duration(60)):
+    if not client.wait_for_server(rospy.Duration(90)):
         print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
         return 2
     bag = None
