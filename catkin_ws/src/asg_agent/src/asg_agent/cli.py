@@ -38,6 +38,8 @@ def parse(argv):
     p.add_argument("--checkpoint-every", type=int, default=10, help="checkpoint every N finished episodes")
     p.add_argument("--answer-timeout", type=float, default=300.0,
                    help="[s, wall] a worker that has not answered by then is reported and its job re-queued")
+    p.add_argument("--updates-per-step", type=int, default=0,
+                   help="TD3 methods: gradient updates per observed transition (default: TD3Config's)")
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
     p.add_argument("--no-progress", action="store_true")
     a = p.parse_args(argv)
@@ -104,7 +106,10 @@ def main(argv=None):
         except RuntimeError as e:
             print(f"campaign: {e}", file=sys.stderr)
             return 2
-    method = make_method(a.method, exp, a.seed, budget=a.scenarios)
+    td3 = TD3Config()
+    if a.updates_per_step:
+        td3.updates_per_step = a.updates_per_step
+    method = make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3)
     checkpoint = os.path.splitext(os.path.abspath(a.store))[0] + f".{name}.ckpt"
     bar = None
     if not a.no_progress:
