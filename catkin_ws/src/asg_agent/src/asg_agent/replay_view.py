@@ -50,14 +50,17 @@ def screenshot(bag: str, out: str, ns: str = "worker_0", at: float = 1.0, displa
                                 stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
         procs.append(rviz)
         time.sleep(8.0)  # rviz up and subscribed
-        play = subprocess.Popen(["rosbag", "play", bag], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                preexec_fn=os.setsid)
+        # -d: wait after advertising, so that rviz is connected before the first messages (the
+        # scene and the driven trajectory are published once, at the bag's start).
+        delay = 3.0
+        play = subprocess.Popen(["rosbag", "play", "-d", str(delay), bag], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
         procs.append(play)
         if at >= 1.0:
             play.wait(timeout=duration * 3 + 60)
             time.sleep(2.0)
         else:
-            time.sleep(duration * at + 0.5)
+            time.sleep(delay + duration * at + 0.5)
             os.killpg(os.getpgid(play.pid), signal.SIGSTOP)  # hold the view at that moment
             time.sleep(2.0)
         ImageGrab.grab(xdisplay=display).save(out)
