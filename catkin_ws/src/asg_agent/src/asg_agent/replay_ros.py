@@ -195,7 +195,16 @@ def run_replay(a, request, row, settings) -> int:
         topics = [f"{worker}/{t}" for t in BAG_TOPICS]
         bag = subprocess.Popen(["rosbag", "record", "-O", a.bag, "--lz4"] + topics, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
-        time.sleep(2.0)  # let rosbag subscribe before the run starts
+        # The run starts only once the recorder subscribes to the worker's topics.
+        import rosgraph
+        master, deadline = rosgraph.Master("/replay"), time.time() + 60
+        while time.time() < deadline:
+            subs = dict(master.getSystemState()[1])
+            if all(any(n.startswith("/record") for n in subs.get(f"{worker}/{t}", []))
+                   for t in ("odom", "camera/image", "planner/state")):
+                break
+            time.sleep(0.2)
+        time.sleep(0.5)
     t0 = time.time()
     client.send_goal(to_goal_msg(request))
     client.wait_for_result()
@@ -204,6 +213,13 @@ def run_replay(a, request, row, settings) -> int:
         time.sleep(1.0)
         os.killpg(os.getpgid(bag.pid), signal.SIGINT)
         bag.wait(timeout=30)
+        # The recorder (a child of the `rosbag` wrapper) may still be closing the file: wait for
+        # it to leave FILE.active and write the index.
+        deadline = time.time() + 60
+        while time.time() < deadline and (os.path.exists(a.bag + ".active") or not os.path.exists(a.bag)
+                                          or os.path.getsize(a.bag) == 0):
+            time.sleep(0.2)
+        time.sleep(0.5)
     if result is None:
         print("replay: the worker returned no result", file=sys.stderr)
         return 1
