@@ -40,6 +40,8 @@ def parse(argv):
                    help="[s, wall] a worker that has not answered by then is reported and its job re-queued")
     p.add_argument("--updates-per-step", type=int, default=0,
                    help="TD3 methods: gradient updates per observed transition (default: TD3Config's)")
+    p.add_argument("--bc-weight", type=float, default=0.0,
+                   help="TD3 methods: weight of the behaviour-regularisation term (default 0: off)")
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
     p.add_argument("--no-progress", action="store_true")
     a = p.parse_args(argv)
@@ -109,6 +111,7 @@ def main(argv=None):
     td3 = TD3Config()
     if a.updates_per_step:
         td3.updates_per_step = a.updates_per_step
+    td3.bc_weight = a.bc_weight
     method = make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3)
     checkpoint = os.path.splitext(os.path.abspath(a.store))[0] + f".{name}.ckpt"
     bar = None

@@ -60,6 +60,7 @@ class TD3Config:
     asp_u0: float = 2.0  #: pre-squash magnitude where it starts
     asp_tau: float = 3000.0  #: updates over which its weight falls by e
     normalize_q: bool = True  #: divide the actor's -Q by its batch mean |Q| (scale-free objective)
+    bc_weight: float = 0.0  #: weight of mean((actor(s) - a)^2) over replayed (s, a): keeps the actor near its data
     seed: int = 0  #: seeds torch and numpy generators of this agent
 
 
@@ -176,6 +177,8 @@ class TD3Agent:
             actor_loss = -q.mean() / scale
             asp = (F.relu(u.abs() - c.asp_u0).pow(2)).mean()
             loss = actor_loss + self.asp_weight() * asp
+            if c.bc_weight > 0:  # behaviour regularisation (TD3+BC's term): no leap off the data
+                loss = loss + c.bc_weight * (torch.tanh(u) - a).pow(2).mean()
             self.actor_opt.zero_grad()
             loss.backward()
             self.actor_opt.step()
