@@ -96,8 +96,9 @@ def test_same_seed_same_agent_and_bad_checkpoint_named(tmp_path):
 
 def test_saturation_penalty_pulls_pre_squash_outputs_in():
     """An actor driven towards saturation by the critic keeps |u| near u0 with ASP, not without."""
-    def run(asp):
-        agent = TD3Agent(2, 2, small_config(seed=0, start_steps=64, asp=asp, asp_lambda0=10.0, asp_tau=1e9))
+    def run(asp, bc=0.0):
+        agent = TD3Agent(2, 2, small_config(seed=0, start_steps=64, asp=asp, asp_lambda0=10.0, asp_tau=1e9,
+                                            bc_weight=bc))
         rng = np.random.default_rng(0)
         for _ in range(300):  # reward grows with the action: the optimum is the edge
             s = rng.uniform(-1, 1, 2).astype(np.float32)
@@ -109,3 +110,5 @@ def test_saturation_penalty_pulls_pre_squash_outputs_in():
     # Measured 1.79 against 2.51 (seeded): the hinge holds |u| near u0 = 2, the critic alone
     # keeps pushing past it.
     assert with_asp < 2.3 and without > with_asp + 0.5, (with_asp, without)
+    # Behaviour regularisation holds the actor near the replayed actions (uniform in the box).
+    assert run(False, bc=5.0) < without - 0.3
