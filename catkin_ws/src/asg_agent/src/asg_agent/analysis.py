@@ -73,18 +73,14 @@ def top_down(store: Store, campaign: str, job: int, out: str):
     (removed ones dashed), the driven path, the optimal path dashed, start and goal circles, the
     proxy and its terms in the title."""
     from asg_scenario.report import plot_run
-    from .optimal_path import obstacle_discs, shortest_path
-    from .proxy import ProxyConfig
+    from .proxy import optimal_path, placed_mask
     row = next((r for r in store.rows(campaign, job - 1) if r["job"] == job), None)
     if row is None:
         raise ValueError(f"campaign {campaign!r} has no job {job}")
     req = json.loads(row["request"])
-    removed = {(l, i) for l, i, _ in json.loads(row["removed"])}
-    counts_ = [len(l["instances"]) for l in req["structural"]["layouts"]]
-    placed = [(li, ii) not in removed for li, n in enumerate(counts_) for ii in range(n)]
-    op = req["operational"]
-    opt = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"],
-                        obstacle_discs(req, ProxyConfig().clearance, placed))
+    removed_list = json.loads(row["removed"])
+    removed = {(l, i) for l, i, _ in removed_list}
+    opt = optimal_path(req, placed_mask(req, removed_list))
     traj = unpack_trajectory(row["trajectory"])
     title = (f"{campaign} job {job} (store id {row['id']})\nproxy {row['proxy']:.2f} = 0.1 x vis {row['vis']:+.2f} "
              f"+ yaw term {row['yaw_term']:.2f} + PLR {row['plr']:.3f}^2\n{row['termination']} after "

@@ -25,7 +25,7 @@ import numpy as np
 from asg_scenario.schema import dump_scenario
 
 from .experiment import Experiment
-from .proxy import ProxyConfig, compute
+from .proxy import ProxyConfig, compute, placed_mask
 from .search import SearchMethod
 from .store import Store, pack_trajectory, unpack_trajectory
 from .td3 import load_checked, save_atomic
@@ -198,11 +198,7 @@ class Campaign:
             self.queue.insert(0, o.job)
             print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
             return
-        placed = [True] * len(o.visibility) if o.visibility else None
-        for layout, inst, _ in o.removed:
-            k = sum(len(l["instances"]) for l in job.request["structural"]["layouts"][:layout]) + inst
-            if placed is not None and k < len(placed):
-                placed[k] = False
+        placed = placed_mask(job.request, o.removed)
         traj = np.asarray(o.trajectory, np.float32).reshape(-1, 5)
         terms = None
         if o.termination != "ERROR" and len(traj):

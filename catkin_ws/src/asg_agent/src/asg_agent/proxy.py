@@ -100,16 +100,28 @@ def resample_path(xy: np.ndarray, n: int) -> np.ndarray:
     return np.stack([np.interp(q, s, xy[:, 0]), np.interp(q, s, xy[:, 1])], axis=1)
 
 
-def optimal_length(scenario: dict, placed_mask: Optional[Sequence[bool]] = None,
-                   config: ProxyConfig = ProxyConfig()) -> float:
+def placed_mask(scenario: dict, removed) -> list:
+    """Per flattened instance, False for those the worker removed; `removed` holds
+    (layout, instance[, reason]) entries as results and the store give them."""
+    gone = {(int(r[0]), int(r[1])) for r in removed}
+    return [(li, ii) not in gone for li, l in enumerate(scenario["structural"]["layouts"])
+            for ii in range(len(l["instances"]))]
+
+
+def optimal_path(scenario: dict, placed: Optional[Sequence[bool]] = None, config: ProxyConfig = ProxyConfig()):
+    """The optimal path (optimal_path.OptimalPath) with every placed obstacle known."""
     op = scenario["operational"]
-    discs = obstacle_discs(scenario, config.clearance, placed_mask)
-    return shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"],
-                         discs).length
+    discs = obstacle_discs(scenario, config.clearance, placed)
+    return shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"], discs)
+
+
+def optimal_length(scenario: dict, placed: Optional[Sequence[bool]] = None,
+                   config: ProxyConfig = ProxyConfig()) -> float:
+    return optimal_path(scenario, placed, config).length
 
 
 def compute(scenario: dict, t, xy, yaw_rate, visibility, termination: str,
-            placed_mask: Optional[Sequence[bool]] = None, config: ProxyConfig = ProxyConfig()) -> Optional[ProxyTerms]:
+            placed: Optional[Sequence[bool]] = None, config: ProxyConfig = ProxyConfig()) -> Optional[ProxyTerms]:
     """Every term of eq. 3 for one run; None for termination ERROR."""
     if termination not in TERMINATIONS:
         raise ValueError(f"termination {termination!r}: one of {', '.join(TERMINATIONS)}")
@@ -121,7 +133,7 @@ def compute(scenario: dict, t, xy, yaw_rate, visibility, termination: str,
     if termination != "SUCCESS" and len(xy):
         rest = math.dist(xy[-1], (op["goal_x"], op["goal_y"])) - op["goal_radius"]
         driven += max(0.0, rest)
-    opt = optimal_length(scenario, placed_mask, config)
+    opt = optimal_length(scenario, placed, config)
     if not math.isfinite(opt) or opt <= 1e-9:
         plr = 1.0  # no path exists (or the start is in the goal circle): nothing to compare with
     else:

@@ -27,7 +27,7 @@ import numpy as np
 from asg_scenario import ScenarioError, load_scenario
 
 from .campaign import Outcome
-from .proxy import compute
+from .proxy import compute, placed_mask
 from .store import Store, unpack_trajectory
 
 BAG_TOPICS = ["camera/image", "camera/labels_gt", "labels", "camera/depth", "camera/camera_info", "odom", "tf",
@@ -64,14 +64,9 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
     import rosbag
     import rospy
     from .bag_scene import plans_fading, scene_messages
-    from .optimal_path import obstacle_discs, shortest_path
-    from .proxy import ProxyConfig
+    from .proxy import optimal_path, placed_mask
     removed = {(l, i) for l, i, _ in o.removed}
-    counts = [len(l["instances"]) for l in request["structural"]["layouts"]]
-    placed = [(li, ii) not in removed for li, n in enumerate(counts) for ii in range(n)]
-    op = request["operational"]
-    opt = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"],
-                        obstacle_discs(request, ProxyConfig().clearance, placed))
+    opt = optimal_path(request, placed_mask(request, o.removed))
     with rosbag.Bag(path, "a") as bag:
         start = bag.get_start_time()
         plans, first_stamp, times = [], None, {}
@@ -235,12 +230,8 @@ def run_replay(a, request, row, settings) -> int:
         return 0 if o.termination != "ERROR" else 1
     stored = unpack_trajectory(row["trajectory"])
     diff = compare(stored, o.trajectory)
-    placed = [True] * len(o.visibility)
-    for layout, inst, _ in o.removed:
-        k = sum(len(l["instances"]) for l in request["structural"]["layouts"][:layout]) + inst
-        placed[k] = False
     terms = compute(request, o.trajectory[:, 0], o.trajectory[:, 1:3], o.trajectory[:, 4], o.visibility,
-                    o.termination, placed) if o.termination != "ERROR" else None
+                    o.termination, placed_mask(request, o.removed)) if o.termination != "ERROR" else None
     proxy = terms.proxy if terms else None
     same_proxy = (proxy is None and row["proxy"] is None) or (
         proxy is not None and row["proxy"] is not None and abs(proxy - row["proxy"]) <= 1e-6)
