@@ -32,4 +32,7 @@ for t in "$WS"/src/*/test; do
       --junitxml="$RESULTS/pytest/$pkg.xml" "$t" || true
 done
 
+log "pytest (end-to-end tests in tests/: scale-out over two hosts, ...)"
+/usr/bin/python3 -m pytest -q -p no:cacheprovider --junitxml="$RESULTS/pytest/tests.xml" "$REPO"/tests/test_*.py || true
+
 /usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$RESULTS"

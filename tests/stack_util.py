@@ -52,6 +52,12 @@ def trajectory_key(result):
                   for s in result.trajectory))
 
 
+def trajectory_digest(result):
+    """sha256 of trajectory_key: the stored form of a reference run (tests/reference/)."""
+    import hashlib
+    return hashlib.sha256(repr(trajectory_key(result)).encode()).hexdigest()
+
+
 def largest_difference(a, b):
     """[m] largest position difference between two trajectories (inf if lengths differ)."""
     if len(a.trajectory) != len(b.trajectory):

@@ -31,6 +31,20 @@ from .store import Store, pack_trajectory, unpack_trajectory
 from .td3 import load_checked, save_atomic
 
 
+class Stages:
+    """Wall seconds and calls per stage of the campaign loop (docs/benchmarks.md: `bench`)."""
+
+    NAMES = ("propose", "update", "proxy", "store", "checkpoint", "dispatch", "wait")
+
+    def __init__(self):
+        self.seconds = {n: 0.0 for n in self.NAMES}
+        self.calls = {n: 0 for n in self.NAMES}
+
+    def add(self, name: str, t0: float):
+        self.seconds[name] += time.perf_counter() - t0
+        self.calls[name] += 1
+
+
 @dataclass
 class Outcome:
     """What a pool returns for a job: the result as plain values."""
@@ -97,6 +111,7 @@ class Campaign:
         self.stats = {"best": -math.inf, "ge3": 0, "ge4": 0, "errors": 0, "retries": 0}
         self.t0 = time.time()
         self.done_at_start = 0
+        self.stages = Stages()
 
     # -- setup ----------------------------------------------------------------------------------
     def start(self):
@@ -151,8 +166,10 @@ class Campaign:
         st = self.slot_state[slot]
         j = self.next_job
         self.next_job += 1
+        t0 = time.perf_counter()
         action = np.asarray(self.method.propose(j, st["episode"], st["step"], st["state"]), np.float32)
         request = self.exp.request(action, scenario_id=j + 1)
+        self.stages.add("propose", t0)
         self.pending[j] = Job(j, slot, st["episode"], st["step"], st["state"], action, request)
         if j not in self.finished:
             self.queue.append(j)
@@ -162,9 +179,18 @@ class Campaign:
         while self.next_apply < self.total:
             if deadline is not None and time.time() > deadline:
                 break
+            t0 = time.perf_counter()
             self._dispatch()
-            for outcome in self.pool.poll(poll_timeout):
+            self.stages.add("dispatch", t0)
+            t0 = time.perf_counter()
+            outcomes = self.pool.poll(poll_timeout)
+            self.stages.add("wait", t0)
+            for outcome in outcomes:
                 self._on_outcome(outcome)
+            if outcomes:  # workers just freed get a waiting proposal before the agent learns
+                t0 = time.perf_counter()
+                self._dispatch()
+                self.stages.add("dispatch", t0)
             self._apply_ready()
         if self.next_apply >= self.total:
             self._checkpoint()
@@ -198,6 +224,7 @@ class Campaign:
             self.queue.insert(0, o.job)
             print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
             return
+        t0 = time.perf_counter()
         placed = placed_mask(job.request, o.removed)
         traj = np.asarray(o.trajectory, np.float32).reshape(-1, 5)
         terms = None
@@ -215,7 +242,10 @@ class Campaign:
                "removed": json.dumps(o.removed), "collision_with": o.collision_with,
                "trajectory": pack_trajectory(traj), "samples": len(traj), "wall_time": o.wall_time,
                "finished": time.time()}
+        self.stages.add("proxy", t0)
+        t0 = time.perf_counter()
         self.store.add(row)
+        self.stages.add("store", t0)
         self.finished[o.job] = row
         if terms:
             self.stats["best"] = max(self.stats["best"], terms.proxy)
@@ -238,10 +268,12 @@ class Campaign:
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)
                 done = True
             else:
+                t0 = time.perf_counter()
                 traj = unpack_trajectory(row["trajectory"])
                 next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, float(reward),
                                     next_state, done)
+                self.stages.add("update", t0)
                 if not done:
                     slot.update(step=job.step + 1, state=next_state)
             if done:
@@ -254,6 +286,11 @@ class Campaign:
                 self._checkpoint()
 
     def _checkpoint(self):
+        t0 = time.perf_counter()
+        self._write_checkpoint()
+        self.stages.add("checkpoint", t0)
+
+    def _write_checkpoint(self):
         pending = [dict(job=j.job, slot=j.slot, episode=j.episode, step=j.step, state=j.state, action=j.action,
                         request=j.request, attempts=0, avoid="") for j in self.pending.values()]
         save_atomic({"method": self.method.state_dict(), "next_job": self.next_job, "next_apply": self.next_apply,

@@ -43,6 +43,10 @@ def parse(argv):
     p.add_argument("--bc-weight", type=float, default=0.0,
                    help="TD3 methods: weight of the behaviour-regularisation term (default 0: off)")
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
+    p.add_argument("--stage-report", default="",
+                   help="write where the time went (per-scenario stage breakdown, rate, inference bound) "
+                        "to this JSON file at the end (`bench`, docs/benchmarks.md)")
+    p.add_argument("--label", default="", help="--stage-report: the column label of this run")
     p.add_argument("--no-progress", action="store_true")
     a = p.parse_args(argv)
     if a.scenarios < 1:
@@ -71,6 +75,29 @@ def print_summary(store, name, out=sys.stdout):
               f"(vis {r['vis']:+.2f}, yaw {r['yaw_term']:.3f}, PLR {r['plr']:.3f}, {r['termination']})", file=out)
     print(f"store: {os.path.abspath(store.path)}", file=out)
     return s
+
+
+def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu):
+    from .bench import breakdown
+    wall, cpu = time.time() - t_wall, time.process_time() - t_cpu
+    first, last = {}, {}
+    if collector is not None:
+        time.sleep(1.5)  # the nodes publish their readings at most once a second
+        first, last = collector.snapshot()
+    rows = [r for r in store.rows(name) if r["finished"] >= t_wall]
+    sim = sum(r["sim_time"] or 0.0 for r in rows)
+    agent = {"seconds": c.stages.seconds, "calls": c.stages.calls, "cpu": cpu}
+    try:
+        out = breakdown(first, last, agent, len(rows), wall, sim, workers)
+    except ValueError as e:
+        print(f"campaign: --stage-report: {e}", file=sys.stderr)
+        return
+    out.update(label=a.label or f"{workers} worker(s)", campaign=name, method=c.method.name,
+               experiment=c.exp.name)
+    os.makedirs(os.path.dirname(os.path.abspath(a.stage_report)), exist_ok=True)
+    with open(a.stage_report, "w") as f:
+        json.dump(out, f, indent=1, sort_keys=True)
+    print(f"stage report: {a.stage_report} ({out['rate_per_hour']:.0f} scenarios an hour)", file=sys.stderr)
 
 
 def main(argv=None):
@@ -129,6 +156,14 @@ def main(argv=None):
 
     settings = {"workers": workers, "experiment_file": exp.source, "perception": exp.perception,
                 "model": exp.model, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
+    collector = None
+    if a.stage_report and not a.fake_workers:
+        from .stages_ros import StageCollector
+        collector = StageCollector(workers)
+        nodes = 3 if exp.perception == "unet" else 2
+        if not collector.wait_for(nodes * len(workers), timeout=15.0):
+            print(f"campaign: --stage-report: not every worker, segmenter and planner published stage_times "
+                  f"within 15 s; the breakdown will lack them", file=sys.stderr)
     c = Campaign(name, exp, method, store, pool, a.scenarios, a.seed, checkpoint, slots=slots,
                  checkpoint_every=a.checkpoint_every, progress=progress, settings=settings)
     try:
@@ -139,7 +174,10 @@ def main(argv=None):
         else:
             c.start()
         progress(c.status())
+        t_wall, t_cpu = time.time(), time.process_time()
         c.run()
+        if a.stage_report:
+            write_stage_report(a, c, store, name, collector, len(workers), t_wall, t_cpu)
     except (ValueError, StoreError) as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2

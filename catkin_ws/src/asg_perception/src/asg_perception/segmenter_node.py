@@ -11,10 +11,11 @@ import threading
 
 import numpy as np
 import rospy
-from asg_msgs.msg import ScenarioInfo, StackAck, StackError
+from asg_msgs.msg import ScenarioInfo, StackAck, StackError, StageTimes
 from sensor_msgs.msg import Image
 
 from .inference import BACKENDS, Segmenter
+from .stage_clock import StageClock
 
 MODELS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "models"))
 
@@ -53,6 +54,13 @@ class SegmenterNode:
         self.pub = rospy.Publisher("labels", Image, queue_size=32, tcp_nodelay=True)
         self.ack_pub = rospy.Publisher("stack_ack", StackAck, queue_size=4)
         self.error_pub = rospy.Publisher("stack_error", StackError, queue_size=4)
+        # Where the time goes (docs/benchmarks.md): decode the image, infer, publish the labels.
+        self.clock = StageClock(["decode", "inference", "publish"])
+        self.runs = 0
+        self.stage_pub = rospy.Publisher("stage_times", StageTimes, queue_size=1, latch=True)
+        self._last_reading = None
+        self.publish_stage_times()
+        rospy.Timer(rospy.Duration(1.0), lambda _: self.publish_stage_times())
         rospy.Subscriber("scenario", ScenarioInfo, self.on_scenario, queue_size=4)
         rospy.Subscriber("camera/image", Image, self.on_image, queue_size=64, tcp_nodelay=True,
                          buff_size=2 ** 24)
@@ -61,6 +69,7 @@ class SegmenterNode:
         with self.lock:
             if self.info is None or self.info.run != info.run:
                 self.info, self.failed = info, None
+                self.runs += 1
                 if (info.camera_width, info.camera_height) != (self.width, self.height):
                     self.fail(f"camera frames are {info.camera_width}x{info.camera_height}, this "
                               f"segmenter was made for {self.width}x{self.height} (~width, ~height)")
@@ -69,6 +78,15 @@ class SegmenterNode:
             else:
                 self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id,
                                               run=info.run))
+
+    def publish_stage_times(self):
+        stages, seconds, calls, cpu = self.clock.read()
+        key = (self.runs, sum(calls))
+        if key == self._last_reading:
+            return
+        self._last_reading = key
+        self.stage_pub.publish(StageTimes(stamp=rospy.Time.now(), node=self.ack_name, runs=self.runs,
+                                          cpu_seconds=cpu, stages=stages, seconds=seconds, calls=calls))
 
     def fail(self, reason):
         """Ends the current run (the caller holds the lock)."""
@@ -94,17 +112,23 @@ class SegmenterNode:
             if self.failed:
                 return
             t = (msg.header.stamp - self.info.base_stamp).to_sec()
-            if msg.encoding != "rgb8" or msg.step != msg.width * 3 or len(msg.data) != msg.step * msg.height:
+            with self.clock.time("decode"):
+                ok = (msg.encoding == "rgb8" and msg.step == msg.width * 3
+                      and len(msg.data) == msg.step * msg.height)
+                if ok:
+                    rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
+            if not ok:
                 return self.fail(f"cannot label the image at t = {t:.3f} s: encoding {msg.encoding!r}, "
                                  f"{msg.width}x{msg.height}, step {msg.step} (expected packed rgb8)")
-            rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
             try:
-                labels = self.segmenter(rgb)
+                with self.clock.time("inference"):
+                    labels = self.segmenter(rgb)
             except (ValueError, RuntimeError) as e:
                 return self.fail(f"cannot label the image at t = {t:.3f} s: {e}")
-        out = Image(header=msg.header, height=msg.height, width=msg.width, encoding="mono8",
-                    is_bigendian=0, step=msg.width, data=labels.tobytes())
-        self.pub.publish(out)
+        with self.clock.time("publish"):
+            out = Image(header=msg.header, height=msg.height, width=msg.width, encoding="mono8",
+                        is_bigendian=0, step=msg.width, data=labels.tobytes())
+            self.pub.publish(out)
 
 
 def main():

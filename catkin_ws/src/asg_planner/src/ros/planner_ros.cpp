@@ -62,6 +62,7 @@ PlannerROS::PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   odom_sub_ = nh_.subscribe("odom", 64, &PlannerROS::onOdom, this, nodelay);
   tf_sub_ = nh_.subscribe("tf", 16, &PlannerROS::onTf, this, nodelay);
   tick_sub_ = nh_.subscribe("tick", 16, &PlannerROS::onTick, this, nodelay);
+  stage_pub_ = std::make_unique<asg_sim::StageTimesPublisher>(nh_, "planner", &clock_);
   ROS_INFO("planner ready in %s (vote grid %.1f m, vehicle grid %.1f m, labels from %s)",
            nh_.getNamespace().c_str(), params_.vote_spacing, params_.astar.vehicle_spacing,
            labels_sub_.getTopic().c_str());
@@ -117,6 +118,8 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
     ack_pub_.publish(ack);
     return;
   }
+  auto reset_time = clock_.time(kReset);
+  stage_pub_->countRun();
   scenario_id_ = msg->scenario_id;
   run_ = msg->run;
   base_ = msg->base_stamp;
@@ -257,6 +260,7 @@ void PlannerROS::process() {
         return;
       }
       const Eigen::Isometry3d T = toIso(oit->second->pose.pose) * T_base_optical_;
+      auto votes_time = clock_.time(kVotes);
       planner_->addFrame((stamp - base_).toSec(), reinterpret_cast<const float*>(it->second->data.data()),
                          lit->second->data.data(), int(it->second->width), int(it->second->height), K_, T);
       ++frames_done_;
@@ -282,7 +286,12 @@ void PlannerROS::process() {
     s.speed = o.twist.twist.linear.x;
     bool replanned = false;
     const double t = (tick.header.stamp - base_).toSec();
-    const ControlCommand c = planner_->tick(t, s, &replanned);
+    ControlCommand c;
+    {
+      auto plan_time = clock_.time(kPlan);
+      c = planner_->tick(t, s, &replanned);
+    }
+    auto publish_time = clock_.time(kPublish);
     asg_msgs::VehicleCommand cmd;
     cmd.header.stamp = tick.header.stamp;
     cmd.scenario_id = scenario_id_;

@@ -18,6 +18,8 @@
 #include <string>
 
 #include "asg_planner/voting_planner.hpp"
+#include "asg_sim/ros/stage_times.hpp"
+#include "asg_sim/stage_clock.hpp"
 
 namespace asg_planner {
 
@@ -65,6 +67,10 @@ class PlannerROS {
   uint32_t stale_dropped_ = 0;  // messages of another run dropped during this run
   bool failed_ = false;         // a StackError went out for this run: answer nothing more
   asg_msgs::StackError last_error_;
+  // Where the planner's time goes (docs/benchmarks.md).
+  enum Stage { kReset, kVotes, kPlan, kPublish };
+  asg_sim::StageClock clock_{{"reset", "votes", "plan", "publish"}};
+  std::unique_ptr<asg_sim::StageTimesPublisher> stage_pub_;
 };
 
 }  // namespace asg_planner

@@ -142,6 +142,7 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
     labels_sub_ = nh_.subscribe("labels", 16, &SceneWorkerROS::onLabels, this, ros::TransportHints().tcpNoDelay());
   server_ = std::make_unique<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>>(
       nh_, "run_scenario", [this](const asg_msgs::RunScenarioGoalConstPtr& g) { execute(g); }, false);
+  stage_pub_ = std::make_unique<StageTimesPublisher>(nh_, "scene_worker", &clock_);
   server_->start();
   publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
   ROS_INFO("scene_worker ready in %s (stack: %zu node(s), lockstep %s)", nh_.getNamespace().c_str(),
@@ -325,7 +326,11 @@ void SceneWorkerROS::publishState(const ros::Time& stamp) {
 void SceneWorkerROS::publishCamera(const ros::Time& stamp, bool labels) {
   // The label pass always runs: per-obstacle visibility comes from its instance ids, whatever
   // labels the stack uses; the labels themselves are published only when asked for.
-  runner_->renderCamera(true, &frame_);
+  {
+    auto t = clock_.time(kRender);
+    runner_->renderCamera(true, &frame_);
+  }
+  auto publish_time = clock_.time(kPublish);
   const int w = frame_.rgb.width, h = frame_.rgb.height;
   sensor_msgs::Image img, depth;
   fillImage(&img, stamp, "rgb8", w, h, 3, frame_.rgb.data);
@@ -380,6 +385,8 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   };
   if (goal->scenario_id == 0) return fail("scenario_id must be > 0");
   if (goal->top_down_px > 4096) return fail("top_down_px = " + std::to_string(goal->top_down_px) + ": must be <= 4096");
+  stage_pub_->countRun();
+  auto build_time = std::make_unique<StageClock::Section>(&clock_, kBuild);
   try {
     runner_->reset(toSpec(goal->scene));
   } catch (const SceneError& e) {
@@ -419,8 +426,14 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   info.start_yaw = op.start_yaw;
   announcement_ = info;
   scenario_pub_.publish(info);
+  build_time.reset();
   std::string missing;
-  if (!waitForAcks(goal->scenario_id, &missing))
+  bool acked;
+  {
+    auto t = clock_.time(kAcks);
+    acked = waitForAcks(goal->scenario_id, &missing);
+  }
+  if (!acked)
     return fail(!stack_error_.empty() ? stack_error_
                                       : "stack node(s) did not acknowledge the scenario within " +
                                             formatSeconds(params_.ack_timeout) + ": " + missing);
@@ -431,7 +444,10 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   const auto start = std::chrono::steady_clock::now();
   while (term == Termination::kNone) {
     const ros::Time now = stamp(runner_->time());
-    publishState(now);
+    {
+      auto t = clock_.time(kPublish);
+      publishState(now);
+    }
     if (runner_->cameraDue()) publishCamera(now, labels);
     if (runner_->controlDue()) {
       {
@@ -448,10 +464,18 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
       tick.tick = runner_->tick() / runner_->config().control_every;
       tick.last_camera_stamp = last_camera_stamp_;
       tick.camera_frames = camera_frames_;
-      tick_pub_.publish(tick);
+      {
+        auto t = clock_.time(kPublish);
+        tick_pub_.publish(tick);
+      }
       Command cmd;
       if (params_.lockstep) {
-        if (!waitForCommand(goal->scenario_id, now, &cmd, &error)) {
+        bool answered;
+        {
+          auto t = clock_.time(kWait);
+          answered = waitForCommand(goal->scenario_id, now, &cmd, &error);
+        }
+        if (!answered) {
           term = Termination::kError;
           break;
         }
@@ -468,7 +492,10 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
         }
       }
     }
-    term = runner_->step();
+    {
+      auto t = clock_.time(kPhysics);
+      term = runner_->step();
+    }
     if (runner_->tick() % runner_->config().tick_hz == 0) {
       asg_msgs::RunScenarioFeedback fb;
       fb.sim_time = runner_->time();
@@ -495,6 +522,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   if (term != Termination::kError || error != "preempted")
     publishState(stamp(runner_->time()));
 
+  auto result_time = std::make_unique<StageClock::Section>(&clock_, kResult);
   result.sim_time = runner_->time();
   result.num_control_msgs = runner_->commandsReceived();
   result.trajectory.reserve(runner_->trajectory().size());
@@ -520,6 +548,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     fillImage(&result.top_down, stamp(runner_->time()), "rgb8", top.width, top.height, 3, top.data);
     result.top_down.header.frame_id = "map";
   }
+  result_time.reset();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     current_id_ = 0;

@@ -22,7 +22,9 @@
 #include <vector>
 
 #include "asg_sim/renderer.hpp"
+#include "asg_sim/ros/stage_times.hpp"
 #include "asg_sim/scenario_runner.hpp"
+#include "asg_sim/stage_clock.hpp"
 
 namespace asg_sim {
 
@@ -87,6 +89,10 @@ class SceneWorkerROS {
   ros::Time base_;              // stamp of simulated time 0 in the current run
   std::string stack_error_;     // "node: reason" from a StackError of the current run
   ros::Time last_labels_stamp_; // newest `labels` frame of the current run (labels_node only)
+  // Where the worker's time goes (docs/benchmarks.md); the stage order is StageTimes' order.
+  enum Stage { kBuild, kAcks, kRender, kPublish, kWait, kPhysics, kResult };
+  StageClock clock_{{"build", "acks", "render", "publish", "wait", "physics", "result"}};
+  std::unique_ptr<StageTimesPublisher> stage_pub_;
 };
 
 }  // namespace asg_sim

@@ -1,0 +1,141 @@
+"""`bench`: where a campaign's time goes (no ROS imports; docs/benchmarks.md).
+
+The scene workers, segmenters and planners publish cumulative stage timers (asg_msgs/StageTimes);
+the campaign times its own loop (campaign.Stages). `breakdown` turns the readings taken at the
+start and the end of a campaign into per-scenario seconds per stage, the rate, and the bound the
+U-Net alone sets; `table` renders one or several breakdowns as Markdown.
+
+    python3 -m asg_agent.bench table results/bench/*.json
+"""
+import argparse
+import json
+import os
+import platform
+import sys
+from typing import Dict, List, Tuple
+
+# Stages that are waiting, not work: left out of a node's busy time.
+IDLE = {("scene_worker", "wait"), ("scene_worker", "acks")}
+PAPER_RATE = 625.0  # scenarios an hour: 5,000 in about 8 hours (the paper)
+
+
+def machine() -> dict:
+    model = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    model = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {"cpu": model, "cores": os.cpu_count(), "python": platform.python_version()}
+
+
+def _delta(first: dict, last: dict) -> dict:
+    return {"runs": last["runs"] - first["runs"], "cpu": last["cpu_seconds"] - first["cpu_seconds"],
+            "seconds": {s: last["seconds"][s] - first["seconds"].get(s, 0.0) for s in last["seconds"]},
+            "calls": {s: last["calls"][s] - first["calls"].get(s, 0) for s in last["calls"]}}
+
+
+def breakdown(first: Dict[Tuple[str, str], dict], last: Dict[Tuple[str, str], dict], agent: dict,
+              scenarios: int, wall: float, sim_seconds: float, workers: int) -> dict:
+    """Per-scenario figures from stage readings. `agent`: {"seconds", "calls", "cpu"} of the
+    campaign process over the same interval."""
+    if scenarios < 1 or wall <= 0:
+        raise ValueError("breakdown needs at least one scenario and a positive wall time")
+    nodes: Dict[str, dict] = {}
+    for key, end in last.items():
+        d = _delta(first.get(key, end), end)
+        kind = key[1]
+        acc = nodes.setdefault(kind, {"cpu": 0.0, "seconds": {}, "calls": {}})
+        acc["cpu"] += d["cpu"]
+        for s, x in d["seconds"].items():
+            acc["seconds"][s] = acc["seconds"].get(s, 0.0) + x
+            acc["calls"][s] = acc["calls"].get(s, 0) + d["calls"][s]
+    nodes["agent"] = {"cpu": agent["cpu"], "seconds": dict(agent["seconds"]), "calls": dict(agent["calls"])}
+    per = {f"{k}.{s}": x / scenarios for k, n in nodes.items() for s, x in n["seconds"].items()}
+    cpu = {k: n["cpu"] / scenarios for k, n in nodes.items()}
+    out = {"workers": workers, "scenarios": scenarios, "wall_s": wall, "rate_per_hour": scenarios / wall * 3600,
+           "sim_s_per_wall_s_per_worker": sim_seconds / wall / workers,
+           "sim_s_per_scenario": sim_seconds / scenarios, "per_scenario_s": per, "cpu_per_scenario_s": cpu,
+           "machine": machine()}
+    seg = nodes.get("segmenter")
+    if seg and seg["calls"].get("inference"):
+        calls = seg["calls"]["inference"]
+        t_inf = seg["seconds"]["inference"] / calls
+        frames = calls / scenarios
+        cores = min(workers, os.cpu_count() or 1)
+        out.update(frames_per_scenario=frames, inference_ms_per_frame=t_inf * 1000,
+                   inference_bound_per_hour=cores * 3600 / (frames * t_inf))
+        out["fraction_of_bound"] = out["rate_per_hour"] / out["inference_bound_per_hour"]
+    # Lockstep: what the worker waited for beyond the stack's own work = transport and scheduling.
+    if "scene_worker" in nodes:
+        stack = sum(x for k in ("segmenter", "planner") if k in nodes for x in nodes[k]["seconds"].values())
+        out["transport_and_waiting_s"] = (nodes["scene_worker"]["seconds"].get("wait", 0.0) - stack) / scenarios
+    out["paper_ratio"] = out["rate_per_hour"] / PAPER_RATE
+    return out
+
+
+ROWS = [  # (label, key in per_scenario_s)
+    ("scene build + announce", "scene_worker.build"), ("stack acknowledgements", "scene_worker.acks"),
+    ("render (camera + labels pass)", "scene_worker.render"), ("publish (worker)", "scene_worker.publish"),
+    ("physics", "scene_worker.physics"), ("result assembly", "scene_worker.result"),
+    ("segmenter: decode", "segmenter.decode"), ("segmenter: U-Net inference", "segmenter.inference"),
+    ("segmenter: publish", "segmenter.publish"), ("planner: reset", "planner.reset"),
+    ("planner: vote insertion", "planner.votes"), ("planner: planning + PD", "planner.plan"),
+    ("planner: publish", "planner.publish"), ("agent: proposal", "agent.propose"),
+    ("agent: TD3 update", "agent.update"), ("agent: proxy", "agent.proxy"), ("agent: store write", "agent.store"),
+    ("agent: checkpoint", "agent.checkpoint"), ("agent: dispatch", "agent.dispatch"),
+]
+
+
+def table(runs: List[dict], labels: List[str]) -> str:
+    head = "| per scenario (s, summed over workers) | " + " | ".join(labels) + " |"
+    lines = [head, "|" + "---|" * (len(runs) + 1)]
+    for label, key in ROWS:
+        if any(key in r["per_scenario_s"] for r in runs):
+            lines.append(f"| {label} | " + " | ".join(f"{r['per_scenario_s'].get(key, 0.0):.3f}" for r in runs) + " |")
+    lines.append("| ROS transport and waiting (worker wait - stack work) | "
+                 + " | ".join(f"{r.get('transport_and_waiting_s', 0.0):.3f}" for r in runs) + " |")
+    for kind in ("scene_worker", "segmenter", "planner", "agent"):
+        lines.append(f"| CPU: {kind} process | "
+                     + " | ".join(f"{r['cpu_per_scenario_s'].get(kind, 0.0):.3f}" for r in runs) + " |")
+    summary = [("scenarios", "{scenarios}"), ("wall (s)", "{wall_s:.0f}"), ("**scenarios an hour**", "**{rate_per_hour:.0f}**"),
+               ("simulated s per wall s per worker", "{sim_s_per_wall_s_per_worker:.2f}"),
+               ("camera frames per scenario", "{frames_per_scenario:.0f}"),
+               ("U-Net ms per frame (in the campaign)", "{inference_ms_per_frame:.1f}"),
+               ("inference-only bound (an hour)", "{inference_bound_per_hour:.0f}"),
+               ("rate / bound", "{fraction_of_bound:.0%}"), ("rate / paper's 625 an hour", "{paper_ratio:.2f}x")]
+    for label, fmt in summary:
+        cells = []
+        for r in runs:
+            try:
+                cells.append(fmt.format(**r))
+            except KeyError:
+                cells.append("-")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="bench", description="Markdown table of bench breakdowns (docs/benchmarks.md)")
+    sub = p.add_subparsers(dest="cmd", required=True)
+    t = sub.add_parser("table", help="one column per breakdown JSON")
+    t.add_argument("files", nargs="+")
+    a = p.parse_args(argv)
+    runs, labels = [], []
+    for path in a.files:
+        try:
+            with open(path) as f:
+                runs.append(json.load(f))
+        except (OSError, ValueError) as e:
+            print(f"bench: {path}: {e}", file=sys.stderr)
+            return 2
+        labels.append(runs[-1].get("label") or os.path.splitext(os.path.basename(path))[0])
+    print(table(runs, labels))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# `bench`: where a real campaign's time goes. The same seeded TD3-PER-ASP campaign on the paper's
+# Exp. 1 with the flawed U-Net in the loop, run with 1 and with 2 scene workers (every result is
+# applied in job order, so both runs propose the same scenarios); every node's stage timers are
+# read at the start and the end. Prints scenarios an hour, simulated seconds per wall second per
+# worker, the per-scenario stage breakdown, the U-Net's inference-only bound and the ratio to the
+# paper's 625 an hour; keeps the JSON of each run under results/bench/TAG-wN.json.
+#   bash scripts/bench.sh [SCENARIOS=160] [TAG=now] [WORKER_COUNTS="1 2"]
+# Run it on an otherwise idle machine: it measures the machine. docs/benchmarks.md.
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+SCENARIOS="${1:-160}"
+TAG="${2:-now}"
+COUNTS="${3:-1 2}"
+install_packages
+build_workspace ON
+OUT="$REPO/results/bench"
+mkdir -p "$OUT"
+TMP="$(mktemp -d)"
+trap 'rm -rf "$TMP"' EXIT
+log "U-Net alone on one core (FLOP a frame, ms a frame, practical peak)"
+/usr/bin/python3 -m asg_perception.peak "$WS/src/asg_perception/models/flawed.pt" --json "$OUT/$TAG-peak.json"
+files=()
+for w in $COUNTS; do
+  log "campaign: $SCENARIOS Exp. 1 scenarios, TD3-PER-ASP, flawed U-Net, $w worker(s)"
+  ASG_TRAIN_PORT="${ASG_BENCH_PORT:-11397}" ASG_STORE="$TMP/bench.sqlite" bash "$REPO/scripts/train.sh" \
+      "$SCENARIOS" workers:="$w" name:="bench-w$w" seed:=0 \
+      extra:="--bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-w$w.json --label $TAG-w$w" \
+      > "$TMP/w$w.log" 2>&1 || { tail -30 "$TMP/w$w.log"; echo "bench: the campaign with $w worker(s) failed" >&2; exit 1; }
+  grep -E "stage report|proxy >= 3" "$TMP/w$w.log" || true
+  files+=("$OUT/$TAG-w$w.json")
+done
+/usr/bin/python3 -m asg_agent.bench table "${files[@]}"
