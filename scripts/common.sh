@@ -20,7 +20,7 @@ APT_PACKAGES=(
   rviz ros-desktop-dev
   libbullet-dev libosmesa6-dev mesa-common-dev liboctomap-dev libeigen3-dev libopencv-dev
   libgtest-dev googletest libyaml-cpp-dev
-  python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-tqdm
+  python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-scipy python3-tqdm
   python3-pytest python3-pil xvfb
 )
 

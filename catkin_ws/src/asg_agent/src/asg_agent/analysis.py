@@ -63,6 +63,8 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
                               for i in l["instances"]],
                 "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
                 "visibility": json.loads(r["visibility"]), "wall_time": round(r["wall_time"], 3),
+                "removed": json.loads(r["removed"]), "finished": round(r["finished"], 2),
+                "attempts": r["attempts"],
                 "trajectory_xy": np.round(keep[:, 1:3], 2).tolist()}) + "\n")
             n += 1
     return n

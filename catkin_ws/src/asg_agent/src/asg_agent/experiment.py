@@ -22,6 +22,7 @@ import numpy as np
 import yaml
 
 from asg_scenario import ScenarioError, load_scenario
+from asg_scenario.schema import strict_yaml_load
 from asg_scenario.layout import instance_count, positions, with_positions
 
 
@@ -73,10 +74,14 @@ def load_experiment(path: str) -> Experiment:
             text = f.read()
     except OSError as e:
         raise ExperimentError(f"{path}: cannot read ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise ExperimentError(f"{path}: not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start})") from None
     try:
-        data = yaml.safe_load(text)
+        data = strict_yaml_load(text)
     except yaml.YAMLError as e:
         raise ExperimentError(f"{path}: not valid YAML ({e})") from None
+    except RecursionError:
+        raise ExperimentError(f"{path}: nested too deeply to be an experiment file") from None
     if not isinstance(data, dict):
         raise ExperimentError(f"{path}: must be a mapping")
     problems = [f"{k}: unknown key (allowed: {', '.join(sorted(KEYS))})" for k in data if k not in KEYS]

@@ -320,18 +320,51 @@ def load_scenario(path: str) -> dict:
             text = f.read()
     except OSError as e:
         raise ScenarioError([("<file>", f"cannot read: {e.strerror}")], str(path)) from None
+    except UnicodeDecodeError as e:
+        raise ScenarioError([("<file>", f"not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start})")],
+                            str(path)) from None
     return parse_scenario(text, str(path))
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """safe_load that refuses a key given twice in one mapping (PyYAML would keep the last one
+    silently, the simulator's loader the first: neither is what the author meant)."""
+
+
+def _no_duplicates(loader, node, deep=False):
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        try:
+            hash(key)
+        except TypeError:
+            continue  # an unhashable key: construct_mapping reports it
+        if key in seen:
+            raise yaml.constructor.ConstructorError(None, None, f"key {key!r} is given twice in one mapping",
+                                                    key_node.start_mark)
+        seen.add(key)
+    return loader.construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _no_duplicates)
+
+
+def strict_yaml_load(text: str):
+    """yaml.safe_load, but a key given twice in one mapping is a yaml.YAMLError."""
+    return yaml.load(text, Loader=_StrictLoader)
 
 
 def parse_scenario(text: str, source: str = "scenario") -> dict:
     """Parse YAML text and validate it (see :func:`validate_scenario`)."""
     try:
-        data = yaml.safe_load(text)
+        data = strict_yaml_load(text)
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "?"
         raise ScenarioError([("<yaml>", f"not valid YAML at {where}: {getattr(e, 'problem', e)}")],
                             source) from None
+    except RecursionError:
+        raise ScenarioError([("<yaml>", "nested too deeply to be a scenario")], source) from None
     return validate_scenario(data, source)
 
 

@@ -3,6 +3,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -206,15 +208,72 @@ class Reader {
   int n_ = 0;
 };
 
+// Offset of the first byte that is not part of well-formed UTF-8, or npos (the Python loader
+// reads scenario files as UTF-8 and refuses anything else; so does this one).
+size_t firstBadUtf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const unsigned char c = s[i];
+    int n = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
+    if (n < 0 || c == 0xc0 || c == 0xc1 || c > 0xf4 || i + n >= s.size() + (n == 0 ? 1 : 0)) return i;
+    for (int k = 1; k <= n; ++k)
+      if ((static_cast<unsigned char>(s[i + k]) >> 6) != 0x2) return i;
+    if (n == 2) {  // no surrogates, no overlong three-byte forms
+      const unsigned char d = s[i + 1];
+      if ((c == 0xe0 && d < 0xa0) || (c == 0xed && d >= 0xa0)) return i;
+    }
+    if (n == 3) {
+      const unsigned char d = s[i + 1];
+      if ((c == 0xf0 && d < 0x90) || (c == 0xf4 && d >= 0x90)) return i;
+    }
+    i += n + 1;
+  }
+  return std::string::npos;
+}
+
+// A key given twice in one mapping (yaml-cpp keeps the first, PyYAML the last: refused by both
+// loaders instead). Returns "" or the key and where.
+std::string duplicateKey(const YAML::Node& n, int depth = 0) {
+  if (depth > 64) return "";
+  if (n.IsMap()) {
+    std::set<std::string> seen;
+    for (const auto& kv : n) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "";
+      if (kv.first.IsScalar() && !seen.insert(key).second)
+        return "key '" + key + "' is given twice in one mapping (line " + std::to_string(kv.first.Mark().line + 1) + ")";
+      const std::string inner = duplicateKey(kv.second, depth + 1);
+      if (!inner.empty()) return inner;
+    }
+  } else if (n.IsSequence()) {
+    for (const auto& v : n) {
+      const std::string inner = duplicateKey(v, depth + 1);
+      if (!inner.empty()) return inner;
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 ScenarioFile loadScenarioYaml(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot read the file");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t bad = firstBadUtf8(text);
+  if (bad != std::string::npos) {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "not UTF-8 text (byte 0x%02x at offset %zu)",
+                  static_cast<unsigned char>(text[bad]), bad);
+    throw SceneError(path + ": " + buf);
+  }
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw SceneError(path + ": " + e.what());
   }
+  const std::string dup = duplicateKey(root);
+  if (!dup.empty()) throw SceneError(path + ": " + dup);
   Reader r(path);
   if (!root.IsMap()) {
     r.fail("<root>", "must be a mapping of sections");
@@ -238,7 +297,7 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
   r.integer(ld, "subdivisions", &s.landscape.subdivisions, "structural.landscape", false, 1, 4096);
   r.number(ld, "border", &s.landscape.border, "structural.landscape", false);
   const YAML::Node layouts = st["layouts"];
-  if (layouts && !layouts.IsNull() && !layouts.IsSequence()) {
+  if (layouts && !layouts.IsSequence()) {  // absent: none; null is refused, as in Python
     r.fail("structural.layouts", "must be a list of layouts");
   } else if (layouts && layouts.IsSequence()) {
     for (size_t i = 0; i < layouts.size(); ++i) {
@@ -248,7 +307,7 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
       ObstacleLayout layout;
       r.string(l, "mesh_name", &layout.mesh_name, lp, true);
       const YAML::Node insts = l["instances"];
-      if (insts && !insts.IsNull() && !insts.IsSequence()) {
+      if (insts && !insts.IsSequence()) {  // absent: none; null is refused, as in Python
         r.fail(lp + ".instances", "must be a list of instances");
       } else if (insts && insts.IsSequence()) {
         for (size_t j = 0; j < insts.size(); ++j) {

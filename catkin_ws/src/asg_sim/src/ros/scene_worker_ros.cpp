@@ -158,6 +158,7 @@ void SceneWorkerROS::readParameters() {
   pnh_.param("lockstep", p.lockstep, p.lockstep);
   pnh_.param("realtime_factor", p.realtime_factor, p.realtime_factor);
   pnh_.param("publish_labels", p.publish_labels, p.publish_labels);
+  pnh_.param("odom_every_tick", p.odom_every_tick, p.odom_every_tick);
   pnh_.param("render_threads", p.render_threads, p.render_threads);
   pnh_.param("camera/width", p.width, p.width);
   pnh_.param("camera/height", p.height, p.height);
@@ -444,7 +445,9 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   const auto start = std::chrono::steady_clock::now();
   while (term == Termination::kNone) {
     const ros::Time now = stamp(runner_->time());
-    {
+    // The stack reads odometry at the stamps of camera frames and control ticks only; the other
+    // ticks' states are in the result's trajectory (odom_every_tick: publish them anyway).
+    if (params_.odom_every_tick || runner_->cameraDue() || runner_->controlDue()) {
       auto t = clock_.time(kPublish);
       publishState(now);
     }

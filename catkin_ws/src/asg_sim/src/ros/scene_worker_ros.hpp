@@ -40,6 +40,7 @@ class SceneWorkerROS {
     bool lockstep = true;
     double realtime_factor = 1.0;          // free-running mode: simulated s per wall s
     bool publish_labels = true;
+    bool odom_every_tick = false;          // false: odom/tf only at camera and control ticks
     int render_threads = 1;
     int width = 256, height = 256;
     double fov_deg = 90.0;

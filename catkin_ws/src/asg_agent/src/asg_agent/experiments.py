@@ -1,0 +1,233 @@
+"""Every table and figure of docs/experiments.md, recomputed from the compact campaign exports
+and re-run results under results/ (no simulation, no ROS; well under a minute).
+
+    python3 -m asg_agent.experiments [--manifest results/experiments.yaml] [--out docs/experiments]
+
+The manifest names which export serves which table (paths relative to the manifest):
+
+    table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
+    comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
+    diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0}
+    flaw_or_layout: flaw_or_layout.json                  # from `asg_agent.rerun` (optional)
+    differential: campaigns/D.jsonl.gz                   # a --reference-workers campaign (optional)
+
+Writes OUT/tables.md (the tables, quoted in docs/experiments.md), OUT/search_comparison.png,
+OUT/top_EXP.png and OUT/summary.json (every count, read back by the tests).
+"""
+import argparse
+import json
+import math
+import os
+import sys
+from typing import Dict, List
+
+import numpy as np
+import yaml
+
+from .analysis import counts, read_export
+
+PAPER = {"exp1": (682, 138, 8.31), "exp2": (126, 7, 6.79), "exp3": (477, 82, 6.67), "exp4": (305, 67, 8.00)}
+PAPER_SCENARIOS = 5000
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "..", "..", ".."))
+
+
+def active_hours(rows) -> float:
+    """Wall time of a campaign from its rows' finish times, gaps over 5 minutes (a campaign
+    stopped and resumed later) left out; None when the export predates the field."""
+    t = sorted(r["finished"] for r in rows if r.get("finished"))
+    if len(t) < 2:
+        return None
+    gaps = np.diff(t)
+    return float(gaps[gaps < 300].sum() + np.median(gaps)) / 3600.0
+
+
+def ge3_curve(rows, budget: int) -> np.ndarray:
+    """Count of proxy >= 3 after each scenario, in job order, up to the budget."""
+    rows = sorted(rows, key=lambda r: r["job"])[:budget]
+    return np.cumsum([(r["proxy"] or 0) >= 3 for r in rows])
+
+
+def layout_distance(a, b, meshes) -> float:
+    """[m] mean displacement between two layouts with obstacles matched one to one within each
+    type (mesh) so that the total displacement is least (Hungarian assignment)."""
+    from scipy.optimize import linear_sum_assignment
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    total = 0.0
+    for m in sorted(set(meshes)):
+        idx = [i for i, x in enumerate(meshes) if x == m]
+        d = np.linalg.norm(a[idx][:, None, :] - b[idx][None, :, :], axis=2)
+        r, c = linear_sum_assignment(d)
+        total += d[r, c].sum()
+    return total / len(meshes)
+
+
+def distinct(rows, top: int, threshold: float) -> int:
+    """Distinct layouts among the `top` highest-proxy rows: in rank order, a layout is new when
+    its layout_distance to every new one before it exceeds `threshold` metres."""
+    ranked = sorted((r for r in rows if r["proxy"] is not None), key=lambda r: -r["proxy"])[:top]
+    kept = []
+    for r in ranked:
+        if all(layout_distance(r["positions"], k["positions"], r["meshes"]) > threshold for k in kept):
+            kept.append(r)
+    return len(kept)
+
+
+def scenario_of(campaign: dict, row: dict) -> dict:
+    """The request of an exported row: the experiment's fixed attributes with its positions."""
+    from asg_scenario.layout import with_positions
+    from .experiment import load_experiment
+    exp = load_experiment(os.path.join(REPO, "experiments", campaign["experiment"] + ".yaml"))
+    return with_positions(exp.scenario, row["positions"])
+
+
+def top_figure(campaign: dict, rows, out: str) -> dict:
+    from asg_scenario.report import plot_run
+    from .proxy import optimal_path, placed_mask
+    r = max((x for x in rows if x["proxy"] is not None), key=lambda x: x["proxy"])
+    req = scenario_of(campaign, r)
+    removed_list = r.get("removed") or []
+    opt = optimal_path(req, placed_mask(req, removed_list))
+    title = (f"{campaign['name']}, rank 1 of {len(rows)} (job {r['job']})\nproxy {r['proxy']:.2f} = 0.1 x vis "
+             f"{r['vis']:+.2f} + yaw term {r['yaw_term']:.2f} + PLR {r['plr']:.3f}^2\n{r['termination']} after "
+             f"{r['sim_time']:.1f} s, driven {r['path_length']:.1f} m, optimal {r['optimal_length']:.1f} m")
+    plot_run(out, req, r["trajectory_xy"], title=title, removed={(l, i) for l, i, *_ in removed_list},
+             optimal=opt.points)
+    return {"job": r["job"], "proxy": r["proxy"], "figure": os.path.basename(out)}
+
+
+def fmt(v, spec=".2f"):
+    return "-" if v is None else format(v, spec)
+
+
+def run(manifest_path: str, out: str) -> dict:
+    base = os.path.dirname(os.path.abspath(manifest_path))
+    with open(manifest_path) as f:
+        man = yaml.safe_load(f) or {}
+    os.makedirs(out, exist_ok=True)
+    cache: Dict[str, tuple] = {}
+
+    def load(rel):
+        if rel not in cache:
+            cache[rel] = read_export(os.path.join(base, rel))
+        return cache[rel]
+
+    summary, md = {"table2": {}, "comparison": {}, "diversity": {}}, []
+    # -- Table 2 ---------------------------------------------------------------------------------
+    md += ["### Table 2", "", "| experiment | scenarios | proxy >= 3 | >= 4 | largest | per 1,000: >= 3 / >= 4 "
+           "| paper (of 5,000): >= 3 / >= 4 / largest | paper per 1,000 | wall time | workers |", "|" + "---|" * 10]
+    for exp, rel in (man.get("table2") or {}).items():
+        camp, rows = load(rel)
+        c = counts(rows)
+        hours = active_hours(rows)
+        workers = len(json.loads(camp["settings"]).get("workers", [])) if camp.get("settings") else None
+        p = PAPER.get(exp)
+        summary["table2"][exp] = dict(c, export=rel, hours=hours)
+        n = c["scenarios"]
+        md.append(f"| {exp} | {n} | {c['proxy_ge_3']} | {c['proxy_ge_4']} | {fmt(c['max_proxy'])} | "
+                  f"{1000 * c['proxy_ge_3'] / n:.0f} / {1000 * c['proxy_ge_4'] / n:.0f} | "
+                  + (f"{p[0]} / {p[1]} / {p[2]:.2f} | {1000 * p[0] / PAPER_SCENARIOS:.0f} / "
+                     f"{1000 * p[1] / PAPER_SCENARIOS:.0f}" if p else "- | -")
+                  + f" | {fmt(hours * 60 if hours else None, '.0f')} min | {workers or '-'} |")
+        summary["table2"][exp]["top"] = top_figure(camp, rows, os.path.join(out, f"top_{exp}.png"))
+    # -- search comparison -----------------------------------------------------------------------
+    comp = man.get("comparison") or {}
+    budget = int(comp.get("budget", 1000))
+    curves = {}
+    if comp.get("arms"):
+        md += ["", f"### Search comparison (Exp. 1, flawed U-Net, budget {budget} scenarios per run)", "",
+               "| method | runs (seeds) | proxy >= 3 at the budget: each run | mean | min-max | vs random (mean) |",
+               "|---|---|---|---|---|---|"]
+        for arm, rels in comp["arms"].items():
+            curves[arm] = []
+            for rel in rels:
+                camp, rows = load(rel)
+                cv = ge3_curve(rows, budget)
+                curves[arm].append({"seed": camp["seed"], "scenarios": len(cv), "curve": cv})
+        rnd = [c["curve"][-1] for c in curves.get("random", []) if c["scenarios"] >= budget]
+        rnd_mean = float(np.mean(rnd)) if rnd else None
+        for arm, runs in curves.items():
+            full = [int(r["curve"][-1]) for r in runs if r["scenarios"] >= budget]
+            short = [f"{int(r['curve'][-1])} (s{r['seed']}, only {r['scenarios']})" for r in runs if r["scenarios"] < budget]
+            mean = float(np.mean(full)) if full else None
+            summary["comparison"][arm] = {"runs": [{"seed": r["seed"], "scenarios": r["scenarios"],
+                                                   "ge3": int(r["curve"][-1])} for r in runs], "mean_at_budget": mean}
+            md.append(f"| {arm} | {len(full)} ({', '.join(str(r['seed']) for r in runs)}) | "
+                      f"{', '.join(str(v) for v in full + short)} | {fmt(mean, '.1f')} | "
+                      + (f"{min(full)}-{max(full)}" if full else "-") + " | "
+                      + (f"{mean / rnd_mean:.2f}x" if mean is not None and rnd_mean else "-") + " |")
+        comparison_figure(curves, budget, os.path.join(out, "search_comparison.png"))
+    # -- diversity -------------------------------------------------------------------------------
+    div = man.get("diversity") or {}
+    if div.get("arms") and curves:
+        top, thr = int(div.get("top", 100)), float(div.get("threshold_m", 5.0))
+        md += ["", f"### Diversity of the top {top} (distinct layouts at > {thr:g} m mean matched displacement)", "",
+               "| method | run | distinct among the top %d | of which proxy >= 3 |" % top, "|---|---|---|---|"]
+        for arm in div["arms"]:
+            for rel in (comp["arms"].get(arm) or [])[:1]:
+                camp, rows = load(rel)
+                rows = sorted(rows, key=lambda r: r["job"])[:budget]
+                n = distinct(rows, top, thr)
+                ge3 = sum((r["proxy"] or 0) >= 3 for r in rows)
+                summary["diversity"][arm] = {"export": rel, "distinct": n, "top": min(top, len(rows))}
+                md.append(f"| {arm} | {camp['name']} | {n} | {min(top, ge3)} |")
+    # -- flaw or layout, differential ------------------------------------------------------------
+    if man.get("flaw_or_layout") and os.path.exists(os.path.join(base, man["flaw_or_layout"])):
+        with open(os.path.join(base, man["flaw_or_layout"])) as f:
+            fol = json.load(f)
+        summary["flaw_or_layout"] = fol["summary"]
+        md += ["", "### Flaw or layout", "", "| planner grid | stack | re-run | still >= 3 | dropped below 3 |",
+               "|---|---|---|---|---|"]
+        for s in fol["summary"]:
+            md.append(f"| {s['grid']} | {s['stack']} | {s['runs']} | {s['still_ge3']} | {s['dropped']} |")
+    with open(os.path.join(out, "tables.md"), "w") as f:
+        f.write("<!-- generated by `python3 -m asg_agent.experiments`; do not edit -->\n" + "\n".join(md) + "\n")
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=1, sort_keys=True)
+    return summary
+
+
+def comparison_figure(curves, budget: int, out: str):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, (arm, runs) in enumerate(curves.items()):
+        c = colours[k % len(colours)]
+        full = [r["curve"] for r in runs if r["scenarios"] >= budget]
+        if len(full) > 1:
+            a = np.stack(full)
+            x = np.arange(1, budget + 1)
+            ax.plot(x, a.mean(0), color=c, label=f"{arm} (mean of {len(full)} seeds, min-max shaded)")
+            ax.fill_between(x, a.min(0), a.max(0), color=c, alpha=0.2)
+        for r in runs if len(full) <= 1 else []:
+            ax.plot(np.arange(1, r["scenarios"] + 1), r["curve"], color=c, label=f"{arm} (seed {r['seed']})")
+    ax.set_xlabel("scenarios spent")
+    ax.set_ylabel("scenarios with proxy >= 3")
+    ax.set_xlim(0, budget)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("Exp. 1, flawed U-Net: difficult scenarios found against scenarios spent", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="asg_agent.experiments", description=__doc__.split("\n\n")[0])
+    p.add_argument("--manifest", default=os.path.join(REPO, "results", "experiments.yaml"))
+    p.add_argument("--out", default=os.path.join(REPO, "docs", "experiments"))
+    a = p.parse_args(argv)
+    try:
+        s = run(a.manifest, a.out)
+    except (OSError, ValueError, KeyError) as e:
+        print(f"experiments: {e}", file=sys.stderr)
+        return 2
+    with open(os.path.join(a.out, "tables.md")) as f:
+        print(f.read())
+    print(f"written: {a.out}/tables.md, summary.json and figures", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
