@@ -6,6 +6,8 @@
 # worker, the per-scenario stage breakdown, the U-Net's inference-only bound and the ratio to the
 # paper's 625 an hour; keeps the JSON of each run under results/bench/TAG-wN.json.
 #   bash scripts/bench.sh [SCENARIOS=160] [TAG=now] [WORKER_COUNTS="1 2"]
+# BENCH_BASELINE=1: the pipeline as it was before issue #13's changes (odom and tf at every tick,
+# planner markers on, freed workers wait for the agent's update) - the "before" column.
 # Run it on an otherwise idle machine: it measures the machine. docs/benchmarks.md.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SCENARIOS="${1:-160}"
@@ -20,11 +22,17 @@ trap 'rm -rf "$TMP"' EXIT
 log "U-Net alone on one core (FLOP a frame, ms a frame, practical peak)"
 /usr/bin/python3 -m asg_perception.peak "$WS/src/asg_perception/models/flawed.pt" --json "$OUT/$TAG-peak.json"
 files=()
+BASE_ARGS=()
+BASE_EXTRA=""
+if [ "${BENCH_BASELINE:-0}" = 1 ]; then
+  BASE_ARGS=(odom_every_tick:=true markers:=true)
+  BASE_EXTRA="--no-early-dispatch"
+fi
 for w in $COUNTS; do
   log "campaign: $SCENARIOS Exp. 1 scenarios, TD3-PER-ASP, flawed U-Net, $w worker(s)"
   ASG_TRAIN_PORT="${ASG_BENCH_PORT:-11397}" ASG_STORE="$TMP/bench.sqlite" bash "$REPO/scripts/train.sh" \
-      "$SCENARIOS" workers:="$w" name:="bench-w$w" seed:=0 \
-      extra:="--bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-w$w.json --label $TAG-w$w" \
+      "$SCENARIOS" workers:="$w" name:="bench-w$w" seed:=0 "${BASE_ARGS[@]}" \
+      extra:="$BASE_EXTRA --bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-w$w.json --label $TAG-w$w" \
       > "$TMP/w$w.log" 2>&1 || { tail -30 "$TMP/w$w.log"; echo "bench: the campaign with $w worker(s) failed" >&2; exit 1; }
   grep -E "stage report|proxy >= 3" "$TMP/w$w.log" || true
   files+=("$OUT/$TAG-w$w.json")

@@ -261,8 +261,11 @@ def main(argv=None):
     if a.mode == "loaders":
         out = fuzz_loaders(a.count, a.seed, a.tool)
     else:
+        import rospy
+        import stack_util as su
         from fuzz_goals import fuzz_goals
-        out = fuzz_goals(a.worker, a.count, a.seed)
+        rospy.init_node("fuzz_goals", anonymous=True)
+        out = fuzz_goals(a.worker, a.count, a.seed, pid_of=lambda: su.node_pid(a.worker.rstrip("/") + "/scene_worker"))
     print(json.dumps({k: v for k, v in out.items() if k != "failures"}, indent=1))
     for f in out["failures"][:10]:
         print(f"FAILURE {f['class']}: {f['file']}: {f['why']}", file=sys.stderr)

@@ -92,13 +92,15 @@ class Campaign:
     def __init__(self, name: str, experiment: Experiment, method: SearchMethod, store: Store, pool: Pool,
                  total: int, seed: int, checkpoint: str, slots: int = 4, max_attempts: int = 3,
                  checkpoint_every: int = 10, proxy_config: ProxyConfig = ProxyConfig(),
-                 progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None):
+                 progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None,
+                 early_dispatch: bool = True):
         if total < 1 or slots < 1:
             raise ValueError("total and slots must be >= 1")
         self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
         self.total, self.seed, self.checkpoint_path, self.slots = total, seed, checkpoint, slots
         self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, checkpoint_every, proxy_config
         self.progress, self.settings = progress, settings or {}
+        self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
         self.pending: Dict[int, Job] = {}  # proposed, not applied
         self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
         self.queue: List[int] = []  # proposed jobs waiting for a worker
@@ -187,7 +189,7 @@ class Campaign:
             self.stages.add("wait", t0)
             for outcome in outcomes:
                 self._on_outcome(outcome)
-            if outcomes:  # workers just freed get a waiting proposal before the agent learns
+            if outcomes and self.early_dispatch:  # freed workers get a waiting proposal before the agent learns
                 t0 = time.perf_counter()
                 self._dispatch()
                 self.stages.add("dispatch", t0)

@@ -46,6 +46,9 @@ def parse(argv):
     p.add_argument("--stage-report", default="",
                    help="write where the time went (per-scenario stage breakdown, rate, inference bound) "
                         "to this JSON file at the end (`bench`, docs/benchmarks.md)")
+    p.add_argument("--no-early-dispatch", action="store_true",
+                   help="benchmark baseline: give freed workers their next job only after the agent has "
+                        "learnt from the results (the order before issue #13)")
     p.add_argument("--label", default="", help="--stage-report: the column label of this run")
     p.add_argument("--no-progress", action="store_true")
     a = p.parse_args(argv)
@@ -165,7 +168,8 @@ def main(argv=None):
             print(f"campaign: --stage-report: not every worker, segmenter and planner published stage_times "
                   f"within 15 s; the breakdown will lack them", file=sys.stderr)
     c = Campaign(name, exp, method, store, pool, a.scenarios, a.seed, checkpoint, slots=slots,
-                 checkpoint_every=a.checkpoint_every, progress=progress, settings=settings)
+                 checkpoint_every=a.checkpoint_every, progress=progress, settings=settings,
+                 early_dispatch=not a.no_early_dispatch)
     try:
         if a.resume:
             c.resume()
