@@ -34,6 +34,7 @@ def test_breakdown_subtracts_first_readings_and_divides_by_scenarios():
     assert b["fraction_of_bound"] == pytest.approx(1000.0 / 2250.0)
     # waited 2.0 s a scenario; the stack worked 1.6 + 0.02 + 0.1 + 0.04 = 1.76 s of it
     assert b["transport_and_waiting_s"] == pytest.approx(2.0 - 1.76)
+    assert "| of which transport and scheduling (wait - stack work on the critical path) | 0.240 |" in table([b], ["x"])
     assert b["cpu_per_scenario_s"]["segmenter"] == pytest.approx(1.8)
     assert b["sim_s_per_wall_s_per_worker"] == pytest.approx(160.0 / 36.0)
     md = table([b], ["one"])

@@ -171,7 +171,12 @@ def main(argv=None):
                  checkpoint_every=a.checkpoint_every, progress=progress, settings=settings,
                  early_dispatch=not a.no_early_dispatch)
     try:
-        if a.resume:
+        if a.resume and store.campaign(name) is None:
+            # Killed before it stored anything: "--resume" then means "start it" (restarts stay
+            # one command, whenever the kill came).
+            print(f"campaign {name}: nothing stored yet, starting it", file=sys.stderr)
+            c.start()
+        elif a.resume:
             c.resume()
             print(f"campaign {name}: resumed with {store.count(name)} of {a.scenarios} scenarios stored",
                   file=sys.stderr)
