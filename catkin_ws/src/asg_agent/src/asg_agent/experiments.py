@@ -213,10 +213,31 @@ def comparison_figure(curves, budget: int, out: str):
     plt.close(fig)
 
 
+BEGIN, END = "<!-- tables:begin -->", "<!-- tables:end -->"
+
+
+def docs_block(text: str) -> str:
+    """The generated tables as docs/experiments.md quotes them."""
+    if BEGIN not in text or END not in text:
+        raise ValueError(f"no {BEGIN} ... {END} block")
+    return text.split(BEGIN, 1)[1].split(END, 1)[0].strip("\n")
+
+
+def update_docs(path: str, tables: str):
+    with open(path) as f:
+        text = f.read()
+    docs_block(text)
+    head, rest = text.split(BEGIN, 1)
+    with open(path, "w") as f:
+        f.write(head + BEGIN + "\n" + tables.strip("\n") + "\n" + END + rest.split(END, 1)[1])
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="asg_agent.experiments", description=__doc__.split("\n\n")[0])
     p.add_argument("--manifest", default=os.path.join(REPO, "results", "experiments.yaml"))
     p.add_argument("--out", default=os.path.join(REPO, "docs", "experiments"))
+    p.add_argument("--docs", default=os.path.join(REPO, "docs", "experiments.md"),
+                   help="rewrite the block between the tables markers of this file ('' to leave it)")
     a = p.parse_args(argv)
     try:
         s = run(a.manifest, a.out)
@@ -224,7 +245,10 @@ def main(argv=None):
         print(f"experiments: {e}", file=sys.stderr)
         return 2
     with open(os.path.join(a.out, "tables.md")) as f:
-        print(f.read())
+        tables = f.read()
+    print(tables)
+    if a.docs and os.path.exists(a.docs):
+        update_docs(a.docs, tables)
     print(f"written: {a.out}/tables.md, summary.json and figures", file=sys.stderr)
     return 0
 
