@@ -24,6 +24,11 @@ from asg_scenario.convert import to_goal_msg
 
 from .campaign import Outcome, Pool
 
+STATUS = {GoalStatus.PENDING: "PENDING", GoalStatus.ACTIVE: "ACTIVE", GoalStatus.PREEMPTED: "PREEMPTED",
+          GoalStatus.SUCCEEDED: "SUCCEEDED", GoalStatus.ABORTED: "ABORTED", GoalStatus.REJECTED: "REJECTED",
+          GoalStatus.PREEMPTING: "PREEMPTING", GoalStatus.RECALLING: "RECALLING", GoalStatus.RECALLED: "RECALLED",
+          GoalStatus.LOST: "LOST"}
+
 
 def result_to_outcome(job: int, worker: str, result, wall: float) -> Outcome:
     n = len(result.trajectory)
@@ -50,6 +55,8 @@ class WorkerPool(Pool):
         self.down: Dict[str, float] = {}  # worker -> when it went missing
         self.results: "queue.Queue[Outcome]" = queue.Queue()
         self.lock = threading.RLock()
+        self.node_uri: Dict[str, str] = {}  # worker -> URI of its scene_worker node when its job went out
+        self.next_liveness = 0.0
         for ns in namespaces:
             ns = "/" + ns.strip("/")
             self.clients[ns] = actionlib.ActionClient(ns + "/run_scenario", RunScenarioAction)
@@ -104,17 +111,38 @@ class WorkerPool(Pool):
             status, result = gh.get_goal_status(), gh.get_result()
             if result is None or status not in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED):
                 self.results.put(Outcome(job=job, worker=worker, termination="ERROR", wall_time=wall,
-                                         error=f"{worker}: goal ended {GoalStatus.to_string(status)} without a result"))
+                                         error=f"{worker}: goal ended {STATUS.get(status, status)} without a result"))
             else:
                 self.results.put(result_to_outcome(job, worker, result, wall))
 
+        uri = self._scene_worker_uri(worker)
         with self.lock:
             self.busy[worker] = (job, state, t0)
+            self.node_uri[worker] = uri
         gh = self.clients[worker].send_goal(to_goal_msg(request), transition_cb=transition)
         with self.lock:
             state["handle"] = gh
             if not state["done"]:
                 self.handles.append(gh)
+
+    @staticmethod
+    def _scene_worker_uri(worker):
+        """The master's record of the worker's scene_worker node ("" if it has none)."""
+        try:
+            import rosgraph
+            return rosgraph.Master(rospy.get_name()).lookupNode(worker.rstrip("/") + "/scene_worker")
+        except Exception:  # noqa: BLE001 - unregistered (dead) or the master unreachable
+            return ""
+
+    def _dead_workers(self, now):
+        """Busy workers whose scene_worker process died (unregistered, or a respawn with a new URI)
+        since their job went out: their run is lost. Checked every 2 s, one master call each."""
+        if now < self.next_liveness:
+            return []
+        self.next_liveness = now + 2.0
+        with self.lock:
+            watched = {ns: self.node_uri.get(ns, "") for ns in self.busy}
+        return [ns for ns, uri in watched.items() if uri and self._scene_worker_uri(ns) != uri]
 
     def poll(self, timeout):
         out = []
@@ -125,10 +153,18 @@ class WorkerPool(Pool):
         except queue.Empty:
             pass
         now = time.time()
+        dead = set(self._dead_workers(now))
         with self.lock:
             stale = []
             for ns, (job, state, t0) in list(self.busy.items()):
-                if now - t0 > self.answer_timeout:
+                if ns in dead:
+                    del self.busy[ns]
+                    self.down[ns] = now
+                    stale.append(state["handle"])
+                    rospy.logerr("pool: %s's scene worker died during job %d: re-queued", ns, job)
+                    out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
+                                       error=f"{ns}: the scene worker died during the run"))
+                elif now - t0 > self.answer_timeout:
                     del self.busy[ns]
                     self.down[ns] = now
                     stale.append(state["handle"])
