@@ -64,7 +64,8 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
                 "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
                 "visibility": json.loads(r["visibility"]), "wall_time": round(r["wall_time"], 3),
                 "removed": json.loads(r["removed"]), "finished": round(r["finished"], 2),
-                "attempts": r["attempts"],
+                "attempts": r["attempts"], "reward": r["reward"],
+                "reference": json.loads(r["reference"]) if r["reference"] else None,
                 "trajectory_xy": np.round(keep[:, 1:3], 2).tolist()}) + "\n")
             n += 1
     return n

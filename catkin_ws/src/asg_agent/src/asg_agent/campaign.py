@@ -86,6 +86,8 @@ class Job:
     request: dict
     attempts: int = 0
     avoid: str = ""  # the worker that failed it last
+    ref_attempts: int = 0  # differential campaigns: the same on the reference stack
+    ref_avoid: str = ""
 
 
 class Campaign:
@@ -93,7 +95,7 @@ class Campaign:
                  total: int, seed: int, checkpoint: str, slots: int = 4, max_attempts: int = 3,
                  checkpoint_every: int = 10, proxy_config: ProxyConfig = ProxyConfig(),
                  progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None,
-                 early_dispatch: bool = True):
+                 early_dispatch: bool = True, reference: Optional[Pool] = None):
         if total < 1 or slots < 1:
             raise ValueError("total and slots must be >= 1")
         self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
@@ -101,6 +103,12 @@ class Campaign:
         self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, checkpoint_every, proxy_config
         self.progress, self.settings = progress, settings or {}
         self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
+        # Differential campaigns: every scenario also runs on the reference stack's workers and
+        # the search learns from proxy(stack under test) - proxy(reference).
+        self.reference = reference
+        self.ref_queue: List[int] = []
+        self.ref_running: Dict[int, str] = {}
+        self.parts: Dict[int, Dict[str, Outcome]] = {}  # job -> {"test": .., "ref": ..} until both are in
         self.pending: Dict[int, Job] = {}  # proposed, not applied
         self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
         self.queue: List[int] = []  # proposed jobs waiting for a worker
@@ -144,11 +152,14 @@ class Campaign:
             self.slot_state = ck["slot_state"]
             self.pending = {j["job"]: Job(**j) for j in ck["pending"]}
             self.queue = sorted(self.pending)
+            self.ref_queue = sorted(self.pending) if self.reference is not None else []
         # Results stored after the checkpoint are applied as the interrupted run applied them.
         for row in self.store.rows(self.name, self.next_apply - 1):
             self.finished[row["job"]] = dict(row)
             if row["job"] in self.queue:
                 self.queue.remove(row["job"])
+            if row["job"] in self.ref_queue:
+                self.ref_queue.remove(row["job"])
         self.done_at_start = self.store.count(self.name)
         summary = self.store.summary(self.name, top=0)
         self.stats.update(best=summary["max_proxy"] if summary["max_proxy"] is not None else -math.inf,
@@ -175,6 +186,8 @@ class Campaign:
         self.pending[j] = Job(j, slot, st["episode"], st["step"], st["state"], action, request)
         if j not in self.finished:
             self.queue.append(j)
+            if self.reference is not None:
+                self.ref_queue.append(j)
 
     # -- the loop -------------------------------------------------------------------------------
     def run(self, poll_timeout: float = 0.2, deadline: Optional[float] = None) -> dict:
@@ -188,7 +201,12 @@ class Campaign:
             outcomes = self.pool.poll(poll_timeout)
             self.stages.add("wait", t0)
             for outcome in outcomes:
-                self._on_outcome(outcome)
+                self._on_outcome(outcome, "test")
+            if self.reference is not None:
+                ref = self.reference.poll(0.0)
+                for outcome in ref:
+                    self._on_outcome(outcome, "ref")
+                outcomes = outcomes + ref
             if outcomes and self.early_dispatch:  # freed workers get a waiting proposal before the agent learns
                 t0 = time.perf_counter()
                 self._dispatch()
@@ -200,39 +218,71 @@ class Campaign:
         return self.store.summary(self.name)
 
     def _dispatch(self):
-        free = self.pool.free()
+        self._dispatch_part(self.pool, self.queue, self.running, "attempts", "avoid")
+        if self.reference is not None:
+            self._dispatch_part(self.reference, self.ref_queue, self.ref_running, "ref_attempts", "ref_avoid")
+
+    def _dispatch_part(self, pool, queue, running, attempts, avoid):
+        free = pool.free()
         for worker in free:
             pick = None
-            for j in self.queue:
-                if self.pending[j].avoid != worker or len(free) == 1:
+            for j in queue:
+                if getattr(self.pending[j], avoid) != worker or len(free) == 1:
                     pick = j
                     break
             if pick is None:
                 continue
-            self.queue.remove(pick)
+            queue.remove(pick)
             job = self.pending[pick]
-            job.attempts += 1
-            self.running[pick] = worker
-            self.pool.submit(worker, pick, job.request)
+            setattr(job, attempts, getattr(job, attempts) + 1)
+            running[pick] = worker
+            pool.submit(worker, pick, job.request)
 
-    def _on_outcome(self, o: Outcome):
+    def _on_outcome(self, o: Outcome, part: str = "test"):
         job = self.pending.get(o.job)
-        if job is None or self.running.get(o.job) != o.worker:
+        running = self.running if part == "test" else self.ref_running
+        if job is None or running.get(o.job) != o.worker:
             return  # a late answer for a job already re-queued elsewhere: never counted twice
-        del self.running[o.job]
-        if o.termination == "ERROR" and job.attempts < self.max_attempts:
+        del running[o.job]
+        attempts = job.attempts if part == "test" else job.ref_attempts
+        if o.termination == "ERROR" and attempts < self.max_attempts:
             self.stats["retries"] += 1
-            job.avoid = o.worker
-            self.queue.insert(0, o.job)
+            if part == "test":
+                job.avoid = o.worker
+                self.queue.insert(0, o.job)
+            else:
+                job.ref_avoid = o.worker
+                self.ref_queue.insert(0, o.job)
             print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
             return
-        t0 = time.perf_counter()
-        placed = placed_mask(job.request, o.removed)
+        if self.reference is None:
+            return self._finish(job, o, None)
+        got = self.parts.setdefault(o.job, {})
+        got[part] = o
+        if len(got) == 2:
+            del self.parts[o.job]
+            self._finish(job, got["test"], got["ref"])
+
+    def _terms(self, request, o: Outcome):
         traj = np.asarray(o.trajectory, np.float32).reshape(-1, 5)
-        terms = None
-        if o.termination != "ERROR" and len(traj):
-            terms = compute(job.request, traj[:, 0], traj[:, 1:3], traj[:, 4], o.visibility, o.termination,
-                            placed, self.proxy_config)
+        if o.termination == "ERROR" or not len(traj):
+            return traj, None
+        return traj, compute(request, traj[:, 0], traj[:, 1:3], traj[:, 4], o.visibility, o.termination,
+                             placed_mask(request, o.removed), self.proxy_config)
+
+    def _finish(self, job: Job, o: Outcome, ref: Optional[Outcome]):
+        t0 = time.perf_counter()
+        traj, terms = self._terms(job.request, o)
+        reference, reward = None, (terms.proxy if terms else None)
+        if ref is not None:
+            _, rterms = self._terms(job.request, ref)
+            reference = json.dumps({"worker": ref.worker, "attempts": job.ref_attempts, "termination": ref.termination,
+                                    "error": ref.error, "proxy": rterms.proxy if rterms else None,
+                                    "vis": rterms.vis if rterms else None, "yaw_term": rterms.yaw_term if rterms else None,
+                                    "plr": rterms.plr if rterms else None, "sim_time": ref.sim_time,
+                                    "trajectory_xy": np.round(np.asarray(ref.trajectory, np.float32).reshape(-1, 5)[::6, 1:3], 2).tolist()},
+                                   sort_keys=True)
+            reward = terms.proxy - rterms.proxy if terms and rterms else None
         row = {"campaign": self.name, "job": o.job, "method": self.method.name, "episode": job.episode,
                "step": job.step, "worker": o.worker, "attempts": job.attempts, "scenario_id": job.request["scenario_id"],
                "request": json.dumps(job.request, sort_keys=True), "termination": o.termination, "error": o.error,
@@ -243,13 +293,13 @@ class Campaign:
                "num_control_msgs": o.num_control_msgs, "visibility": json.dumps([float(v) for v in o.visibility]),
                "removed": json.dumps(o.removed), "collision_with": o.collision_with,
                "trajectory": pack_trajectory(traj), "samples": len(traj), "wall_time": o.wall_time,
-               "finished": time.time()}
+               "finished": time.time(), "reference": reference, "reward": reward}
         self.stages.add("proxy", t0)
         t0 = time.perf_counter()
         self.store.add(row)
         self.stages.add("store", t0)
         self.finished[o.job] = row
-        if terms:
+        if terms and reward is not None:
             self.stats["best"] = max(self.stats["best"], terms.proxy)
             self.stats["ge3"] += terms.proxy >= 3
             self.stats["ge4"] += terms.proxy >= 4
@@ -265,7 +315,7 @@ class Campaign:
             self.next_apply += 1
             slot = self.slot_state[job.slot]
             done = job.step >= self.exp.episode_steps - 1
-            reward = row["proxy"]
+            reward = row["reward"] if self.reference is not None else row["proxy"]
             if reward is None:  # ERROR after every attempt: no transition, the episode ends here
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)
                 done = True

@@ -43,6 +43,10 @@ def parse(argv):
     p.add_argument("--bc-weight", type=float, default=0.0,
                    help="TD3 methods: weight of the behaviour-regularisation term (default 0: off)")
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
+    p.add_argument("--reference-workers", default="",
+                   help="differential campaign: every scenario also runs on these workers (count, as "
+                        "--workers, numbered after them, or namespaces) and the search maximises "
+                        "proxy(--workers' stack) - proxy(reference stack)")
     p.add_argument("--stage-report", default="",
                    help="write where the time went (per-scenario stage breakdown, rate, inference bound) "
                         "to this JSON file at the end (`bench`, docs/benchmarks.md)")
@@ -117,6 +121,18 @@ def main(argv=None):
     except ValueError as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2
+    ref_workers = []
+    if a.reference_workers:
+        spec = a.reference_workers
+        if spec.isdigit():
+            first = len(workers)
+            ref_workers = ([f"fake_ref_{i}" for i in range(int(spec))] if a.fake_workers
+                           else [f"/worker_{first + i}" for i in range(int(spec))])
+        else:
+            ref_workers = worker_names(spec)
+        if not ref_workers or set(ref_workers) & set(workers):
+            print("campaign: --reference-workers must name workers other than --workers", file=sys.stderr)
+            return 2
     slots = a.slots or 2 * len(workers)
     try:
         store = Store(a.store)
@@ -126,15 +142,20 @@ def main(argv=None):
     if not a.resume and store.campaign(name) is not None:
         print(f"campaign: {name!r} already exists in {a.store}: add --resume to continue it, or --name", file=sys.stderr)
         return 2
+    reference = None
     if a.fake_workers:
         from .fake_pool import FakePool
         pool = FakePool(a.fake_workers, seed=int(time.time()))
+        if ref_workers:  # a stand-in reference stack that wiggles less
+            reference = FakePool(len(ref_workers), seed=int(time.time()) + 1, gain=0.3, prefix="fake_ref")
     else:
         import rospy
         from .pool_ros import WorkerPool
         rospy.init_node("campaign", anonymous=True, disable_signals=True)
         try:
             pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
+            if ref_workers:
+                reference = WorkerPool(ref_workers, answer_timeout=a.answer_timeout)
         except RuntimeError as e:
             print(f"campaign: {e}", file=sys.stderr)
             return 2
@@ -157,7 +178,7 @@ def main(argv=None):
         bar.set_postfix_str(f"{st['rate_per_hour']:.0f}/h best {best} >=3 {st['ge3']} >=4 {st['ge4']}"
                             + (f" err {st['errors']}" if st["errors"] else ""), refresh=True)
 
-    settings = {"workers": workers, "experiment_file": exp.source, "perception": exp.perception,
+    settings = {"workers": workers, "reference_workers": ref_workers, "experiment_file": exp.source, "perception": exp.perception,
                 "model": exp.model, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
     collector = None
     if a.stage_report and not a.fake_workers:
@@ -169,7 +190,7 @@ def main(argv=None):
                   f"within 15 s; the breakdown will lack them", file=sys.stderr)
     c = Campaign(name, exp, method, store, pool, a.scenarios, a.seed, checkpoint, slots=slots,
                  checkpoint_every=a.checkpoint_every, progress=progress, settings=settings,
-                 early_dispatch=not a.no_early_dispatch)
+                 early_dispatch=not a.no_early_dispatch, reference=reference)
     try:
         if a.resume and store.campaign(name) is None:
             # Killed before it stored anything: "--resume" then means "start it" (restarts stay

@@ -15,7 +15,7 @@ from .optimal_path import obstacle_discs, shortest_path
 from .proxy import resample_path
 
 
-def fake_run(request: dict) -> Outcome:
+def fake_run(request: dict, gain: float = 0.8) -> Outcome:
     op = request["operational"]
     discs = obstacle_discs(request, 0.75)
     path = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"], discs)
@@ -27,7 +27,7 @@ def fake_run(request: dict) -> Outcome:
     s = np.linspace(0.0, 1.0, n)
     normal = np.array([-(op["goal_y"] - op["start_y"]), op["goal_x"] - op["start_x"]])
     normal /= np.linalg.norm(normal)
-    xy = xy + np.outer(0.8 * near * np.sin(np.pi * s) * np.sin(6 * np.pi * s), normal)
+    xy = xy + np.outer(gain * near * np.sin(np.pi * s) * np.sin(6 * np.pi * s), normal)
     t = np.arange(n) / 60.0
     yaw = np.unwrap(np.arctan2(np.gradient(xy[:, 1]), np.gradient(xy[:, 0])))
     traj = np.stack([t, xy[:, 0], xy[:, 1], yaw, np.gradient(yaw, t) if n > 1 else 0 * t], axis=1)
@@ -39,8 +39,9 @@ def fake_run(request: dict) -> Outcome:
 
 
 class FakePool(Pool):
-    def __init__(self, workers: int = 2, seed: int = 0, fail_jobs=()):
-        self.names = [f"/fake_{i}" for i in range(workers)]
+    def __init__(self, workers: int = 2, seed: int = 0, fail_jobs=(), gain: float = 0.8, prefix: str = "fake"):
+        self.names = [f"/{prefix}_{i}" for i in range(workers)]
+        self.gain = gain  # the stand-in stack's wiggle near obstacles (a "worse" stack: larger)
         self.busy: Dict[str, tuple] = {}
         self.rng = np.random.default_rng(seed)
         self.fail_jobs = set(fail_jobs)  # these jobs answer ERROR on their first attempt
@@ -66,7 +67,7 @@ class FakePool(Pool):
                 self.failed_once.add(job)
                 out.append(Outcome(job=job, worker=w, termination="ERROR", error="planner: fake failure"))
                 continue
-            o = fake_run(request)
+            o = fake_run(request, self.gain)
             o.job, o.worker = job, w
             out.append(o)
         return out

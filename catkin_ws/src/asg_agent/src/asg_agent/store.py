@@ -59,7 +59,11 @@ CREATE INDEX IF NOT EXISTS scenarios_proxy ON scenarios (campaign, proxy);
 COLUMNS = ("campaign", "job", "method", "episode", "step", "worker", "attempts", "scenario_id", "request",
            "termination", "error", "proxy", "vis", "yaw_term", "plr", "path_length", "optimal_length", "sim_time",
            "num_control_msgs", "visibility", "removed", "collision_with", "trajectory", "samples", "wall_time",
-           "finished")
+           "finished", "reference", "reward")
+# Columns added after the first stores were written: (name, SQL type); added to an older store
+# when it is opened.
+ADDED = (("reference", "TEXT"),  # differential campaigns: JSON of the reference stack's run
+         ("reward", "REAL"))     # what the search learnt from: the proxy, or proxy - reference proxy
 
 
 class StoreError(RuntimeError):
@@ -86,6 +90,10 @@ class Store:
             self.db.execute("PRAGMA journal_mode=WAL")
             self.db.execute("PRAGMA synchronous=NORMAL")
             self.db.executescript(SCHEMA)
+            have = {r[1] for r in self.db.execute("PRAGMA table_info(scenarios)")}
+            for name, kind in ADDED:
+                if name not in have:
+                    self.db.execute(f"ALTER TABLE scenarios ADD COLUMN {name} {kind}")
         except sqlite3.DatabaseError as e:
             raise StoreError(f"{path}: not a usable scenario store ({e})") from None
 
