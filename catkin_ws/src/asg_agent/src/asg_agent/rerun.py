@@ -13,6 +13,8 @@ import os
 import sys
 import time
 
+import numpy as np
+
 from .analysis import read_export
 from .proxy import compute, placed_mask
 
@@ -83,7 +85,8 @@ def summary(a) -> int:
         p = [r["proxy"] for r in rows if r["proxy"] is not None]
         out.append({"grid": grid, "stack": stack, "file": os.path.basename(path), "runs": len(rows),
                     "still_ge3": sum(v >= 3 for v in p), "dropped": sum(v < 3 for v in p),
-                    "errors": len(rows) - len(p)})
+                    "errors": len(rows) - len(p), "median_proxy": float(np.median(p)) if p else None,
+                    "campaign_median_proxy": float(np.median([r["campaign_proxy"] for r in rows]))})
     with open(a.json, "w") as f:
         json.dump({"summary": out}, f, indent=1)
     for s in out:
