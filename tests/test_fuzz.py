@@ -23,14 +23,16 @@ def test_short_fuzz_run_of_the_loaders():
     assert out["outcomes"].get("scenario ERROR/ERROR", 0) > 100
 
 
-@pytest.mark.parametrize("name,data,needle", [
-    ("latin1", open(os.path.join(fuzz_inputs.REPO, "scenarios", "exp1.yaml"), "rb").read().replace(b"name:", b"n\xe4me:", 1),
-     "not UTF-8 text (byte 0xe4"),
-    ("duplicate", open(os.path.join(fuzz_inputs.REPO, "scenarios", "exp1.yaml"), "rb").read() + b"\nname: again\n",
-     "given twice"),
-    ("deep", b"a: " + b"[" * 5000 + b"]" * 5000 + b"\n", ""),
+EXP1 = open(os.path.join(fuzz_inputs.REPO, "scenarios", "exp1.yaml"), "rb").read()
+
+
+@pytest.mark.parametrize("name,data,needle,cpp_needle", [
+    ("latin1", EXP1.replace(b"name:", b"n\xe4me:", 1), "not UTF-8 text (byte 0xe4", "not UTF-8 text (byte 0xe4"),
+    ("duplicate", EXP1 + b"\nname: again\n", "given twice", "given twice"),
+    ("deep", b"a: " + b"[" * 5000 + b"]" * 5000 + b"\n", "", ""),
+    ("control", EXP1.replace(b"name:", b"na\x18me:", 1), "#x0018", "control character YAML does not allow"),
 ])
-def test_both_loaders_refuse_with_their_own_error(tmp_path, name, data, needle):
+def test_both_loaders_refuse_with_their_own_error(tmp_path, name, data, needle, cpp_needle):
     from asg_scenario import ScenarioError, load_scenario
     path = tmp_path / f"{name}.yaml"
     path.write_bytes(data)
@@ -39,7 +41,7 @@ def test_both_loaders_refuse_with_their_own_error(tmp_path, name, data, needle):
     assert needle in str(e.value)
     r = subprocess.run([TOOL, str(path)], capture_output=True, text=True, errors="replace", timeout=60)
     assert r.returncode == 1, r.stdout + r.stderr
-    assert r.stdout.startswith("ERROR ") and needle in r.stdout
+    assert r.stdout.startswith("ERROR ") and cpp_needle in r.stdout
 
 
 def test_experiment_loader_refuses_bytes_and_duplicates(tmp_path):

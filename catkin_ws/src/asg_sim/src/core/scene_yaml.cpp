@@ -208,23 +208,30 @@ class Reader {
   int n_ = 0;
 };
 
-// Offset of the first byte that is not part of well-formed UTF-8, or npos (the Python loader
-// reads scenario files as UTF-8 and refuses anything else; so does this one).
-size_t firstBadUtf8(const std::string& s) {
+// Offset of the first byte that is not part of well-formed UTF-8, or of a character YAML does not
+// allow in a stream (C0/C1 controls other than tab, newline and carriage return, surrogates,
+// U+FFFE/U+FFFF); npos when there is none. The Python loader reads scenario files as UTF-8 and
+// PyYAML refuses those characters: this loader refuses the same files. *why says which.
+size_t firstBadCharacter(const std::string& s, std::string* why) {
   size_t i = 0;
   while (i < s.size()) {
     const unsigned char c = s[i];
-    int n = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
-    if (n < 0 || c == 0xc0 || c == 0xc1 || c > 0xf4 || i + n >= s.size() + (n == 0 ? 1 : 0)) return i;
-    for (int k = 1; k <= n; ++k)
-      if ((static_cast<unsigned char>(s[i + k]) >> 6) != 0x2) return i;
-    if (n == 2) {  // no surrogates, no overlong three-byte forms
-      const unsigned char d = s[i + 1];
-      if ((c == 0xe0 && d < 0xa0) || (c == 0xed && d >= 0xa0)) return i;
+    const int n = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
+    *why = "not UTF-8 text";
+    if (n < 0 || c == 0xc0 || c == 0xc1 || c > 0xf4 || (n > 0 && i + n >= s.size())) return i;
+    uint32_t cp = n == 0 ? c : n == 1 ? (c & 0x1f) : n == 2 ? (c & 0x0f) : (c & 0x07);
+    for (int k = 1; k <= n; ++k) {
+      const unsigned char d = s[i + k];
+      if ((d >> 6) != 0x2) return i;
+      cp = (cp << 6) | (d & 0x3f);
     }
-    if (n == 3) {
-      const unsigned char d = s[i + 1];
-      if ((c == 0xf0 && d < 0x90) || (c == 0xf4 && d >= 0x90)) return i;
+    if ((n == 2 && cp < 0x800) || (n == 3 && (cp < 0x10000 || cp > 0x10ffff)) || (cp >= 0xd800 && cp <= 0xdfff))
+      return i;  // overlong, out of range or a surrogate
+    const bool printable = cp == 0x9 || cp == 0xa || cp == 0xd || (cp >= 0x20 && cp <= 0x7e) || cp == 0x85 ||
+                           (cp >= 0xa0 && cp <= 0xd7ff) || (cp >= 0xe000 && cp <= 0xfffd) || cp >= 0x10000;
+    if (!printable) {
+      *why = "a control character YAML does not allow";
+      return i;
     }
     i += n + 1;
   }
@@ -259,12 +266,12 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot read the file");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const size_t bad = firstBadUtf8(text);
+  std::string why;
+  const size_t bad = firstBadCharacter(text, &why);
   if (bad != std::string::npos) {
-    char buf[96];
-    std::snprintf(buf, sizeof(buf), "not UTF-8 text (byte 0x%02x at offset %zu)",
-                  static_cast<unsigned char>(text[bad]), bad);
-    throw SceneError(path + ": " + buf);
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), " (byte 0x%02x at offset %zu)", static_cast<unsigned char>(text[bad]), bad);
+    throw SceneError(path + ": " + why + buf);
   }
   YAML::Node root;
   try {
