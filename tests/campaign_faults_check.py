@@ -58,7 +58,7 @@ class CampaignFaults(unittest.TestCase):
         planners = [su.node_pid("/worker_0/planner"), su.node_pid("/worker_1/planner")]
         for pid in planners:
             os.kill(pid, signal.SIGSTOP)
-        time.sleep(12.0)  # 3 attempts x 3 s command timeout, with the hand-overs
+        time.sleep(20.0)  # 3 attempts x 3 s timeout, with the hand-overs and room for a loaded machine
         for pid in planners:
             os.kill(pid, signal.SIGCONT)
         out, err = p.communicate(timeout=400)
