@@ -162,7 +162,8 @@ def bring_up_worker(stack: dict, port: int):
     os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     os.environ.setdefault("ROS_HOSTNAME", "127.0.0.1")
     cmd = ["roslaunch", "-p", str(port), os.path.join(repo, "launch", "worker.launch"), "ns:=replay_worker",
-           f"perception:={stack['perception']}", f"model:={stack['model']}", f"planner_config:={planner}"]
+           f"perception:={stack['perception']}", f"model:={stack['model']}", f"planner_config:={planner}",
+           "odom_every_tick:=true"]  # a replay is for looking at: every tick's pose in the bag
     print(f"replay: bringing up a worker: {' '.join(cmd[3:])}", file=sys.stderr)
     return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
 
