@@ -19,7 +19,7 @@ from asg_agent.store import Store  # noqa: E402
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
 ENV = dict(os.environ, PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src") + os.pathsep
            + os.environ.get("PYTHONPATH", ""))
-N = 120
+N = 200
 
 
 def cmd(store, name, *extra):
@@ -34,21 +34,28 @@ def test_random_kill_9_of_the_agent_then_resume_equals_an_uninterrupted_campaign
     rng = random.Random(14)
     store = Store(path)
     kills = 0
-    first = True
-    while kills < 8:
-        p = subprocess.Popen(cmd(path, "c", *([] if first else ["--resume"])), env=ENV,
+    # One kill during start-up, then seven when the store reaches random counts, each a few
+    # milliseconds later (so they land in store writes, learning and checkpoints alike).
+    schedule = [None] + sorted(rng.sample(range(2, N - 5), 7))
+    for k, at in enumerate(schedule):
+        p = subprocess.Popen(cmd(path, "c", *([] if k == 0 else ["--resume"])), env=ENV,
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        first = False
-        time.sleep(rng.uniform(1.0, 4.0))  # start-up takes about a second: some kills land before any work
+        if at is None:
+            time.sleep(rng.uniform(0.3, 1.2))
+        else:
+            deadline = time.time() + 120
+            while store.count("c") < at and p.poll() is None and time.time() < deadline:
+                time.sleep(0.002)
+            time.sleep(rng.uniform(0.0, 0.03))
         if p.poll() is not None:
-            break  # finished before the kill
+            continue  # it finished (or had stored past this mark) before the kill
         p.send_signal(signal.SIGKILL)
         p.wait()
         kills += 1
         assert store.integrity_ok()
     r = subprocess.run(cmd(path, "c", "--resume"), env=ENV, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert kills >= 3
+    assert kills >= 6
     assert store.integrity_ok()
     assert store.jobs("c") == list(range(N))  # none lost, none twice
     ref = Store(ref_path).content_digest("c")
