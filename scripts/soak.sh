@@ -1,34 +1,41 @@
 #!/usr/bin/env bash
 # Soak (issue #14): a long campaign with 2 workers (flawed U-Net) while scene workers, stack nodes
 # and the agent itself are killed with SIGKILL at random moments. The workers respawn (worker.launch);
-# the agent is restarted with --resume. At the end every scenario must be stored exactly once.
+# the agent is restarted with --resume. The soak lasts HOURS: at the end the killer stops, the agent
+# is killed a last time and resumed with its budget cut to the scenarios it has begun, so the
+# campaign drains and finishes. Then every scenario 0..N-1 must be stored exactly once.
 # Writes results/reliability/soak.json (scenarios, kills by kind, retries, lost, duplicates) and
 # prints it; docs/reliability.md quotes the last result.
-#   bash scripts/soak.sh [SCENARIOS=3000] [MIN_GAP_S=60] [MAX_GAP_S=240] [METHOD=random] [SEED=0]
-# About 2 hours with the defaults on a 2-core machine.
+#   [SOAK_EXTRA="--bc-weight 1.0"] bash scripts/soak.sh [HOURS=2] [MIN_GAP_S=60] [MAX_GAP_S=240] \
+#       [METHOD=random] [SEED=1] [EXP=exp1]        (SOAK_EXTRA: more campaign options)
+# The campaign is a valid campaign of METHOD on experiments/EXP.yaml (kills change nothing in what is stored), so
+# its export can serve as a search-comparison arm (docs/experiments.md).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-SCENARIOS="${1:-3000}"
+HOURS="${1:-2}"
 MIN_GAP="${2:-60}"
 MAX_GAP="${3:-240}"
 METHOD="${4:-random}"
-SEED="${5:-0}"
+SEED="${5:-1}"
+EXP="${6:-exp1}"
+BIG=1000000  # the budget while the kills go on: the clock, not the count, ends the first leg
 install_packages
 build_workspace ON
 export ROS_MASTER_URI="http://127.0.0.1:${ASG_SOAK_PORT:-11395}" ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
 export LP_NUM_THREADS=1 ROS_LOG_DIR="$REPO/runs/soak/logs"
 OUT="$REPO/results/reliability"
 STORE="${ASG_STORE:-$REPO/results/reliability/soak.sqlite}"
-NAME="soak-$METHOD-s$SEED"
+NAME="soak-$EXP-$METHOD-s$SEED"
 KILLS="$REPO/runs/soak/kills.log"
 mkdir -p "$OUT" "$ROS_LOG_DIR"
 : > "$KILLS"
+: > "$REPO/runs/soak/agent.log"
 roscore -p "${ROS_MASTER_URI##*:}" >/dev/null 2>&1 & core=$!
 sleep 3
 pids=()
 for w in 0 1; do
   roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" perception:=unet markers:=false >/dev/null 2>&1 & pids+=($!)
 done
-cleanup() { kill "${pids[@]}" 2>/dev/null; kill "$core" 2>/dev/null; kill "$killer" 2>/dev/null; }
+cleanup() { kill "${pids[@]}" "$core" "$killer" 2>/dev/null || true; }
 trap cleanup EXIT
 # The killer: every MIN_GAP..MAX_GAP seconds one victim, by kind in turn of a random draw.
 (
@@ -53,29 +60,49 @@ except Exception:
   done
 ) & killer=$!
 start=$(date +%s)
+deadline=$(( start + $(/usr/bin/python3 -c "print(int(float('$HOURS') * 3600))") ))
+agent() {  # agent BUDGET [--resume]
+  /usr/bin/python3 -m asg_agent.cli "$REPO/experiments/$EXP.yaml" --workers 2 --method "$METHOD" \
+      --seed "$SEED" --scenarios "$1" --store "$STORE" --name "$NAME" --no-progress ${SOAK_EXTRA:-} "${@:2}" \
+      >> "$REPO/runs/soak/agent.log" 2>&1
+}
 resume=()
-[ -f "$STORE" ] && resume=(--resume)
-until /usr/bin/python3 -m asg_agent.cli "$REPO/experiments/exp1.yaml" --workers 2 --method "$METHOD" \
-    --seed "$SEED" --scenarios "$SCENARIOS" --store "$STORE" --name "$NAME" --no-progress "${resume[@]}" \
-    >> "$REPO/runs/soak/agent.log" 2>&1; do
-  echo "$(date +%s) agent exited ($?): restarting with --resume" >> "$REPO/runs/soak/agent.log"
+/usr/bin/python3 -c "import sys; from asg_agent.store import Store; sys.exit(Store('$STORE').campaign('$NAME') is None)" \
+    2>/dev/null && resume=(--resume)
+# Leg 1: kills until the deadline; the agent is restarted with --resume whenever it dies.
+while [ "$(date +%s)" -lt "$deadline" ]; do
+  agent "$BIG" "${resume[@]}" & apid=$!
+  while kill -0 "$apid" 2>/dev/null && [ "$(date +%s)" -lt "$deadline" ]; do sleep 2; done
+  if kill -0 "$apid" 2>/dev/null; then
+    kill "$killer" 2>/dev/null || true
+    pkill -9 -f "asg_agent.cli .*--name $NAME" && echo "$(date +%s) agent-final $apid" >> "$KILLS"
+  fi
+  wait "$apid" 2>/dev/null || true
+  echo "$(date +%s) agent exited: restarting with --resume" >> "$REPO/runs/soak/agent.log"
   resume=(--resume)
   sleep 1
 done
+kill "$killer" 2>/dev/null || true
+# Leg 2: no more kills; the budget is cut to the scenarios begun, and the campaign drains.
+N=$(/usr/bin/python3 -c "from asg_agent.store import Store; print(max(Store('$STORE').jobs('$NAME')) + 1)")
+echo "$(date +%s) draining: budget cut to $N scenarios" >> "$REPO/runs/soak/agent.log"
+until agent "$N" --resume; do sleep 1; done
 end=$(date +%s)
-kill "$killer" 2>/dev/null
-/usr/bin/python3 - "$STORE" "$NAME" "$SCENARIOS" "$KILLS" "$start" "$end" "$OUT/soak.json" <<'EOF'
-import collections, json, sys
+kill "$killer" 2>/dev/null || true
+/usr/bin/python3 - "$STORE" "$NAME" "$N" "$KILLS" "$start" "$end" "$OUT/soak.json" <<'EOF'
+import collections, json, os, sys
 from asg_agent.store import Store
 store_path, name, n, kills_path, start, end, out = sys.argv[1:8]
 s = Store(store_path)
 rows = list(s.rows(name))
 jobs = [r["job"] for r in rows]
 kinds = collections.Counter(line.split()[1].split("/")[-1] for line in open(kills_path) if line.strip())
+restarts = sum("restarting" in line for line in open(os.path.join(os.path.dirname(kills_path), "agent.log")))
 res = {"campaign": name, "scenarios_expected": int(n), "scenarios_stored": len(rows),
        "lost": len(set(range(int(n))) - set(jobs)), "duplicates": len(jobs) - len(set(jobs)),
        "integrity_ok": s.integrity_ok(), "hours": round((int(end) - int(start)) / 3600, 2),
        "kills": dict(kinds), "kills_total": sum(kinds.values()),
+       "agent_restarts": restarts, "finished": bool(s.campaign(name)["finished"]),
        "retried_scenarios": sum(1 for r in rows if r["attempts"] > 1),
        "stored_as_error": sum(1 for r in rows if r["termination"] == "ERROR")}
 json.dump(res, open(out, "w"), indent=1)

@@ -91,6 +91,41 @@ def test_interrupted_mid_episode_and_resumed_equals_uninterrupted(tmp_path):
     assert store.content_digest("cut") == store.content_digest("ref")
 
 
+def test_resume_with_a_cut_budget_stores_every_job_below_it_once(tmp_path):
+    """The soak's ending: a campaign with a large budget is interrupted, then resumed with its
+    budget cut to the scenarios begun; it finishes with jobs 0..T-1 stored exactly once."""
+    store = Store(str(tmp_path / "store.sqlite"))
+    first = campaign(tmp_path, "cut", DyingPool(23, workers=2, seed=5), total=1000, store=store)
+    first.start()
+    with pytest.raises(Interrupt):
+        first.run()
+    cut = max(store.jobs("cut")) + 1
+    second = campaign(tmp_path, "cut", FakePool(2, seed=6), total=cut, store=store)
+    second.resume()
+    second.run()
+    assert store.jobs("cut") == list(range(cut))
+    assert store.campaign("cut")["finished"]
+
+
+def test_a_finished_campaign_is_extended_by_a_resume_with_a_larger_budget(tmp_path):
+    store = Store(str(tmp_path / "store.sqlite"))
+    first = campaign(tmp_path, "ext", FakePool(2, seed=1), total=20, store=store)
+    first.start()
+    first.run()
+    assert store.jobs("ext") == list(range(20))
+    second = campaign(tmp_path, "ext", FakePool(3, seed=2), total=45, store=store)
+    second.resume()
+    second.run()
+    assert store.jobs("ext") == list(range(45))
+    again = campaign(tmp_path, "ext2", FakePool(2, seed=3), total=20, store=store)
+    again.start()
+    again.run()
+    third = campaign(tmp_path, "ext2", FakePool(1, seed=4), total=45, store=store)
+    third.resume()
+    third.run()
+    assert store.content_digest("ext") == store.content_digest("ext2")  # the extension repeats
+
+
 def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
     env = dict(os.environ, PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src") + os.pathsep
                + os.environ.get("PYTHONPATH", ""))

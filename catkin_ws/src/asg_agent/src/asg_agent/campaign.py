@@ -151,8 +151,21 @@ class Campaign:
                 setattr(self, key, ck[key])
             self.slot_state = ck["slot_state"]
             self.pending = {j["job"]: Job(**j) for j in ck["pending"]}
+            # A resume may cut the budget (the soak ends its campaign that way): proposals at or
+            # past the new total are dropped, never run.
+            for j in [j for j in self.pending if j >= self.total]:
+                del self.pending[j]
+            self.next_job = min(self.next_job, max(self.total, self.next_apply))
             self.queue = sorted(self.pending)
             self.ref_queue = sorted(self.pending) if self.reference is not None else []
+            # A resume may also raise the budget of a finished (or cut) campaign: slots left
+            # without a proposal by the old budget propose again, in slot order. The extension
+            # is deterministic given the stored history (not the same scenarios a campaign run
+            # at the larger budget from the start would have proposed).
+            busy = {j.slot for j in self.pending.values()}
+            for s in range(self.slots):
+                if s not in busy:
+                    self._propose(s)
         # Results stored after the checkpoint are applied as the interrupted run applied them.
         for row in self.store.rows(self.name, self.next_apply - 1):
             self.finished[row["job"]] = dict(row)
