@@ -4,7 +4,8 @@
 # missing and builds first; prints a progress bar, then the summary and where the store is.
 #   bash scripts/train.sh [SCENARIOS] [extra launch args, e.g. method:=random seed:=1 resume:=true]
 # Default 150 scenarios (about 8 minutes on a 2-core machine). Idempotent: a finished campaign is
-# reported, an unfinished one resumed (resume:=true).
+# reported, an unfinished one resumed (resume:=true). ASG_LAUNCH=differential runs
+# launch/differential.launch instead (2 workers under test, 2 reference workers).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SCENARIOS="${1:-150}"
 shift || true
@@ -19,6 +20,6 @@ LOG="$REPO/runs/train/logs"
 mkdir -p "$LOG" "$(dirname "$STORE")"
 export ROS_LOG_DIR="$LOG"
 log "campaign: $SCENARIOS Exp. 1 scenarios, flawed U-Net, 2 workers (worker logs: $LOG)"
-roslaunch -p "${ROS_MASTER_URI##*:}" "$REPO/launch/train.launch" scenarios:="$SCENARIOS" \
+roslaunch -p "${ROS_MASTER_URI##*:}" "$REPO/launch/${ASG_LAUNCH:-train}.launch" scenarios:="$SCENARIOS" \
     store:="$STORE" "$@"
 log "store: $STORE (docs/agent.md: schema, resume, reading it)"
