@@ -36,6 +36,10 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
     for arm, info in summary["comparison"].items():
         for run in info["runs"]:
             assert run["ge3"] <= run["scenarios"]
+        # The per-window counts of an arm's first run add up to its count at the budget.
+        windows = summary["dynamics"][arm]
+        assert sum(w["ge3"] for w in windows) == info["runs"][0]["ge3"]
+        assert all(0.0 <= w["at_edge"] <= 1.0 and w["median_to_route_m"] >= 0.0 for w in windows)
     with open(os.path.join(REPO, "docs", "experiments.md")) as f:
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")

@@ -72,6 +72,29 @@ def distinct(rows, top: int, threshold: float) -> int:
     return len(kept)
 
 
+def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]:
+    """Where the search placed obstacles, window by window in job order: proxy >= 3 count, the
+    share of obstacle coordinates within 2 m of the landscape's edge (a saturated action), and the
+    median distance [m] of the obstacles from the straight start-goal segment."""
+    rows = sorted(rows, key=lambda r: r["job"])[:budget]
+    if not rows:
+        return []
+    req = scenario_of(campaign, rows[0])
+    size = float(req["structural"]["landscape"]["size"])
+    op = req["operational"]
+    a, b = np.array([op["start_x"], op["start_y"]]), np.array([op["goal_x"], op["goal_y"]])
+    out = []
+    for i in range(0, len(rows), window):
+        chunk = rows[i:i + window]
+        p = np.concatenate([np.asarray(r["positions"], float).reshape(-1, 2) for r in chunk])
+        t = np.clip((p - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
+        dist = np.linalg.norm(p - (a + t[:, None] * (b - a)), axis=1)
+        edge = np.minimum(p, size - p).min(axis=1) < 2.0
+        out.append({"from": i + 1, "to": i + len(chunk), "ge3": int(sum((r["proxy"] or 0) >= 3 for r in chunk)),
+                    "at_edge": float(edge.mean()), "median_to_route_m": float(np.median(dist))})
+    return out
+
+
 def scenario_of(campaign: dict, row: dict) -> dict:
     """The request of an exported row: the experiment's fixed attributes with its positions."""
     from asg_scenario.layout import with_positions
@@ -162,6 +185,25 @@ def run(manifest_path: str, out: str) -> dict:
                       + ", ".join(str(int(r["curve"][-1] - r["curve"][budget // 2 - 1])) for r in runs
                                   if r["scenarios"] >= budget) + " |")
         comparison_figure(curves, budget, os.path.join(out, "search_comparison.png"))
+        # Where each arm's first run placed its obstacles as it went.
+        dyn = {}
+        for arm, rels in comp["arms"].items():
+            camp, rows = load(rels[0])
+            dyn[arm] = (camp["name"], dynamics(camp, rows, budget))
+        summary["dynamics"] = {arm: d for arm, (_, d) in dyn.items()}
+        names = list(dyn)
+        md += ["", "### Search dynamics (first run of each arm, per 100 scenarios: proxy >= 3 / obstacles "
+               "within 2 m of the edge / median distance of obstacles from the start-goal line)", "",
+               "| scenarios | " + " | ".join(f"{a} ({dyn[a][0]})" for a in names) + " |",
+               "|---|" + "---|" * len(names)]
+        for k in range(max(len(d) for _, d in dyn.values())):
+            cells = []
+            for a in names:
+                d = dyn[a][1]
+                cells.append(f"{d[k]['ge3']} / {100 * d[k]['at_edge']:.0f}% / {d[k]['median_to_route_m']:.1f} m"
+                             + ("" if d[k]["to"] - d[k]["from"] == 99 else f" (of {d[k]['to'] - d[k]['from'] + 1})")
+                             if k < len(d) else "-")
+            md.append(f"| {k * 100 + 1}-{(k + 1) * 100} | " + " | ".join(cells) + " |")
     # -- diversity -------------------------------------------------------------------------------
     div = man.get("diversity") or {}
     if div.get("arms") and curves:
