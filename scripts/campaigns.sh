@@ -10,6 +10,10 @@ PLAN="${1:-$REPO/results/campaign_plan.txt}"
 ONLY="${2:-.}"
 STORE_DEFAULT="$REPO/results/campaigns/exp11.sqlite"
 [ -f "$PLAN" ] || { echo "campaigns.sh: no plan file $PLAN" >&2; exit 2; }
+if [ -z "${ASG_DRY:-}" ]; then
+  install_packages
+  build_workspace ON
+fi
 while read -r name scenarios launch args; do
   [[ -z "$name" || "$name" == \#* ]] && continue
   [[ "$name" =~ $ONLY ]] || continue
