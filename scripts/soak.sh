@@ -89,22 +89,5 @@ echo "$(date +%s) draining: budget cut to $N scenarios" >> "$REPO/runs/soak/agen
 until agent "$N" --resume; do sleep 1; done
 end=$(date +%s)
 kill "$killer" 2>/dev/null || true
-/usr/bin/python3 - "$STORE" "$NAME" "$N" "$KILLS" "$start" "$end" "$OUT/soak.json" <<'EOF'
-import collections, json, os, sys
-from asg_agent.store import Store
-store_path, name, n, kills_path, start, end, out = sys.argv[1:8]
-s = Store(store_path)
-rows = list(s.rows(name))
-jobs = [r["job"] for r in rows]
-kinds = collections.Counter(line.split()[1].split("/")[-1] for line in open(kills_path) if line.strip())
-restarts = sum("restarting" in line for line in open(os.path.join(os.path.dirname(kills_path), "agent.log")))
-res = {"campaign": name, "scenarios_expected": int(n), "scenarios_stored": len(rows),
-       "lost": len(set(range(int(n))) - set(jobs)), "duplicates": len(jobs) - len(set(jobs)),
-       "integrity_ok": s.integrity_ok(), "hours": round((int(end) - int(start)) / 3600, 2),
-       "kills": dict(kinds), "kills_total": sum(kinds.values()),
-       "agent_restarts": restarts, "finished": bool(s.campaign(name)["finished"]),
-       "retried_scenarios": sum(1 for r in rows if r["attempts"] > 1),
-       "stored_as_error": sum(1 for r in rows if r["termination"] == "ERROR")}
-json.dump(res, open(out, "w"), indent=1)
-print(json.dumps(res, indent=1))
-EOF
+/usr/bin/python3 "$REPO/scripts/soak_report.py" "$STORE" "$NAME" "$N" "$KILLS" "$REPO/runs/soak/agent.log" \
+    "$start" "$end" "$OUT/soak.json"

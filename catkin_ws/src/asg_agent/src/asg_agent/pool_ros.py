@@ -45,8 +45,13 @@ def result_to_outcome(job: int, worker: str, result, wall: float) -> Outcome:
 
 
 class WorkerPool(Pool):
-    def __init__(self, namespaces: List[str], answer_timeout: float = 300.0, connect_timeout: float = 120.0):
+    def __init__(self, namespaces: List[str], answer_timeout: float = 300.0, connect_timeout: float = 120.0,
+                 ack_timeout: float = 20.0):
         self.answer_timeout = answer_timeout
+        # A goal the worker's action server has not acknowledged this long after it went out was
+        # dropped (sent to a scene worker that had just respawned): re-queued without waiting for
+        # answer_timeout. The 2-hour soak lost 3 x 300 s of a worker that way.
+        self.ack_timeout = ack_timeout
         # The plain ActionClient: one handle per goal, so a late status of an earlier goal can never
         # be taken for the current one (SimpleActionClient tracks a single goal per client).
         self.clients: Dict[str, actionlib.ActionClient] = {}
@@ -110,6 +115,8 @@ class WorkerPool(Pool):
             wall = time.time() - t0
             status, result = gh.get_goal_status(), gh.get_result()
             if result is None or status not in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED):
+                with self.lock:  # the server went away (LOST): let it come back before the next goal
+                    self.down[worker] = time.time()
                 self.results.put(Outcome(job=job, worker=worker, termination="ERROR", wall_time=wall,
                                          error=f"{worker}: goal ended {STATUS.get(status, status)} without a result"))
             else:
@@ -155,6 +162,11 @@ class WorkerPool(Pool):
         now = time.time()
         dead = set(self._dead_workers(now))
         with self.lock:
+            waiting = [(ns, state) for ns, (job, state, t0) in self.busy.items()
+                       if now - t0 > self.ack_timeout and state["handle"] is not None]
+        # Outside self.lock (see transition): goals the server never acknowledged.
+        unacked = {ns for ns, state in waiting if state["handle"].get_comm_state() == CommState.WAITING_FOR_GOAL_ACK}
+        with self.lock:
             stale = []
             for ns, (job, state, t0) in list(self.busy.items()):
                 if ns in dead:
@@ -164,6 +176,13 @@ class WorkerPool(Pool):
                     rospy.logerr("pool: %s's scene worker died during job %d: re-queued", ns, job)
                     out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
                                        error=f"{ns}: the scene worker died during the run"))
+                elif ns in unacked:
+                    del self.busy[ns]
+                    self.down[ns] = now
+                    stale.append(state["handle"])
+                    rospy.logerr("pool: %s never acknowledged job %d within %.0f s: re-queued", ns, job, self.ack_timeout)
+                    out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
+                                       error=f"{ns} never acknowledged the goal within {self.ack_timeout:.0f} s"))
                 elif now - t0 > self.answer_timeout:
                     del self.busy[ns]
                     self.down[ns] = now
