@@ -15,7 +15,7 @@ from asg_agent.store import Store  # noqa: E402
 
 REASONS = [("scene worker died", r"scene worker died"), ("planner silent", r"planner: no command"),
            ("segmenter silent", r"segmenter: no labels"), ("goal lost", r"goal ended LOST"),
-           ("no answer in time", r"did not answer")]
+           ("no answer in time", r"did not answer"), ("never acknowledged", r"never acknowledged")]
 
 
 def main(argv):

@@ -170,26 +170,19 @@ class WorkerPool(Pool):
             stale = []
             for ns, (job, state, t0) in list(self.busy.items()):
                 if ns in dead:
-                    del self.busy[ns]
-                    self.down[ns] = now
-                    stale.append(state["handle"])
-                    rospy.logerr("pool: %s's scene worker died during job %d: re-queued", ns, job)
-                    out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
-                                       error=f"{ns}: the scene worker died during the run"))
+                    why = "the scene worker died during the run"
                 elif ns in unacked:
-                    del self.busy[ns]
-                    self.down[ns] = now
-                    stale.append(state["handle"])
-                    rospy.logerr("pool: %s never acknowledged job %d within %.0f s: re-queued", ns, job, self.ack_timeout)
-                    out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
-                                       error=f"{ns} never acknowledged the goal within {self.ack_timeout:.0f} s"))
+                    why = f"never acknowledged the goal within {self.ack_timeout:.0f} s"
                 elif now - t0 > self.answer_timeout:
-                    del self.busy[ns]
-                    self.down[ns] = now
-                    stale.append(state["handle"])
-                    rospy.logerr("pool: %s did not answer job %d within %.0f s: re-queued", ns, job, self.answer_timeout)
-                    out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
-                                       error=f"{ns} did not answer within {self.answer_timeout:.0f} s"))
+                    why = f"did not answer within {self.answer_timeout:.0f} s"
+                else:
+                    continue
+                del self.busy[ns]
+                self.down[ns] = now
+                stale.append(state["handle"])
+                rospy.logerr("pool: %s, job %d: %s: re-queued", ns, job, why)
+                out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
+                                   error=f"{ns}: {why}"))
         for gh in stale:  # outside self.lock (see transition)
             if gh is not None:
                 gh.cancel()
