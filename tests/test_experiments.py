@@ -44,3 +44,43 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")
     assert quoted == generated, "docs/experiments.md is stale: run `python3 -m asg_agent.experiments`"
+    if "differential" in summary:
+        d = summary["differential"]
+        camp, rows = read_export(os.path.join(REPO, "results", d["export"]))
+        both = [r for r in rows if r["reward"] is not None]
+        assert d["both_runs"] == len(both) and d["scenarios"] == len(rows)
+        assert d["regressions"]["1"] == sum(r["reward"] >= 1 for r in both)
+        assert sum(d["cross"].values()) == len(both)
+        assert sum(w["regressions_1"] for w in d["windows"]) == d["regressions"]["1"]
+
+
+def test_differential_counts_on_a_known_export(tmp_path):
+    """The differential section's counts, on an export whose reference runs are made up: twelve
+    scenarios of a real Exp. 1 campaign, each given a reference proxy at a known offset."""
+    import gzip
+    import json
+    camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
+    rows = sorted(rows, key=lambda r: r["job"])[:12]
+    offsets = [0.0, 0.0, 0.0, 0.5, -0.5, 1.0, 1.5, 2.5, 3.5, -1.2, -2.4, None]  # reward = proxy - reference
+    for r, off in zip(rows, offsets):
+        ref = None if off is None else r["proxy"] - off
+        r["reference"] = {"proxy": ref, "vis": r["vis"], "yaw_term": r["yaw_term"], "plr": r["plr"],
+                          "termination": "SUCCESS" if off is None or off < 2 else "COLLISION", "sim_time": 10.0,
+                          "trajectory_xy": r["trajectory_xy"][::2]}
+        r["reward"] = None if off is None else r["proxy"] - ref
+    with gzip.open(tmp_path / "d.jsonl.gz", "wt") as f:
+        f.write(json.dumps({"campaign": dict(camp, name="synthetic-diff")}) + "\n")
+        for r in rows:
+            f.write(json.dumps(r) + "\n")
+    (tmp_path / "m.yaml").write_text("differential: {export: d.jsonl.gz, under_test: flawed, reference: full}\n")
+    d = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["differential"]
+    assert (d["scenarios"], d["both_runs"], d["same"]) == (12, 11, 3)
+    assert d["regressions"] == {"1": 4, "2": 2, "3": 1} and d["reverse"] == {"1": 2, "2": 1, "3": 0}
+    assert abs(d["max_reward"] - 3.5) < 1e-9 and abs(d["min_reward"] + 2.4) < 1e-9
+    assert d["top"][0]["reward"] == d["max_reward"] and len(d["top"]) == 10
+    from collections import Counter
+    assert d["terminations"] == dict(Counter(f"{r['termination']} / {r['reference']['termination']}"
+                                             for r in rows[5:9]))
+    assert sum(d["cross"].values()) == 11
+    assert os.path.getsize(tmp_path / "out" / "differential_top.png") > 10000
+    assert "synthetic-diff" in (tmp_path / "out" / "tables.md").read_text()

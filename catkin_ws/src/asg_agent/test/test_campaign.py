@@ -202,5 +202,8 @@ def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
             assert ref["worker"].startswith("/fake_ref_")
             assert abs(r["reward"] - (r["proxy"] - ref["proxy"])) < 1e-12
         assert any(r["reward"] > 0 for r in rows)  # the wigglier stack scores higher somewhere
+        st = c.status()  # the progress bar's differential figures agree with the store
+        assert st["diff_ge1"] == sum(r["reward"] >= 1 for r in rows)
+        assert abs(st["diff_best"] - max(r["reward"] for r in rows)) < 1e-12
         digests.append([(r["job"], r["proxy"], r["reward"], r["request"]) for r in rows])
     assert digests[0] == digests[1]

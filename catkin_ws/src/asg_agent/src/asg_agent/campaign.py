@@ -118,7 +118,10 @@ class Campaign:
         self.next_apply = 0
         self.next_episode = 0
         self.episodes_done = 0
-        self.stats = {"best": -math.inf, "ge3": 0, "ge4": 0, "errors": 0, "retries": 0}
+        # best/ge3/ge4: the proxy of the stack under test; diff_best/diff_ge1: differential
+        # campaigns' reward (proxy - reference proxy), its largest and how often it reached 1.
+        self.stats = {"best": -math.inf, "ge3": 0, "ge4": 0, "errors": 0, "retries": 0,
+                      "diff_best": -math.inf, "diff_ge1": 0}
         self.t0 = time.time()
         self.done_at_start = 0
         self.stages = Stages()
@@ -147,8 +150,9 @@ class Campaign:
                 self._propose(s)
         else:
             self.method.load_state_dict(ck["method"])
-            for key in ("next_job", "next_apply", "next_episode", "episodes_done", "stats"):
+            for key in ("next_job", "next_apply", "next_episode", "episodes_done"):
                 setattr(self, key, ck[key])
+            self.stats.update(ck["stats"])  # checkpoints older than a stats key keep its default
             self.slot_state = ck["slot_state"]
             self.pending = {j["job"]: Job(**j) for j in ck["pending"]}
             # A resume may cut the budget (the soak ends its campaign that way): proposals at or
@@ -316,6 +320,9 @@ class Campaign:
             self.stats["best"] = max(self.stats["best"], terms.proxy)
             self.stats["ge3"] += terms.proxy >= 3
             self.stats["ge4"] += terms.proxy >= 4
+            if self.reference is not None:
+                self.stats["diff_best"] = max(self.stats["diff_best"], reward)
+                self.stats["diff_ge1"] += reward >= 1
         else:
             self.stats["errors"] += 1
         if self.progress:
@@ -368,4 +375,6 @@ class Campaign:
         elapsed = max(1e-6, time.time() - self.t0)
         return {"done": stored, "total": self.total, "rate_per_hour": (stored - self.done_at_start) / elapsed * 3600,
                 "best": self.stats["best"], "ge3": self.stats["ge3"], "ge4": self.stats["ge4"],
-                "errors": self.stats["errors"], "retries": self.stats["retries"]}
+                "errors": self.stats["errors"], "retries": self.stats["retries"],
+                "diff_best": self.stats["diff_best"] if self.reference is not None else None,
+                "diff_ge1": self.stats["diff_ge1"] if self.reference is not None else None}

@@ -175,7 +175,10 @@ def main(argv=None):
             return
         bar.n = st["done"]
         best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
-        bar.set_postfix_str(f"{st['rate_per_hour']:.0f}/h best {best} >=3 {st['ge3']} >=4 {st['ge4']}"
+        diff = ""
+        if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
+            diff = f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
+        bar.set_postfix_str(f"{st['rate_per_hour']:.0f}/h best {best} >=3 {st['ge3']} >=4 {st['ge4']}{diff}"
                             + (f" err {st['errors']}" if st["errors"] else ""), refresh=True)
 
     settings = {"workers": workers, "reference_workers": ref_workers, "experiment_file": exp.source, "perception": exp.perception,

@@ -9,10 +9,11 @@ The manifest names which export serves which table (paths relative to the manife
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
     diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0}
     flaw_or_layout: flaw_or_layout.json                  # from `asg_agent.rerun` (optional)
-    differential: campaigns/D.jsonl.gz                   # a --reference-workers campaign (optional)
+    differential: {export: campaigns/D.jsonl.gz, under_test: flawed, reference: full}
+                                                         # a --reference-workers campaign (optional)
 
 Writes OUT/tables.md (the tables, quoted in docs/experiments.md), OUT/search_comparison.png,
-OUT/top_EXP.png and OUT/summary.json (every count, read back by the tests).
+OUT/top_EXP.png, OUT/differential_{top,curve}.png and OUT/summary.json (every count, read back by the tests).
 """
 import argparse
 import json
@@ -118,6 +119,104 @@ def top_figure(campaign: dict, rows, out: str) -> dict:
     return {"job": r["job"], "proxy": r["proxy"], "figure": os.path.basename(out)}
 
 
+DIFF_MARGINS = (1.0, 2.0, 3.0)  # a regression: the stack under test's proxy exceeds the reference's by this
+
+
+def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_png: str, window: int = 100) -> dict:
+    """What a differential campaign found. Each row holds both runs of one scenario: the stack
+    under test's proxy and terms, and the reference stack's (`reference`); the reward is their
+    difference. Counts regressions (reward >= each of DIFF_MARGINS), the reverse, how often the two
+    runs score the same, how the proxy >= 3 verdicts of the two stacks cross, the top 10 by reward
+    with their terms and terminations, and the rate per window of scenarios (did the search learn
+    where the two stacks differ?); draws the rank-1 scenario with both trajectories and the count
+    of regressions against scenarios spent."""
+    both = sorted((r for r in rows if r["reward"] is not None and r.get("reference")), key=lambda r: r["job"])
+    rw = np.array([r["reward"] for r in both])
+    pt = np.array([r["proxy"] for r in both])
+    pr = np.array([r["reference"]["proxy"] for r in both])
+    out = {"scenarios": len(rows), "both_runs": len(both), "under_test": test, "reference": ref,
+           "same": int((np.abs(rw) < 0.01).sum()),
+           "regressions": {f"{m:g}": int((rw >= m).sum()) for m in DIFF_MARGINS},
+           "reverse": {f"{m:g}": int((rw <= -m).sum()) for m in DIFF_MARGINS},
+           "max_reward": float(rw.max()) if len(rw) else None, "min_reward": float(rw.min()) if len(rw) else None,
+           "mean_reward": float(rw.mean()) if len(rw) else None,
+           "cross": {"test_ge3_ref_lt3": int(((pt >= 3) & (pr < 3)).sum()),
+                     "test_lt3_ref_ge3": int(((pt < 3) & (pr >= 3)).sum()),
+                     "both_ge3": int(((pt >= 3) & (pr >= 3)).sum()), "neither": int(((pt < 3) & (pr < 3)).sum())},
+           "terminations": {}, "windows": [], "top": []}
+    for r in both:
+        if r["reward"] >= DIFF_MARGINS[0]:
+            key = f"{r['termination']} / {r['reference']['termination']}"
+            out["terminations"][key] = out["terminations"].get(key, 0) + 1
+    for i in range(0, len(both), window):
+        w = rw[i:i + window]
+        out["windows"].append({"from": i + 1, "to": i + len(w), "mean_reward": float(w.mean()),
+                               "regressions_1": int((w >= 1).sum()), "reverse_1": int((w <= -1).sum()),
+                               "same": int((np.abs(w) < 0.01).sum())})
+    for r in sorted(both, key=lambda r: -r["reward"])[:10]:
+        f = r["reference"]
+        out["top"].append({"job": r["job"], "reward": r["reward"],
+                           "test": {k: r[k] for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")},
+                           "ref": {k: f.get(k) for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")}})
+    if both:
+        r = max(both, key=lambda r: r["reward"])
+        f = r["reference"]
+        req = scenario_of(campaign, r)
+        from asg_scenario.report import plot_run
+        from .proxy import optimal_path, placed_mask
+        opt = optimal_path(req, placed_mask(req, r.get("removed") or []))
+        title = (f"{campaign['name']}, rank 1 by proxy difference (job {r['job']})\n{test}: proxy {r['proxy']:.2f} "
+                 f"(yaw {r['yaw_term']:.2f}, PLR {r['plr']:.3f}), {r['termination']}\n{ref}: proxy {f['proxy']:.2f} "
+                 f"(yaw {f['yaw_term']:.2f}, PLR {f['plr']:.3f}), {f['termination']}")
+        plot_run(top_png, req, r["trajectory_xy"], title=title, optimal=opt.points, label=f"{test} U-Net",
+                 removed={(l, i) for l, i, *_ in (r.get("removed") or [])},
+                 others=[(f"{ref} U-Net (reference)", f["trajectory_xy"], "tab:green")])
+        out["top_figure"] = os.path.basename(top_png)
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(6.4, 3.6))
+        x = np.arange(1, len(rw) + 1)
+        for m in DIFF_MARGINS:
+            ax.plot(x, np.cumsum(rw >= m), label=f"{test} worse by >= {m:g}")
+        ax.plot(x, np.cumsum(rw <= -DIFF_MARGINS[0]), "--", color="0.4", label=f"{ref} worse by >= {DIFF_MARGINS[0]:g}")
+        ax.set_xlabel("scenarios spent (each run on both stacks)")
+        ax.set_ylabel("count")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        ax.set_title(f"{campaign['name']}: proxy({test}) - proxy({ref})", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(curve_png, dpi=120)
+        plt.close(fig)
+    return out
+
+
+def differential_tables(campaign: dict, d: dict) -> List[str]:
+    t, f = d["under_test"], d["reference"]
+    md = ["", f"### Differential campaign ({campaign['name']}: {t} U-Net under test, {f} U-Net as reference, "
+              f"reward = proxy({t}) - proxy({f}))", "",
+          f"| scenarios (both runs) | same proxy (within 0.01) | {t} worse by >= 1 / 2 / 3 | {f} worse by >= 1 / 2 / 3 "
+          f"| largest difference | mean | {t} >= 3, {f} < 3 | {f} >= 3, {t} < 3 | both >= 3 |", "|" + "---|" * 9,
+          f"| {d['both_runs']} (of {d['scenarios']}) | {d['same']} | "
+          + " / ".join(str(v) for v in d["regressions"].values()) + " | "
+          + " / ".join(str(v) for v in d["reverse"].values()) + f" | {fmt(d['max_reward'])} | {fmt(d['mean_reward'], '+.3f')} | "
+          f"{d['cross']['test_ge3_ref_lt3']} | {d['cross']['test_lt3_ref_ge3']} | {d['cross']['both_ge3']} |",
+          "", f"Terminations ({t} / {f}) of the scenarios where {t} is worse by >= 1: "
+          + (", ".join(f"{k} {v}" for k, v in sorted(d["terminations"].items(), key=lambda kv: -kv[1])) or "none") + ".",
+          "", f"| scenarios | mean difference | {t} worse by >= 1 | {f} worse by >= 1 | same proxy |", "|---|---|---|---|---|"]
+    for w in d["windows"]:
+        md.append(f"| {w['from']}-{w['to']} | {w['mean_reward']:+.3f} | {w['regressions_1']} | {w['reverse_1']} | {w['same']} |")
+    md += ["", f"| job | difference | {t}: proxy (vis, yaw term, PLR), end | {f}: proxy (vis, yaw term, PLR), end |",
+           "|---|---|---|---|"]
+    for r in d["top"]:
+        cells = []
+        for s in (r["test"], r["ref"]):
+            cells.append(f"{fmt(s['proxy'])} ({fmt(s['vis'], '+.2f')}, {fmt(s['yaw_term'])}, {fmt(s['plr'], '.3f')}), "
+                         f"{s['termination']} at {fmt(s['sim_time'], '.1f')} s")
+        md.append(f"| {r['job']} | {r['reward']:+.2f} | {cells[0]} | {cells[1]} |")
+    return md
+
+
 def fmt(v, spec=".2f"):
     return "-" if v is None else format(v, spec)
 
@@ -136,8 +235,10 @@ def run(manifest_path: str, out: str) -> dict:
 
     summary, md = {"table2": {}, "comparison": {}, "diversity": {}}, []
     # -- Table 2 ---------------------------------------------------------------------------------
-    md += ["### Table 2", "", "| experiment | scenarios | proxy >= 3 | >= 4 | largest | per 1,000: >= 3 / >= 4 "
-           "| paper (of 5,000): >= 3 / >= 4 / largest | paper per 1,000 | wall time | workers |", "|" + "---|" * 10]
+    if man.get("table2"):
+        md += ["### Table 2", "", "| experiment | scenarios | proxy >= 3 | >= 4 | largest | per 1,000: >= 3 / >= 4 "
+               "| paper (of 5,000): >= 3 / >= 4 / largest | paper per 1,000 | wall time | workers |",
+               "|" + "---|" * 10]
     for exp, rel in (man.get("table2") or {}).items():
         camp, rows = load(rel)
         c = counts(rows)
@@ -229,6 +330,15 @@ def run(manifest_path: str, out: str) -> dict:
         for s in fol["summary"]:
             md.append(f"| {s['grid']} | {s['stack']} | {s['runs']} | {s['still_ge3']} | {s['dropped']} | "
                       f"{fmt(s.get('median_proxy'))} ({fmt(s.get('campaign_median_proxy'))}) |")
+    diff = man.get("differential")
+    if diff:
+        diff = {"export": diff} if isinstance(diff, str) else dict(diff)
+        camp, rows = load(diff["export"])
+        d = differential(camp, rows, diff.get("under_test", "under test"), diff.get("reference", "reference"),
+                         os.path.join(out, "differential_top.png"), os.path.join(out, "differential_curve.png"))
+        d["export"] = diff["export"]
+        summary["differential"] = d
+        md += differential_tables(camp, d)
     with open(os.path.join(out, "tables.md"), "w") as f:
         f.write("<!-- generated by `python3 -m asg_agent.experiments`; do not edit -->\n" + "\n".join(md) + "\n")
     with open(os.path.join(out, "summary.json"), "w") as f:

@@ -39,13 +39,17 @@ def write_result_yaml(path: str, result: dict):
 
 def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: str = "",
              removed: Optional[set] = None, background=None, votes=None, vote_cell: float = 0.0,
-             optimal: Optional[Sequence[Sequence[float]]] = None):
+             optimal: Optional[Sequence[Sequence[float]]] = None, label: str = "vehicle",
+             others: Sequence[tuple] = ()):
     """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory.
 
     background: optional HxWx3 uint8 rendering of [0, size]^2 (row 0 at y = size) drawn below.
     votes: optional list of {x, y, weight 0..1} vote-grid vertices, drawn as squares of side
     vote_cell [m] (yellow to red by weight).
     optimal: optional polyline of the optimal path, drawn dashed.
+    label: the legend's name for the trajectory xy.
+    others: more trajectories to draw under it, as (label, xy, colour) tuples (e.g. the same
+    scenario driven by a reference stack).
     """
     import matplotlib
     matplotlib.use("Agg")
@@ -53,6 +57,7 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
     from matplotlib.patches import Circle
 
     removed = removed or set()
+    vehicle_label = label
     size = scenario["structural"]["landscape"]["size"]
     op = scenario["operational"]
     fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
@@ -85,9 +90,13 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
     if optimal is not None and len(optimal):
         ax.plot([p[0] for p in optimal], [p[1] for p in optimal], "--", color="0.15", lw=1.2,
                 label="optimal path")
+    for other_label, other_xy, colour in others:
+        if len(other_xy):
+            ax.plot([p[0] for p in other_xy], [p[1] for p in other_xy], "-", color=colour, lw=1.5,
+                    label=other_label)
     if len(xy):
         ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="magenta", lw=1.8,
-                label="vehicle")
+                label=vehicle_label)
     ax.set_xlim(-2, size + 2)
     ax.set_ylim(-2, size + 2)
     ax.set_aspect("equal")
