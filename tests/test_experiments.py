@@ -52,6 +52,7 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
         assert d["regressions"]["1"] == sum(r["reward"] >= 1 for r in both)
         assert sum(d["cross"].values()) == len(both)
         assert sum(w["regressions_1"] for w in d["windows"]) == d["regressions"]["1"]
+        assert d["divergence"]["parted"] + d["divergence"]["never"] == len(both)
 
 
 def test_differential_counts_on_a_known_export(tmp_path):
@@ -82,5 +83,25 @@ def test_differential_counts_on_a_known_export(tmp_path):
     assert d["terminations"] == dict(Counter(f"{r['termination']} / {r['reference']['termination']}"
                                              for r in rows[5:9]))
     assert sum(d["cross"].values()) == 11
+    # Made-up reference runs drive every second sample of the real path, so they part from it
+    # (except where the vehicle stood still), and the parting pairs are sorted by the sign.
+    dv = d["divergence"]
+    assert dv["parted"] + dv["never"] == 11 and dv["parted"] >= 1
+    assert sum(e["pairs"] for e in dv["by_sign"].values()) == dv["parted"]
     assert os.path.getsize(tmp_path / "out" / "differential_top.png") > 10000
     assert "synthetic-diff" in (tmp_path / "out" / "tables.md").read_text()
+
+
+def test_shadow_ahead_sees_a_cast_shadow_in_front_not_behind():
+    """Exp. 1's sun (35 degrees up, yaw 150) casts a juniper's shadow 6.4 m towards +x, -y: a
+    vehicle 10 m before the tree and driving at it has the shadow ahead; driving away, it has not."""
+    import numpy as np
+    camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
+    r = dict(rows[0])
+    r["positions"] = [[95.0, 95.0]] * len(r["positions"])
+    r["positions"][r["meshes"].index("juniper")] = [50.0, 50.0]
+    req = experiments.scenario_of(camp, r)
+    towards = np.array([[40.0 + 0.5 * k, 51.0] for k in range(30)])
+    away = towards[::-1] - np.array([20.0, 0.0])
+    assert experiments.shadow_ahead(req, towards, 0)
+    assert not experiments.shadow_ahead(req, away, 0)

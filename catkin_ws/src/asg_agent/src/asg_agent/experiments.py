@@ -158,6 +158,7 @@ def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_
         out["top"].append({"job": r["job"], "reward": r["reward"],
                            "test": {k: r[k] for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")},
                            "ref": {k: f.get(k) for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")}})
+    out["divergence"] = divergence(campaign, both)
     if both:
         r = max(both, key=lambda r: r["reward"])
         f = r["reference"]
@@ -191,6 +192,55 @@ def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_
     return out
 
 
+def shadow_ahead(req: dict, xy: np.ndarray, i: int, reach: float = 20.0, half_width: float = 5.0) -> bool:
+    """Whether an obstacle's cast shadow lies in the corridor `reach` m ahead of trajectory point i
+    (heading from the point 1 s later), `half_width` m to either side: ground the camera sees."""
+    from asg_scenario.votes import in_cast_shadow
+    j = min(len(xy) - 1, i + 10)
+    h = xy[j] - xy[i] if j > i else xy[i] - xy[max(0, i - 10)]
+    if np.linalg.norm(h) < 1e-6:
+        return False
+    h = h / np.linalg.norm(h)
+    n = np.array([-h[1], h[0]])
+    return any(in_cast_shadow(req, *(xy[i] + a * h + b * n)) for a in np.arange(1.0, reach + 0.5, 1.0)
+               for b in np.arange(-half_width, half_width + 0.5, 1.0))
+
+
+def divergence(campaign: dict, rows, gap: float = 0.5, lead: int = 20, seed: int = 0) -> dict:
+    """Where the two runs of a differential campaign part: the first 10 Hz sample at which the
+    stacks' positions are more than `gap` m apart. Counts, by the sign of the difference, how often
+    an obstacle's cast shadow lay ahead of the vehicle `lead` samples (2 s) before that point, and
+    the same share at a random sample of the runs that never part (a control: how common shadows
+    ahead are anyway)."""
+    rng = np.random.default_rng(seed)
+    out = {"parted": 0, "never": 0, "by_sign": {}, "control": {"samples": 0, "shadow_ahead": 0}}
+    for r in rows:
+        if r["reward"] is None or not r.get("reference"):
+            continue
+        a = np.asarray(r["trajectory_xy"], float)
+        b = np.asarray(r["reference"]["trajectory_xy"], float)
+        n = min(len(a), len(b))
+        far = np.nonzero(np.linalg.norm(a[:n] - b[:n], axis=1) > gap)[0]
+        req = scenario_of(campaign, r)
+        if not len(far):
+            out["never"] += 1
+            if n > 1:
+                out["control"]["samples"] += 1
+                out["control"]["shadow_ahead"] += shadow_ahead(req, a, int(rng.integers(0, n - 1)))
+            continue
+        out["parted"] += 1
+        sign = "test worse by >= 1" if r["reward"] >= 1 else ("reference worse by >= 1" if r["reward"] <= -1
+                                                               else "within 1")
+        e = out["by_sign"].setdefault(sign, {"pairs": 0, "shadow_ahead": 0, "parted_at_m": []})
+        e["pairs"] += 1
+        i = max(0, int(far[0]) - lead)
+        e["shadow_ahead"] += shadow_ahead(req, a, i)
+        e["parted_at_m"].append(float(np.linalg.norm(np.diff(a[:far[0] + 1], axis=0), axis=1).sum()))
+    for e in out["by_sign"].values():
+        e["median_parted_at_m"] = float(np.median(e.pop("parted_at_m")))
+    return out
+
+
 def differential_tables(campaign: dict, d: dict) -> List[str]:
     t, f = d["under_test"], d["reference"]
     md = ["", f"### Differential campaign ({campaign['name']}: {t} U-Net under test, {f} U-Net as reference, "
@@ -203,7 +253,18 @@ def differential_tables(campaign: dict, d: dict) -> List[str]:
           f"{d['cross']['test_ge3_ref_lt3']} | {d['cross']['test_lt3_ref_ge3']} | {d['cross']['both_ge3']} |",
           "", f"Terminations ({t} / {f}) of the scenarios where {t} is worse by >= 1: "
           + (", ".join(f"{k} {v}" for k, v in sorted(d["terminations"].items(), key=lambda kv: -kv[1])) or "none") + ".",
-          "", f"| scenarios | mean difference | {t} worse by >= 1 | {f} worse by >= 1 | same proxy |", "|---|---|---|---|---|"]
+          "", f"Where the two runs part (first point more than 0.5 m apart): {d['divergence']['parted']} pairs part, "
+          f"{d['divergence']['never']} drive the same path. An obstacle's cast shadow lay within 20 m ahead (10 m "
+          "wide corridor) 2 s before they part in:", "",
+          "| pairs that part | pairs | shadow ahead 2 s before parting | median distance driven when they part |",
+          "|---|---|---|---|"]
+    for sign, e in sorted(d["divergence"]["by_sign"].items()):
+        md.append(f"| {sign.replace('test', t).replace('reference', f)} | {e['pairs']} | {e['shadow_ahead']} "
+                  f"({100 * e['shadow_ahead'] / e['pairs']:.0f}%) | {e['median_parted_at_m']:.1f} m |")
+    c = d["divergence"]["control"]
+    md += [f"| control: a random point of the pairs that never part | {c['samples']} | {c['shadow_ahead']} "
+           + (f"({100 * c['shadow_ahead'] / c['samples']:.0f}%)" if c["samples"] else "") + " | - |",
+           "", f"| scenarios | mean difference | {t} worse by >= 1 | {f} worse by >= 1 | same proxy |", "|---|---|---|---|---|"]
     for w in d["windows"]:
         md.append(f"| {w['from']}-{w['to']} | {w['mean_reward']:+.3f} | {w['regressions_1']} | {w['reverse_1']} | {w['same']} |")
     md += ["", f"| job | difference | {t}: proxy (vis, yaw term, PLR), end | {f}: proxy (vis, yaw term, PLR), end |",
