@@ -231,7 +231,8 @@ class Campaign:
             self._apply_ready()
         if self.next_apply >= self.total:
             self._checkpoint()
-            self.store.finish_campaign(self.name)
+            if self.store.count(self.name) > self.done_at_start or self.store.campaign(self.name)["finished"] is None:
+                self.store.finish_campaign(self.name)  # a resumed finished campaign keeps its time
         return self.store.summary(self.name)
 
     def _dispatch(self):
