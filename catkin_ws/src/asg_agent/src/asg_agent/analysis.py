@@ -47,7 +47,10 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
     if c is None:
         raise ValueError(f"no campaign {campaign!r} in {store.path}")
     n = 0
-    with gzip.open(out, "wt", encoding="utf-8") as f:
+    import io
+    # mtime 0 and no file name in the gzip header: the same campaign exports to the same bytes.
+    with open(out, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz, \
+            io.TextIOWrapper(gz, encoding="utf-8") as f:
         f.write(json.dumps({"campaign": c}) + "\n")
         for r in store.rows(campaign):
             req = json.loads(r["request"])
