@@ -10,6 +10,7 @@ scenarios take a minute), reporting the fraction of action coordinates at the ed
 range (|a| >= 0.99, an obstacle within 0.5 % of the landscape's border) per 100 scenarios.
 """
 import argparse
+import io
 import json
 import os
 import sys
@@ -47,7 +48,6 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
     if c is None:
         raise ValueError(f"no campaign {campaign!r} in {store.path}")
     n = 0
-    import io
     # mtime 0 and no file name in the gzip header: the same campaign exports to the same bytes.
     with open(out, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz, \
             io.TextIOWrapper(gz, encoding="utf-8") as f:

@@ -347,7 +347,7 @@ def run(manifest_path: str, out: str) -> dict:
                       + ", ".join(str(int(r["curve"][-1] - r["curve"][budget // 2 - 1])) for r in runs
                                   if r["scenarios"] >= budget) + " |")
         comparison_figure(curves, budget, os.path.join(out, "search_comparison.png"))
-        # Where each arm's first run placed its obstacles as it went.
+        # Where every run placed its obstacles as it went (the summary keeps each arm's first).
         dyn = {}
         for arm, rels in comp["arms"].items():
             for k, rel in enumerate(rels):
