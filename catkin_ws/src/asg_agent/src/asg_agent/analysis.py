@@ -3,6 +3,12 @@
     python3 -m asg_agent.analysis asp-effect [--scenarios 1000] [--seeds 3] [--out PNG] [--json OUT]
     python3 -m asg_agent.analysis export STORE CAMPAIGN OUT.jsonl.gz
     python3 -m asg_agent.analysis summary EXPORT.jsonl.gz [...]
+    python3 -m asg_agent.analysis park STORE CAMPAIGN OUT.tar.gz
+    python3 -m asg_agent.analysis unpark STORE PARKED.tar.gz
+    python3 -m asg_agent.analysis complete EXPORT.jsonl.gz SCENARIOS   # exit 0: finished, that many
+
+`park` packs an unfinished campaign (its rows and its checkpoint) into one file to carry to
+another machine or checkout; `unpark` puts it back into a store, and `--resume` goes on from it.
 
 `asp-effect` measures what the action saturation penalty does: TD3-PER with and without it,
 run against the in-process stand-in simulator (fake_pool: cheap, so several seeds of 1,000
@@ -19,7 +25,7 @@ from typing import List
 
 import numpy as np
 
-from .store import Store, unpack_trajectory
+from .store import Store, StoreError, checkpoint_path, park, unpack_trajectory, unpark
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -152,7 +158,37 @@ def main(argv=None):
     fg.add_argument("--out", default="figures", help="folder for CAMPAIGN_jobN.png")
     sm = sub.add_parser("summary", help="counts of exported campaigns")
     sm.add_argument("exports", nargs="+")
+    pk = sub.add_parser("park", help="pack an unfinished campaign (rows and checkpoint) into one tar.gz")
+    pk.add_argument("store")
+    pk.add_argument("campaign")
+    pk.add_argument("out")
+    pk.add_argument("--unfinished-only", action="store_true",
+                    help="do nothing (exit 0) for a campaign the store lacks or that has finished")
+    cp = sub.add_parser("complete", help="exit 0 when an export is of a finished campaign of >= SCENARIOS")
+    cp.add_argument("export")
+    cp.add_argument("scenarios", type=int)
+    up = sub.add_parser("unpark", help="put a parked campaign back into a store (left alone if it holds it)")
+    up.add_argument("store")
+    up.add_argument("parked")
     args = p.parse_args(argv)
+    if args.cmd in ("park", "unpark"):
+        try:
+            if args.cmd == "park":
+                store = Store(args.store)
+                c = store.campaign(args.campaign)
+                if args.unfinished_only and (c is None or c["finished"]):
+                    print(f"{args.campaign}: " + ("not in the store" if c is None else "finished") + "; not parked")
+                    return 0
+                n = park(store, args.campaign, checkpoint_path(args.store, args.campaign), args.out)
+                print(f"{args.out}: campaign {args.campaign}, {n} scenarios and its checkpoint")
+            else:
+                n = unpark(Store(args.store), args.parked)
+                print(f"{args.parked}: " + ("the store already holds this campaign; left alone" if n is None
+                                            else f"{n} scenarios and the checkpoint restored into {args.store}"))
+        except StoreError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        return 0
     if args.cmd == "export":
         n = export(Store(args.store), args.campaign, args.out)
         print(f"{args.out}: {n} scenarios")
@@ -165,6 +201,11 @@ def main(argv=None):
             top_down(store, args.campaign, r["job"], path)
             print(path)
         return 0
+    if args.cmd == "complete":
+        if not os.path.isfile(args.export):
+            return 1
+        c, rows = read_export(args.export)
+        return 0 if c["finished"] and len(rows) >= args.scenarios else 1
     if args.cmd == "summary":
         for path in args.exports:
             c, rows = read_export(path)

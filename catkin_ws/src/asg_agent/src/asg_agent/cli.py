@@ -20,7 +20,7 @@ import time
 from .campaign import Campaign
 from .experiment import ExperimentError, load_experiment
 from .search import METHODS, make_method
-from .store import Store, StoreError
+from .store import Store, StoreError, checkpoint_path
 from .td3 import TD3Config
 
 
@@ -164,7 +164,7 @@ def main(argv=None):
         td3.updates_per_step = a.updates_per_step
     td3.bc_weight = a.bc_weight
     method = make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3)
-    checkpoint = os.path.splitext(os.path.abspath(a.store))[0] + f".{name}.ckpt"
+    checkpoint = checkpoint_path(a.store, name)
     bar = None
     if not a.no_progress:
         from tqdm import tqdm

@@ -9,6 +9,7 @@ Tables (docs/agent.md has every column):
 """
 import json
 import os
+import shutil
 import sqlite3
 import time
 import zlib
@@ -159,3 +160,96 @@ class Store:
         return [tuple(r) for r in self.db.execute(
             "SELECT job, episode, step, scenario_id, request, termination, proxy, vis, yaw_term, plr, sim_time, "
             "num_control_msgs, trajectory FROM scenarios WHERE campaign = ? ORDER BY job", (campaign,))]
+
+
+# -- parking: carrying an unfinished campaign from one machine (or checkout) to another ------------
+# A campaign is resumable only with its store rows and its checkpoint. `park` writes both into one
+# tar.gz (a one-campaign SQLite store and the checkpoint file), small enough to commit; `unpark`
+# puts them back into a store and beside it, and the campaign then resumes as if never moved.
+
+def park(store: "Store", campaign: str, checkpoint: str, out: str) -> int:
+    """Writes campaign `campaign` of `store` (its campaign row and every scenario row) and its
+    checkpoint file into the tar.gz `out`. Returns the number of scenario rows parked."""
+    import tarfile
+    import tempfile
+    if store.campaign(campaign) is None:
+        raise StoreError(f"no campaign {campaign!r} in {store.path} to park")
+    if not os.path.isfile(checkpoint):
+        raise StoreError(f"{checkpoint}: no checkpoint for campaign {campaign!r} (nothing to resume from)")
+    with tempfile.TemporaryDirectory() as tmp:
+        one = os.path.join(tmp, "store.sqlite")
+        Store(one).close()  # the schema
+        db = sqlite3.connect(one, isolation_level=None)
+        try:
+            db.execute("ATTACH DATABASE ? AS src", (os.path.abspath(store.path),))
+            db.execute("INSERT INTO campaigns SELECT * FROM src.campaigns WHERE name = ?", (campaign,))
+            cols = ", ".join(COLUMNS)
+            db.execute(f"INSERT INTO scenarios ({cols}) SELECT {cols} FROM src.scenarios WHERE campaign = ? "
+                       f"ORDER BY job", (campaign,))
+            n = db.execute("SELECT COUNT(*) FROM scenarios").fetchone()[0]
+            db.execute("DETACH DATABASE src")
+            db.execute("PRAGMA journal_mode=DELETE")
+            db.execute("VACUUM")
+        finally:
+            db.close()
+        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+        part = out + ".part"
+        with tarfile.open(part, "w:gz") as tar:
+            for path, arc in ((one, "store.sqlite"), (checkpoint, "checkpoint.ckpt")):
+                info = tar.gettarinfo(path, arc)
+                info.mtime, info.uid, info.gid, info.uname, info.gname = 0, 0, 0, "", ""
+                with open(path, "rb") as f:
+                    tar.addfile(info, f)
+        os.replace(part, out)
+    return n
+
+
+def checkpoint_path(store_path: str, campaign: str) -> str:
+    """Where a campaign's checkpoint lives: beside its store, STORE.CAMPAIGN.ckpt."""
+    return os.path.splitext(os.path.abspath(store_path))[0] + f".{campaign}.ckpt"
+
+
+def unpark(store: "Store", parked: str, checkpoint_for=None) -> Optional[int]:
+    """Puts a parked campaign back: its rows into `store`, its checkpoint to
+    checkpoint_for(campaign name). A store that already holds the campaign is left alone (returns
+    None): it is the newer copy. Otherwise returns the number of scenario rows restored."""
+    import tarfile
+    import tempfile
+    try:
+        tar = tarfile.open(parked, "r:gz")
+    except (OSError, tarfile.TarError) as e:
+        raise StoreError(f"{parked}: not a parked campaign ({e})") from None
+    with tempfile.TemporaryDirectory() as tmp, tar:
+        names = set(tar.getnames())
+        if names != {"store.sqlite", "checkpoint.ckpt"}:
+            raise StoreError(f"{parked}: not a parked campaign (holds {sorted(names)}, expected store.sqlite and "
+                             f"checkpoint.ckpt)")
+        for name in names:
+            with tar.extractfile(name) as src, open(os.path.join(tmp, name), "wb") as dst:
+                dst.write(src.read())
+        one = Store(os.path.join(tmp, "store.sqlite"))
+        rows = one.db.execute("SELECT name FROM campaigns").fetchall()
+        one.close()
+        if len(rows) != 1:
+            raise StoreError(f"{parked}: holds {len(rows)} campaigns, expected 1")
+        campaign = rows[0][0]
+        if store.campaign(campaign) is not None:
+            return None
+        cols = ", ".join(COLUMNS)
+        db = store.db
+        db.execute("ATTACH DATABASE ? AS src", (os.path.join(tmp, "store.sqlite"),))
+        try:
+            db.execute("BEGIN")
+            db.execute("INSERT INTO campaigns SELECT * FROM src.campaigns")
+            db.execute(f"INSERT INTO scenarios ({cols}) SELECT {cols} FROM src.scenarios ORDER BY job")
+            db.execute("COMMIT")
+        except sqlite3.DatabaseError as e:
+            db.execute("ROLLBACK")
+            raise StoreError(f"{parked}: could not be restored into {store.path} ({e})") from None
+        finally:
+            db.execute("DETACH DATABASE src")
+        target = (checkpoint_for or (lambda c: checkpoint_path(store.path, c)))(campaign)
+        os.makedirs(os.path.dirname(os.path.abspath(target)), exist_ok=True)
+        shutil.copyfile(os.path.join(tmp, "checkpoint.ckpt"), target + ".part")
+        os.replace(target + ".part", target)
+        return store.count(campaign)
