@@ -7,7 +7,7 @@
 #   ASG_PARK=1 bash scripts/campaigns.sh    # park the unfinished ones (to commit; see below)
 # A campaign whose committed export is finished at its budget is skipped, also on a fresh clone
 # without the store. A campaign resumes only from its store rows and checkpoint, which a fresh
-# clone lacks: ASG_PARK=1 packs each unfinished one into results/parked/NAME.tar.gz (a few MB, to
+# clone lacks: ASG_PARK=1 packs each unfinished one into results/parked/NAME.tar.xz (a few MB, to
 # commit), and the next run here or on another clone unparks it first and goes on from there.
 # About 45 minutes per 1,000 Exp. 1 scenarios on a 2-core machine, 75 for Exp. 2-4.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -35,19 +35,19 @@ while read -r name scenarios launch args; do
   done
   export_file="$REPO/results/campaigns/$name.jsonl.gz"
   if [ -n "${ASG_PARK:-}" ]; then
-    [ -f "$store" ] && analysis park --unfinished-only "$store" "$name" "$PARKED/$name.tar.gz"
+    [ -f "$store" ] && analysis park --unfinished-only "$store" "$name" "$PARKED/$name.tar.xz"
     continue
   fi
-  if [ ! -f "$PARKED/$name.tar.gz" ] && [ -z "${ASG_DRY:-}" ] && analysis complete "$export_file" "$scenarios"; then
+  if [ ! -f "$PARKED/$name.tar.xz" ] && [ -z "${ASG_DRY:-}" ] && analysis complete "$export_file" "$scenarios"; then
     log "campaign $name: finished at $scenarios scenarios (export $export_file); skipped"
     continue
   fi
   log "campaign $name: $scenarios scenarios ($launch.launch ${largs[*]}; store $store)"
   [ -n "${ASG_DRY:-}" ] && continue  # ASG_DRY=1: list what would run
-  [ -f "$PARKED/$name.tar.gz" ] && analysis unpark "$store" "$PARKED/$name.tar.gz"
+  [ -f "$PARKED/$name.tar.xz" ] && analysis unpark "$store" "$PARKED/$name.tar.xz"
   ASG_LAUNCH="$launch" ASG_STORE="$store" bash "$REPO/scripts/train.sh" "$scenarios" name:="$name" \
       resume:=true "${largs[@]}" < /dev/null
   analysis export "$store" "$name" "$export_file"
   # Finished: the export is the record, the parked copy is spent.
-  if analysis complete "$export_file" "$scenarios"; then rm -f "$PARKED/$name.tar.gz"; fi
+  if analysis complete "$export_file" "$scenarios"; then rm -f "$PARKED/$name.tar.xz"; fi
 done < "$PLAN"

@@ -104,7 +104,7 @@ def test_parked_on_one_machine_and_resumed_on_another_equals_uninterrupted(tmp_p
     with pytest.raises(Interrupt):
         first.run()
     stored = first.store.count("cut")
-    parked = str(tmp_path / "parked" / "cut.tar.gz")
+    parked = str(tmp_path / "parked" / "cut.tar.xz")
     assert park(first.store, "cut", str(here / "cut.ckpt"), parked) == stored
     with open(parked, "rb") as f:
         once = f.read()
@@ -126,14 +126,14 @@ def test_parked_on_one_machine_and_resumed_on_another_equals_uninterrupted(tmp_p
 def test_park_and_unpark_refuse_bad_input_by_name(tmp_path):
     store = Store(str(tmp_path / "store.sqlite"))
     with pytest.raises(StoreError, match="no campaign 'nope'"):
-        park(store, "nope", str(tmp_path / "x.ckpt"), str(tmp_path / "p.tar.gz"))
+        park(store, "nope", str(tmp_path / "x.ckpt"), str(tmp_path / "p.tar.xz"))
     c = campaign(tmp_path, "c", FakePool(2, seed=1), total=8)
     c.start()
     with pytest.raises(StoreError, match="no checkpoint"):
-        park(store, "c", str(tmp_path / "missing.ckpt"), str(tmp_path / "p.tar.gz"))
-    junk = tmp_path / "junk.tar.gz"
+        park(store, "c", str(tmp_path / "missing.ckpt"), str(tmp_path / "p.tar.xz"))
+    junk = tmp_path / "junk.tar.xz"
     junk.write_bytes(b"not a tar file")
-    with pytest.raises(StoreError, match="junk.tar.gz: not a parked campaign"):
+    with pytest.raises(StoreError, match="junk.tar.xz: not a parked campaign"):
         unpark(store, str(junk))
 
 

@@ -3,8 +3,8 @@
     python3 -m asg_agent.analysis asp-effect [--scenarios 1000] [--seeds 3] [--out PNG] [--json OUT]
     python3 -m asg_agent.analysis export STORE CAMPAIGN OUT.jsonl.gz
     python3 -m asg_agent.analysis summary EXPORT.jsonl.gz [...]
-    python3 -m asg_agent.analysis park STORE CAMPAIGN OUT.tar.gz
-    python3 -m asg_agent.analysis unpark STORE PARKED.tar.gz
+    python3 -m asg_agent.analysis park STORE CAMPAIGN OUT.tar.xz
+    python3 -m asg_agent.analysis unpark STORE PARKED.tar.xz
     python3 -m asg_agent.analysis complete EXPORT.jsonl.gz SCENARIOS   # exit 0: finished, that many
 
 `park` packs an unfinished campaign (its rows and its checkpoint) into one file to carry to
@@ -158,7 +158,7 @@ def main(argv=None):
     fg.add_argument("--out", default="figures", help="folder for CAMPAIGN_jobN.png")
     sm = sub.add_parser("summary", help="counts of exported campaigns")
     sm.add_argument("exports", nargs="+")
-    pk = sub.add_parser("park", help="pack an unfinished campaign (rows and checkpoint) into one tar.gz")
+    pk = sub.add_parser("park", help="pack an unfinished campaign (rows and checkpoint) into one tar.xz")
     pk.add_argument("store")
     pk.add_argument("campaign")
     pk.add_argument("out")
