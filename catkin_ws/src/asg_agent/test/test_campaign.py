@@ -230,6 +230,34 @@ def test_export_summary_and_report_agree_with_the_store(tmp_path):
     assert os.path.isfile(tmp_path / "report" / "curves.png")
 
 
+def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input(tmp_path, capsys):
+    """What scripts/campaigns.sh asks before running a plan line: `complete` exits 0 only for the
+    export of a finished campaign holding at least the budget; `park` and `unpark` exit 2 naming
+    what is wrong."""
+    from asg_agent.analysis import export, main
+    c = campaign(tmp_path, "done", FakePool(2, seed=8), total=12, method="random")
+    c.start()
+    c.run()
+    out = str(tmp_path / "done.jsonl.gz")
+    export(c.store, "done", out)
+    assert main(["complete", out, "12"]) == 0
+    assert main(["complete", out, "13"]) == 1  # a larger budget than it ran: not done
+    assert main(["complete", str(tmp_path / "none.jsonl.gz"), "12"]) == 1
+    cut = campaign(tmp_path, "cut", DyingPool(9, workers=2, seed=5), total=40, store=c.store)
+    cut.start()
+    with pytest.raises(Interrupt):
+        cut.run()
+    export(c.store, "cut", str(tmp_path / "cut.jsonl.gz"))
+    assert main(["complete", str(tmp_path / "cut.jsonl.gz"), "1"]) == 1  # unfinished
+    store = c.store.path
+    assert main(["park", "--unfinished-only", store, "done", str(tmp_path / "p.tar.xz")]) == 0
+    assert not os.path.exists(tmp_path / "p.tar.xz") and "finished; not parked" in capsys.readouterr().out
+    assert main(["park", store, "nope", str(tmp_path / "p.tar.xz")]) == 2
+    assert "no campaign 'nope'" in capsys.readouterr().err
+    assert main(["unpark", store, str(tmp_path / "done.jsonl.gz")]) == 2
+    assert "not a parked campaign" in capsys.readouterr().err
+
+
 def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
     """--reference-workers: every scenario runs on both stacks (here stand-ins that wiggle 0.8 and
     0.3 m per nearby obstacle); the stored reward is the proxy difference, the reference run is
