@@ -9,7 +9,7 @@
 # without the store. A campaign resumes only from its store rows and checkpoint, which a fresh
 # clone lacks: ASG_PARK=1 packs each unfinished one into results/parked/NAME.tar.xz (a few MB, to
 # commit), and the next run here or on another clone unparks it first and goes on from there.
-# About 45 minutes per 1,000 Exp. 1 scenarios on a 2-core machine (annealing and random: 55), about
+# About 45 minutes per 1,000 Exp. 1 scenarios on a 2-core machine (annealing: about 55), about
 # 100 for Exp. 3 (docs/experiments.md, Table 2 wall times).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 PLAN="${1:-$REPO/results/campaign_plan.txt}"
