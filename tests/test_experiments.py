@@ -105,3 +105,31 @@ def test_shadow_ahead_sees_a_cast_shadow_in_front_not_behind():
     away = towards[::-1] - np.array([20.0, 0.0])
     assert experiments.shadow_ahead(req, towards, 0)
     assert not experiments.shadow_ahead(req, away, 0)
+
+
+def test_distinct_counts_clusters_of_near_copies_once():
+    """Three layouts, each with near copies 0.5-1.5 m away and one 3 m away: at 2 m the far copies
+    count as layouts of their own, at 5 m only the three; the fast distance equals the Hungarian one."""
+    import numpy as np
+    rng = np.random.default_rng(4)
+    meshes = ["juniper"] * 4 + ["barberry"] * 4
+    bases = [rng.uniform(0, 100, (8, 2)) for _ in range(3)]
+    rows, proxy = [], 9.0
+    for b in bases:
+        for shift in (0.0, 0.5, 1.0, 1.5, 3.0):
+            # a copy: each obstacle moved by `shift` in a random direction, the order within a type shuffled
+            ang = rng.uniform(0, 2 * np.pi, 8)
+            p = b + shift * np.c_[np.cos(ang), np.sin(ang)]
+            p[:4], p[4:] = p[:4][rng.permutation(4)], p[4:][rng.permutation(4)]
+            rows.append({"proxy": proxy, "positions": p.tolist(), "meshes": meshes})
+            proxy -= 0.1
+    rows.append({"proxy": 1.0, "positions": rng.uniform(0, 100, (8, 2)).tolist(), "meshes": meshes})
+    rows.append({"proxy": None, "positions": rows[0]["positions"], "meshes": meshes})
+    assert experiments.distinct(rows, None, 5.0, min_proxy=3.0) == 3
+    assert experiments.distinct(rows, None, 2.0, min_proxy=3.0) == 6
+    assert experiments.distinct(rows, None, 5.0) == 4  # the low-proxy stranger counts without the floor
+    assert experiments.distinct(rows, 5, 2.0) == 2  # the top 5 are the first layout's copies
+    for a in rows[:15]:
+        fast = experiments.layout_distances(a["positions"], [r["positions"] for r in rows[:15]], meshes)
+        slow = [experiments.layout_distance(a["positions"], r["positions"], meshes) for r in rows[:15]]
+        assert np.allclose(fast, slow)

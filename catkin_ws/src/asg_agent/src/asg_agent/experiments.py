@@ -7,7 +7,7 @@ The manifest names which export serves which table (paths relative to the manife
 
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
-    diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0}
+    diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0, all_thresholds_m: [2, 5, 10]}
     flaw_or_layout: flaw_or_layout.json                  # from `asg_agent.rerun` (optional)
     differential: {export: campaigns/D.jsonl.gz, under_test: flawed, reference: full}
                                                          # a --reference-workers campaign (optional)
@@ -20,7 +20,7 @@ import json
 import math
 import os
 import sys
-from typing import Dict, List
+from typing import Dict, List, Optional
 
 import numpy as np
 import yaml
@@ -62,14 +62,37 @@ def layout_distance(a, b, meshes) -> float:
     return total / len(meshes)
 
 
-def distinct(rows, top: int, threshold: float) -> int:
-    """Distinct layouts among the `top` highest-proxy rows: in rank order, a layout is new when
-    its layout_distance to every new one before it exceeds `threshold` metres."""
-    ranked = sorted((r for r in rows if r["proxy"] is not None), key=lambda r: -r["proxy"])[:top]
+def layout_distances(a, others, meshes) -> np.ndarray:
+    """layout_distance from layout `a` to each layout of `others` (K x N x 2) at once: exact,
+    by trying every matching within a type where a type has at most 6 obstacles, by the
+    Hungarian assignment per layout otherwise."""
+    import itertools
+    a, others = np.asarray(a, float), np.asarray(others, float).reshape(-1, len(meshes), 2)
+    total = np.zeros(len(others))
+    for m in sorted(set(meshes)):
+        idx = [i for i, x in enumerate(meshes) if x == m]
+        d = np.linalg.norm(others[:, idx][:, :, None, :] - a[idx][None, None, :, :], axis=3)  # K x n(other) x n(a)
+        if len(idx) <= 6:
+            perms = np.array(list(itertools.permutations(range(len(idx)))))
+            total += d[:, np.arange(len(idx))[None, :], perms].sum(axis=2).min(axis=1)
+        else:
+            from scipy.optimize import linear_sum_assignment
+            for k in range(len(others)):
+                r, c = linear_sum_assignment(d[k])
+                total[k] += d[k][r, c].sum()
+    return total / len(meshes)
+
+
+def distinct(rows, top: Optional[int], threshold: float, min_proxy: float = -np.inf) -> int:
+    """Distinct layouts among the `top` highest-proxy rows (all of them when `top` is None) with
+    proxy >= `min_proxy`: in rank order, a layout is new when its layout_distance to every new one
+    before it exceeds `threshold` metres."""
+    ranked = sorted((r for r in rows if r["proxy"] is not None and r["proxy"] >= min_proxy),
+                    key=lambda r: -r["proxy"])[:top]
     kept = []
     for r in ranked:
-        if all(layout_distance(r["positions"], k["positions"], r["meshes"]) > threshold for k in kept):
-            kept.append(r)
+        if not kept or layout_distances(r["positions"], kept, r["meshes"]).min() > threshold:
+            kept.append(np.asarray(r["positions"], float))
     return len(kept)
 
 
@@ -371,16 +394,23 @@ def run(manifest_path: str, out: str) -> dict:
     div = man.get("diversity") or {}
     if div.get("arms") and curves:
         top, thr = int(div.get("top", 100)), float(div.get("threshold_m", 5.0))
-        md += ["", f"### Diversity of the top {top} (distinct layouts at > {thr:g} m mean matched displacement)", "",
-               "| method | run | distinct among the top %d | of which proxy >= 3 |" % top, "|---|---|---|---|"]
+        thrs = [float(t) for t in div.get("all_thresholds_m", [thr])]
+        md += ["", "### Diversity (a layout is distinct when its mean matched displacement from every higher-ranked "
+               "distinct one exceeds the threshold)", "",
+               "| method | run | distinct among the top %d at %g m | of which proxy >= 3 | proxy >= 3 in all "
+               "| distinct among all with proxy >= 3, at %s m |" % (top, thr, " / ".join(f"{t:g}" for t in thrs)),
+               "|---|---|---|---|---|---|"]
         for arm in div["arms"]:
             for rel in (comp["arms"].get(arm) or [])[:1]:
                 camp, rows = load(rel)
                 rows = sorted(rows, key=lambda r: r["job"])[:budget]
                 n = distinct(rows, top, thr)
                 ge3 = sum((r["proxy"] or 0) >= 3 for r in rows)
-                summary["diversity"][arm] = {"export": rel, "distinct": n, "top": min(top, len(rows))}
-                md.append(f"| {arm} | {camp['name']} | {n} | {min(top, ge3)} |")
+                n3 = {f"{t:g}": distinct(rows, None, t, min_proxy=3.0) for t in thrs}
+                summary["diversity"][arm] = {"export": rel, "distinct": n, "top": min(top, len(rows)),
+                                             "ge3": ge3, "distinct_ge3": n3}
+                md.append(f"| {arm} | {camp['name']} | {n} | {min(top, ge3)} | {ge3} | "
+                          + " / ".join(str(v) for v in n3.values()) + " |")
     # -- flaw or layout, differential ------------------------------------------------------------
     if man.get("flaw_or_layout") and os.path.exists(os.path.join(base, man["flaw_or_layout"])):
         with open(os.path.join(base, man["flaw_or_layout"])) as f:
