@@ -96,6 +96,20 @@ def distinct(rows, top: Optional[int], threshold: float, min_proxy: float = -np.
     return len(kept)
 
 
+def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = 3.0) -> np.ndarray:
+    """Count of distinct finds after each scenario, in job order up to the budget: a scenario
+    with proxy >= `min_proxy` counts when its layout is farther than `threshold` metres
+    (layout_distance) from every find counted before it."""
+    rows = sorted(rows, key=lambda r: r["job"])[:budget]
+    kept, out = [], []
+    for r in rows:
+        if (r["proxy"] or 0) >= min_proxy and (
+                not kept or layout_distances(r["positions"], kept, r["meshes"]).min() > threshold):
+            kept.append(np.asarray(r["positions"], float))
+        out.append(len(kept))
+    return np.asarray(out)
+
+
 def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]:
     """Where the search placed obstacles, window by window in job order: proxy >= 3 count, the
     share of obstacle coordinates within 2 m of the landscape's edge (a saturated action), and the
@@ -340,18 +354,21 @@ def run(manifest_path: str, out: str) -> dict:
     # -- search comparison -----------------------------------------------------------------------
     comp = man.get("comparison") or {}
     budget = int(comp.get("budget", 1000))
+    thr = float((man.get("diversity") or {}).get("threshold_m", 5.0))
     curves = {}
     if comp.get("arms"):
         md += ["", f"### Search comparison (Exp. 1, flawed U-Net, budget {budget} scenarios per run)", "",
                "| method | runs (seeds) | proxy >= 3 at the budget: each run | mean | min-max | vs random (mean) "
-               f"| of which in scenarios {budget // 2 + 1}-{budget}: each run |",
-               "|---|---|---|---|---|---|---|"]
+               f"| of which in scenarios {budget // 2 + 1}-{budget}: each run "
+               f"| distinct layouts among them ({thr:g} m, in the order found): each run | mean |",
+               "|---|---|---|---|---|---|---|---|---|"]
         for arm, rels in comp["arms"].items():
             curves[arm] = []
             for rel in rels:
                 camp, rows = load(rel)
                 cv = ge3_curve(rows, budget)
-                curves[arm].append({"seed": camp["seed"], "scenarios": len(cv), "curve": cv})
+                curves[arm].append({"seed": camp["seed"], "scenarios": len(cv), "curve": cv,
+                                    "distinct": distinct_curve(rows, budget, thr)})
         rnd = [c["curve"][-1] for c in curves.get("random", []) if c["scenarios"] >= budget]
         rnd_mean = float(np.mean(rnd)) if rnd else None
         for arm, runs in curves.items():
@@ -360,6 +377,7 @@ def run(manifest_path: str, out: str) -> dict:
             mean = float(np.mean(full)) if full else None
             summary["comparison"][arm] = {"runs": [{"seed": r["seed"], "scenarios": r["scenarios"],
                                                    "ge3": int(r["curve"][-1]),
+                                                   "distinct_ge3": int(r["distinct"][-1]),
                                                    "ge3_second_half": (int(r["curve"][-1] - r["curve"][budget // 2 - 1])
                                                                        if r["scenarios"] >= budget else None)}
                                                   for r in runs], "mean_at_budget": mean}
@@ -368,8 +386,11 @@ def run(manifest_path: str, out: str) -> dict:
                       + (f"{min(full)}-{max(full)}" if full else "-") + " | "
                       + (f"{mean / rnd_mean:.2f}x" if mean is not None and rnd_mean else "-") + " | "
                       + ", ".join(str(int(r["curve"][-1] - r["curve"][budget // 2 - 1])) for r in runs
-                                  if r["scenarios"] >= budget) + " |")
-        comparison_figure(curves, budget, os.path.join(out, "search_comparison.png"))
+                                  if r["scenarios"] >= budget) + " | "
+                      + ", ".join(str(int(r["distinct"][-1])) for r in runs) + " | "
+                      + fmt(np.mean([r["distinct"][-1] for r in runs if r["scenarios"] >= budget])
+                            if full else None, ".1f") + " |")
+        comparison_figure(curves, budget, thr, os.path.join(out, "search_comparison.png"))
         # Where every run placed its obstacles as it went (the summary keeps each arm's first).
         dyn = {}
         for arm, rels in comp["arms"].items():
@@ -438,30 +459,36 @@ def run(manifest_path: str, out: str) -> dict:
     return summary
 
 
-def comparison_figure(curves, budget: int, out: str):
+def comparison_figure(curves, budget: int, threshold: float, out: str):
+    """Two panels against scenarios spent: finds with proxy >= 3, and the distinct layouts
+    among them (distinct_curve); an arm of several seeds as its mean with the min-max shaded."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2), sharey=True)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, (arm, runs) in enumerate(curves.items()):
-        c = colours[k % len(colours)]
-        full = [r["curve"] for r in runs if r["scenarios"] >= budget]
-        if len(full) > 1:
-            a = np.stack(full)
-            x = np.arange(1, budget + 1)
-            ax.plot(x, a.mean(0), color=c, label=f"{arm} (mean of {len(full)} seeds, min-max shaded)")
-            ax.fill_between(x, a.min(0), a.max(0), color=c, alpha=0.2)
-        for r in runs if len(full) <= 1 else []:
-            ax.plot(np.arange(1, r["scenarios"] + 1), r["curve"], color=c, label=f"{arm} (seed {r['seed']})")
-    ax.set_xlabel("scenarios spent")
-    ax.set_ylabel("scenarios with proxy >= 3")
-    ax.set_xlim(0, budget)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    ax.set_title("Exp. 1, flawed U-Net: difficult scenarios found against scenarios spent", fontsize=9)
+    for ax, key, ylabel in ((axes[0], "curve", "scenarios with proxy >= 3"),
+                            (axes[1], "distinct", f"distinct layouts among them ({threshold:g} m)")):
+        for k, (arm, runs) in enumerate(curves.items()):
+            c = colours[k % len(colours)]
+            full = [r[key] for r in runs if r["scenarios"] >= budget]
+            if len(full) > 1:
+                a = np.stack(full)
+                x = np.arange(1, budget + 1)
+                ax.plot(x, a.mean(0), color=c, label=f"{arm} (mean of {len(full)} seeds, min-max shaded)")
+                ax.fill_between(x, a.min(0), a.max(0), color=c, alpha=0.2)
+            for r in runs if len(full) <= 1 else []:
+                ax.plot(np.arange(1, r["scenarios"] + 1), r[key], color=c, label=f"{arm} (seed {r['seed']})")
+        ax.set_xlabel("scenarios spent")
+        ax.set_ylabel(ylabel)
+        ax.set_xlim(0, budget)
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelleft=True)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Exp. 1, flawed U-Net: difficult scenarios found against scenarios spent (left), "
+                 "and how many of them are distinct layouts (right)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(out, dpi=120)
+    fig.savefig(out, dpi=110)
     plt.close(fig)
 
 
