@@ -83,31 +83,33 @@ def layout_distances(a, others, meshes) -> np.ndarray:
     return total / len(meshes)
 
 
+def _is_new(rows, threshold: float) -> List[bool]:
+    """In the given order: whether each row's layout is farther than `threshold` metres
+    (layout_distance) from every earlier new one."""
+    kept, new = [], []
+    for r in rows:
+        p = np.asarray(r["positions"], float)
+        new.append(not kept or bool(layout_distances(p, kept, r["meshes"]).min() > threshold))
+        if new[-1]:
+            kept.append(p)
+    return new
+
+
 def distinct(rows, top: Optional[int], threshold: float, min_proxy: float = -np.inf) -> int:
     """Distinct layouts among the `top` highest-proxy rows (all of them when `top` is None) with
-    proxy >= `min_proxy`: in rank order, a layout is new when its layout_distance to every new one
-    before it exceeds `threshold` metres."""
+    proxy >= `min_proxy`, taken in rank order (_is_new)."""
     ranked = sorted((r for r in rows if r["proxy"] is not None and r["proxy"] >= min_proxy),
                     key=lambda r: -r["proxy"])[:top]
-    kept = []
-    for r in ranked:
-        if not kept or layout_distances(r["positions"], kept, r["meshes"]).min() > threshold:
-            kept.append(np.asarray(r["positions"], float))
-    return len(kept)
+    return sum(_is_new(ranked, threshold))
 
 
 def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = 3.0) -> np.ndarray:
-    """Count of distinct finds after each scenario, in job order up to the budget: a scenario
-    with proxy >= `min_proxy` counts when its layout is farther than `threshold` metres
-    (layout_distance) from every find counted before it."""
+    """Count of distinct finds after each scenario, in job order up to the budget: the
+    scenarios with proxy >= `min_proxy` taken in the order found (_is_new)."""
     rows = sorted(rows, key=lambda r: r["job"])[:budget]
-    kept, out = [], []
-    for r in rows:
-        if (r["proxy"] or 0) >= min_proxy and (
-                not kept or layout_distances(r["positions"], kept, r["meshes"]).min() > threshold):
-            kept.append(np.asarray(r["positions"], float))
-        out.append(len(kept))
-    return np.asarray(out)
+    finds = [r for r in rows if (r["proxy"] or 0) >= min_proxy]
+    new = dict(zip((id(r) for r in finds), _is_new(finds, threshold)))
+    return np.cumsum([new.get(id(r), False) for r in rows]).astype(int)
 
 
 def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]:
