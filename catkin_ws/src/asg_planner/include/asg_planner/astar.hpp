@@ -1,8 +1,10 @@
 #pragma once
 /// @file astar.hpp
 /// A* over an 8-connected vehicle grid on [0, size]^2 with a Euclidean heuristic. An edge from
-/// a to b costs |ab| (1 + sum_k votes_k alpha exp(-d_k^2 / (2 sigma^2))), d_k the distance from
-/// the edge midpoint to vote vertex k (vertices beyond kernel_sigmas sigma are left out).
+/// a to b costs |ab| (1 + alpha F), F = sum_k votes_k exp(-d_k^2 / (2 sigma^2)) with d_k the
+/// distance to vote vertex k (vertices beyond kernel_sigmas sigma are left out), F evaluated at
+/// the edge midpoint (edge_points = 1) or averaged over both ends and the midpoint
+/// (edge_points = 3, the reference's version with sigma 2.5 m).
 
 #include <Eigen/Core>
 #include <vector>
@@ -16,6 +18,7 @@ struct AStarParams {
   double alpha = 1.0 / 50.0;     ///< [-] cost weight of one vote
   double sigma = 2.5;            ///< [m] vote influence radius
   double kernel_sigmas = 4.0;    ///< [-] votes further than this many sigma are ignored
+  int edge_points = 3;           ///< [-] 1: kernel at the edge midpoint; 3: mean of ends and midpoint
 };
 
 struct PlannedPath {

@@ -2,6 +2,10 @@
 /// @file path_follower.hpp
 /// Pure-pursuit-style look-ahead with PD steering on the heading error, and a PI speed
 /// controller that outputs throttle and brake. Time comes from the caller (message stamps).
+///
+/// Steering is computed as a front-wheel angle, with the gains in the reference's units
+/// (degrees of wheel per radian of heading error), and only then divided by the steering lock
+/// to give the command in [-1, 1]. The conversion happens once, in the constructor.
 
 #include <Eigen/Core>
 #include <vector>
@@ -10,10 +14,10 @@ namespace asg_planner {
 
 struct FollowerParams {
   double lookahead = 5.0;   ///< [m] distance of the look-ahead point
-  double kp = 10.0;         ///< [1/rad] steering per radian of heading error
-  double kd = 5.0;          ///< [s/rad] steering per radian/s of heading-error rate
-  double derivative_tau = 0.5;  ///< [s] low-pass time constant of the error rate (0: raw).
-                                ///< Unfiltered, kd = 5 at 20 Hz flips full lock every tick.
+  double kp = 10.0;         ///< [deg/rad] front-wheel angle per radian of heading error
+  double kd = 5.0;          ///< [deg s/rad] front-wheel angle per rad/s of heading-error rate
+  double steering_lock = 0.6;   ///< [rad] front-wheel angle at steering command 1 (the vehicle's)
+  double derivative_tau = 0.0;  ///< [s] low-pass time constant of the error rate (0: unfiltered)
   double speed_kp = 0.5;    ///< [1/(m/s)] throttle per m/s of speed error
   double speed_ki = 0.1;    ///< [1/m] throttle per metre of integrated speed error
   double brake_gain = 0.5;  ///< [1/(m/s)] brake per m/s above the target speed (beyond 0.3 m/s)
@@ -43,6 +47,9 @@ class PathFollower {
   const Eigen::Vector2d& lookaheadPoint() const { return lookahead_; }
   double headingError() const { return last_error_; }
   const FollowerParams& params() const { return params_; }
+  /// The gains as steering command (fraction of lock) per rad and per rad/s: kp, kd converted.
+  double kpCommand() const { return kp_cmd_; }
+  double kdCommand() const { return kd_cmd_; }
 
   /// Look-ahead point for a vehicle at p: the furthest-along intersection of the circle of
   /// radius L around p with the path beyond the path point closest to p; the path end when it
@@ -52,6 +59,7 @@ class PathFollower {
 
  private:
   FollowerParams params_;
+  double kp_cmd_, kd_cmd_;  // [1/rad], [s/rad] of steering command
   std::vector<Eigen::Vector2d> path_;
   Eigen::Vector2d lookahead_ = Eigen::Vector2d::Zero();
   bool have_last_ = false;

@@ -59,7 +59,10 @@ class VoteSnapshot {
 
 double edgeCost(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const VoteGrid& votes,
                 const AStarParams& p) {
-  const double sum = VoteSnapshot(votes).field((a + b) / 2, p.sigma, p.kernel_sigmas * p.sigma);
+  const VoteSnapshot snap(votes);
+  const double r = p.kernel_sigmas * p.sigma;
+  double sum = snap.field((a + b) / 2, p.sigma, r);
+  if (p.edge_points == 3) sum = (sum + snap.field(a, p.sigma, r) + snap.field(b, p.sigma, r)) / 3.0;
   return (b - a).norm() * (1.0 + p.alpha * sum);
 }
 
@@ -78,7 +81,7 @@ PlannedPath planPath(const VoteGrid& votes, const AStarParams& p, double size,
   auto pos = [&](int i, int j) { return Eigen::Vector2d(i * s, j * s); };
   const VoteSnapshot snapshot(votes);
   const double r = p.kernel_sigmas * p.sigma;
-  // Midpoints sit on the half-grid: cache their field values, (2n+1)^2 of them.
+  // Midpoints and vertices sit on the half-grid: cache their field values, (2n+1)^2 of them.
   const int hs = 2 * n + 1;
   std::vector<double> mid(size_t(hs) * hs, -1.0);
   auto midField = [&](int i2, int j2) {
@@ -109,7 +112,9 @@ PlannedPath planPath(const VoteGrid& votes, const AStarParams& p, double size,
       const size_t v = id(vi, vj);
       if (closed[v]) continue;
       const double len = (k < 4 ? 1.0 : M_SQRT2) * s;
-      const double c = len * (1.0 + p.alpha * midField(ui + vi, uj + vj));
+      double f = midField(ui + vi, uj + vj);
+      if (p.edge_points == 3) f = (f + midField(2 * ui, 2 * uj) + midField(2 * vi, 2 * vj)) / 3.0;
+      const double c = len * (1.0 + p.alpha * f);
       if (g[u] + c < g[v]) {
         g[v] = g[u] + c;
         parent[v] = int64_t(u);

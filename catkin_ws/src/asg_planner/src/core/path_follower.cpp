@@ -6,7 +6,14 @@
 
 namespace asg_planner {
 
-PathFollower::PathFollower(const FollowerParams& params) : params_(params) {}
+namespace {
+constexpr double kRadPerDeg = M_PI / 180.0;
+}
+
+PathFollower::PathFollower(const FollowerParams& params)
+    : params_(params),
+      kp_cmd_(params.kp * kRadPerDeg / params.steering_lock),
+      kd_cmd_(params.kd * kRadPerDeg / params.steering_lock) {}
 
 void PathFollower::setPath(const std::vector<Eigen::Vector2d>& path) { path_ = path; }
 
@@ -79,7 +86,7 @@ ControlCommand PathFollower::update(double t, const VehicleState2D& s, double ta
     rate_ += a * (raw - rate_);
     de = rate_;
   }
-  c.steering = std::clamp(params_.kp * e + params_.kd * de, -1.0, 1.0);
+  c.steering = std::clamp(kp_cmd_ * e + kd_cmd_ * de, -1.0, 1.0);
   const double err = target_speed - s.speed;
   if (dt > 0) integral_ = std::clamp(integral_ + err * dt, -5.0, 5.0);
   c.throttle = std::clamp(params_.speed_kp * err + params_.speed_ki * integral_, 0.0, 1.0);

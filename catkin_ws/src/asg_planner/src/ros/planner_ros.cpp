@@ -87,6 +87,10 @@ void PlannerROS::readParameters() {
   get("astar/alpha", p.astar.alpha, 0.0, 100.0);
   get("astar/sigma", p.astar.sigma, 0.01, 100.0);
   get("astar/kernel_sigmas", p.astar.kernel_sigmas, 1.0, 10.0);
+  pnh_.param("astar/edge_points", p.astar.edge_points, p.astar.edge_points);
+  if (p.astar.edge_points != 1 && p.astar.edge_points != 3)
+    throw std::runtime_error("parameter ~astar/edge_points = " + std::to_string(p.astar.edge_points) +
+                             ": must be 1 (midpoint) or 3 (ends and midpoint)");
   get("projection/max_height", p.projection.max_height, -100.0, 100.0);
   get("projection/max_range", p.projection.max_range, -1.0, 10000.0);
   int stride = p.projection.stride;
@@ -94,8 +98,9 @@ void PlannerROS::readParameters() {
   if (stride < 1 || stride > 64) throw std::runtime_error("parameter ~projection/stride: must be 1..64");
   p.projection.stride = stride;
   get("follower/lookahead", p.follower.lookahead, 0.1, 100.0);
-  get("follower/kp", p.follower.kp, 0.0, 1000.0);
-  get("follower/kd", p.follower.kd, 0.0, 1000.0);
+  get("follower/kp", p.follower.kp, 0.0, 10000.0);
+  get("follower/kd", p.follower.kd, 0.0, 10000.0);
+  get("follower/steering_lock", p.follower.steering_lock, 0.01, 1.5);
   get("follower/derivative_tau", p.follower.derivative_tau, 0.0, 10.0);
   get("follower/speed_kp", p.follower.speed_kp, 0.0, 100.0);
   get("follower/speed_ki", p.follower.speed_ki, 0.0, 100.0);

@@ -103,12 +103,23 @@ TEST(AStar, CostFormulaMatchesHandComputedEdge) {
   g.add({1, 1}, 10);  // vertex (5, 5)
   g.add({0, 0}, 50);  // vertex (0, 0)
   AStarParams p;      // alpha 1/50, sigma 2.5
+  p.edge_points = 1;
   // Midpoint (2.5, 0): d^2 = 31.25 and 6.25.
   const double expected = 5.0 * (1.0 + 10.0 / 50.0 * std::exp(-31.25 / 12.5) +
                                   50.0 / 50.0 * std::exp(-6.25 / 12.5));
   EXPECT_NEAR(edgeCost({0, 0}, {5, 0}, g, p), expected, 1e-12);
   EXPECT_NEAR(expected, 5.0 * (1 + 0.0164170 + 0.6065307), 1e-6);
   EXPECT_DOUBLE_EQ(edgeCost({0, 0}, {5, 0}, VoteGrid(5.0), p), 5.0);
+  // The reference's version with sigma 2.5 m: the kernel sum averaged over (0, 0), (2.5, 0), (5, 0).
+  // At (0, 0): d^2 = 50 and 0; at (5, 0): d^2 = 25 and 25.
+  p.edge_points = 3;
+  const double f0 = 10.0 * std::exp(-50.0 / 12.5) + 50.0;
+  const double fm = 10.0 * std::exp(-31.25 / 12.5) + 50.0 * std::exp(-6.25 / 12.5);
+  const double f1 = 10.0 * std::exp(-25.0 / 12.5) + 50.0 * std::exp(-25.0 / 12.5);
+  EXPECT_NEAR(edgeCost({0, 0}, {5, 0}, g, p), 5.0 * (1.0 + (f0 + fm + f1) / 3.0 / 50.0), 1e-12);
+  // A* uses the same costs: a one-edge plan costs what edgeCost says.
+  const PlannedPath one = planPath(g, p, 100.0, {0, 0}, {5, 0});
+  EXPECT_NEAR(one.cost, edgeCost({0, 0}, {5, 0}, g, p), 1e-12);
 }
 
 TEST(AStar, StraightPathOnEmptyGrid) {

@@ -1,0 +1,210 @@
+"""baseline: what the stacks under test do on seeded random layouts of an experiment (issue #23).
+
+A finding is only as good as its baseline: with perfect perception the stack must drive close to
+the optimal path, and what a flawed perception changes is measured on the same layouts. The
+layouts are those uniform random search proposes with seed 0 (job k of `random`, seed 0, is
+layout k), so a baseline of N layouts is the first N scenarios of that campaign.
+
+    python3 -m asg_agent.baseline run EXPERIMENT.yaml --stack ground_truth --layouts 500 --workers 2
+    python3 -m asg_agent.baseline summary EXPERIMENT.yaml      # results/baseline/<exp>.json + table
+
+`run` talks to running workers (scripts/baseline.sh launches them per stack) and appends one JSON
+line per layout to results/baseline/<exp>/<stack>.jsonl as each run ends, so an interrupted run
+resumes where it stopped. `summary` needs no ROS.
+"""
+import argparse
+import json
+import os
+import sys
+import time
+from typing import Dict, List
+
+import numpy as np
+
+from .experiment import load_experiment
+from .proxy import compute, placed_mask
+from .search import RandomSearch
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 5))
+STACKS = ("ground_truth", "flawed", "full")
+BOUNDS = {"share_ge3": 0.01, "median_yaw_term": 0.2, "median_plr": 1.03, "collision_share": 0.005}  # issue #23
+
+
+def layouts(exp, n: int) -> List[dict]:
+    """The first n scenarios of uniform random search with seed 0 on this experiment."""
+    m = RandomSearch(exp, 0)
+    steps = exp.episode_steps
+    return [exp.request(m.propose(k, k // steps, k % steps, None), scenario_id=k + 1) for k in range(n)]
+
+
+def out_path(exp_name: str, stack: str, root: str = "") -> str:
+    return os.path.join(root or os.path.join(REPO, "results", "baseline"), exp_name, f"{stack}.jsonl")
+
+
+def read_rows(path: str) -> Dict[int, dict]:
+    rows = {}
+    if os.path.isfile(path):
+        with open(path) as f:
+            for line in f:
+                if line.strip():
+                    r = json.loads(line)
+                    rows[r["layout"]] = r
+    return rows
+
+
+def row_of(k: int, req: dict, o) -> dict:
+    """One layout's result: every proxy term, or the error."""
+    terms = None
+    if o.termination != "ERROR" and len(o.trajectory):
+        tr = np.asarray(o.trajectory, np.float64).reshape(-1, 5)
+        terms = compute(req, tr[:, 0], tr[:, 1:3], tr[:, 4], o.visibility, o.termination, placed_mask(req, o.removed))
+    r = {"layout": k, "termination": o.termination, "error": o.error, "collision_with": o.collision_with,
+         "sim_time": round(float(o.sim_time), 4)}
+    for key in ("proxy", "vis", "yaw_term", "plr", "path_length", "optimal_length"):
+        r[key] = None if terms is None else round(float(getattr(terms, key)), 6)
+    return r
+
+
+def run_requests(pool, requests: List[dict], todo: List[int], on_row, max_attempts: int = 3):
+    """Runs requests[k] for k in todo on the pool's free workers; on_row(k, outcome) for each,
+    in the order they finish. An ERROR is retried on another worker up to max_attempts."""
+    pending, attempts, running = list(todo), {}, set()
+    while pending or running:
+        for w in pool.free():
+            if not pending:
+                break
+            k = pending.pop(0)
+            attempts[k] = attempts.get(k, 0) + 1
+            running.add(k)
+            pool.submit(w, k, requests[k])
+        for o in pool.poll(0.2):
+            running.discard(o.job)
+            if o.termination == "ERROR" and attempts[o.job] < max_attempts:
+                pending.insert(0, o.job)
+                continue
+            on_row(o.job, o)
+
+
+def run(a) -> int:
+    import rospy
+    from .cli import worker_names
+    from .pool_ros import WorkerPool
+    from tqdm import tqdm
+    exp = load_experiment(a.experiment)
+    reqs = layouts(exp, a.layouts)
+    path = out_path(exp.name, a.stack, a.root)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    done = read_rows(path)
+    todo = [k for k in range(a.layouts) if k not in done]
+    print(f"{exp.name}/{a.stack}: {len(done)} of {a.layouts} layouts stored in {path}, {len(todo)} to run",
+          file=sys.stderr)
+    if not todo:
+        return 0
+    rospy.init_node("baseline", anonymous=True, disable_signals=True)
+    pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
+    bar = tqdm(total=len(todo), desc=f"{exp.name}/{a.stack}", unit="run", dynamic_ncols=True)
+    with open(path, "a") as f:
+        def on_row(k, o):
+            r = dict(row_of(k, reqs[k], o), stack=a.stack)
+            f.write(json.dumps(r, sort_keys=True) + "\n")
+            f.flush()
+            bar.update(1)
+            bar.set_postfix_str(f"{r['termination']} proxy {r['proxy'] if r['proxy'] is None else round(r['proxy'], 2)}")
+        run_requests(pool, reqs, todo, on_row)
+    bar.close()
+    return 0
+
+
+def stack_summary(rows: List[dict]) -> dict:
+    ok = [r for r in rows if r["proxy"] is not None]
+    p = np.array([r["proxy"] for r in ok])
+    y = np.array([r["yaw_term"] for r in ok])
+    plr = np.array([r["plr"] for r in ok])
+    coll = sum(r["termination"] == "COLLISION" for r in rows)
+    return {"runs": len(rows), "errors": len(rows) - len(ok),
+            "share_ge3": float((p >= 3).mean()) if len(p) else None,
+            "median_proxy": float(np.median(p)) if len(p) else None,
+            "median_yaw_term": float(np.median(y)) if len(y) else None,
+            "p90_yaw_term": float(np.percentile(y, 90)) if len(y) else None,
+            "median_plr": float(np.median(plr)) if len(plr) else None,
+            "p90_plr": float(np.percentile(plr, 90)) if len(plr) else None,
+            "collisions": int(coll), "collision_share": coll / len(rows) if rows else None,
+            "success": int(sum(r["termination"] == "SUCCESS" for r in rows)),
+            "plr_below_0999": int((plr < 0.999).sum())}
+
+
+def summarize(exp_name: str, root: str = "") -> dict:
+    """results/baseline/<exp>.json: per stack its summary, per layout the proxies of every stack,
+    and what each U-Net stack changes against ground truth on the layouts both ran."""
+    rows = {s: read_rows(out_path(exp_name, s, root)) for s in STACKS}
+    out = {"experiment": exp_name, "layouts": "uniform random search, seed 0: job k is layout k",
+           "bounds_ground_truth": BOUNDS, "stacks": {}, "against_ground_truth": {}, "per_layout": []}
+    for s in STACKS:
+        if rows[s]:
+            out["stacks"][s] = stack_summary(list(rows[s].values()))
+    gt = rows["ground_truth"]
+    if "ground_truth" in out["stacks"]:
+        g = out["stacks"]["ground_truth"]
+        out["ground_truth_within_bounds"] = {k: g[k] is not None and g[k] <= v for k, v in BOUNDS.items()}
+    for s in ("flawed", "full"):
+        both = [k for k in rows[s] if k in gt and rows[s][k]["proxy"] is not None and gt[k]["proxy"] is not None]
+        if not both:
+            continue
+        d = np.array([rows[s][k]["proxy"] - gt[k]["proxy"] for k in both])
+        out["against_ground_truth"][s] = {
+            "layouts": len(both), "raises_by_0.5": float((d >= 0.5).mean()), "raises_by_1": float((d >= 1).mean()),
+            "median_change": float(np.median(d)), "ge3_here_lt2_ground_truth": int(sum(
+                rows[s][k]["proxy"] >= 3 and gt[k]["proxy"] < 2 for k in both))}
+    for k in sorted(set().union(*[set(r) for r in rows.values()])):
+        out["per_layout"].append({"layout": k, **{s: (rows[s][k]["proxy"] if k in rows[s] else None) for s in STACKS},
+                                  **{f"{s}_termination": rows[s][k]["termination"] for s in STACKS if k in rows[s]}})
+    return out
+
+
+def table(summary: dict) -> str:
+    """The Markdown table of docs/baseline.md for one experiment."""
+    lines = [f"| {summary['experiment']} stack | runs | proxy >= 3 | median / p90 yaw term | median / p90 PLR "
+             "| collisions | PLR < 0.999 |", "|---|---|---|---|---|---|---|"]
+    for s, g in summary["stacks"].items():
+        lines.append(f"| {s} | {g['runs']} | {100 * g['share_ge3']:.1f} % | {g['median_yaw_term']:.3f} / "
+                     f"{g['p90_yaw_term']:.3f} | {g['median_plr']:.3f} / {g['p90_plr']:.3f} | {g['collisions']} "
+                     f"({100 * g['collision_share']:.1f} %) | {g['plr_below_0999']} |")
+    for s, d in summary["against_ground_truth"].items():
+        lines.append(f"\n{s} against ground truth on the same {d['layouts']} layouts: the proxy rises by >= 0.5 on "
+                     f"{100 * d['raises_by_0.5']:.1f} % and by >= 1 on {100 * d['raises_by_1']:.1f} % of them; "
+                     f"{d['ge3_here_lt2_ground_truth']} reach 3 where ground truth stays below 2.")
+    return "\n".join(lines)
+
+
+def summary_cmd(a) -> int:
+    exp = load_experiment(a.experiment)
+    s = summarize(exp.name, a.root)
+    path = os.path.join(a.root or os.path.join(REPO, "results", "baseline"), f"{exp.name}.json")
+    with open(path, "w") as f:
+        json.dump(s, f, indent=1, sort_keys=True)
+        f.write("\n")
+    print(table(s))
+    print(f"\n{path}")
+    return 0
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="baseline", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run", help="run the layouts on running workers of one stack")
+    r.add_argument("experiment")
+    r.add_argument("--stack", required=True, choices=STACKS, help="which stack the workers run (a label)")
+    r.add_argument("--layouts", type=int, default=500, help="layouts 0..N-1")
+    r.add_argument("--workers", default="2", help="count or comma-separated namespaces")
+    r.add_argument("--root", default="", help="results folder (default results/baseline)")
+    s = sub.add_parser("summary", help="results/baseline/<exp>.json and the Markdown table")
+    s.add_argument("experiment")
+    s.add_argument("--root", default="")
+    a = p.parse_args(argv)
+    if a.cmd == "run" and a.layouts < 1:
+        p.error("--layouts must be >= 1")
+    return run(a) if a.cmd == "run" else summary_cmd(a)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
