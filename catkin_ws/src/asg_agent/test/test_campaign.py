@@ -269,7 +269,7 @@ def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
         exp = load_experiment(EXP)
         c = Campaign(name, exp, make_method("td3-per-asp", exp, 4, budget=40), store, FakePool(2, seed=seed), 40, 4,
                      str(tmp_path / f"{name}.ckpt"), slots=4,
-                     reference=FakePool(2, seed=seed + 10, gain=0.3, prefix="fake_ref"))
+                     reference=FakePool(2, seed=seed + 10, gain=0.3, prefix="fake_ref"), reward="differential")
         c.start()
         c.run(poll_timeout=0.0)
         rows = list(store.rows(name))
@@ -284,3 +284,38 @@ def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
         assert abs(st["diff_best"] - max(r["reward"] for r in rows)) < 1e-12
         digests.append([(r["job"], r["proxy"], r["reward"], r["request"]) for r in rows])
     assert digests[0] == digests[1]
+
+
+def test_attribution_counts_perception_and_stack_findings(tmp_path):
+    """--reference-workers with the proxy reward (the default): the search learns from the stack
+    under test's proxy, every scenario also runs on the reference stand-in, and the progress
+    figures, the store's summary and a resumed campaign all count a finding (proxy >= 3) as the
+    perception's when the reference stays below 2 and as the stack's when it reaches 3."""
+    import json as _json
+    store = Store(str(tmp_path / "a.sqlite"))
+    exp = load_experiment(EXP)
+    c = Campaign("a", exp, make_method("random", exp, 3, budget=60), store, FakePool(2, seed=1, gain=6.0), 60, 3,
+                 str(tmp_path / "a.ckpt"), slots=4, reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"))
+    c.start()
+    c.run(poll_timeout=0.0)
+    rows = list(store.rows("a"))
+    assert len(rows) == 60
+    ref = {r["job"]: _json.loads(r["reference"])["proxy"] for r in rows}
+    for r in rows:
+        assert r["reward"] == r["proxy"]  # the paper's objective, not the difference
+    perception = sum(r["proxy"] >= 3 and ref[r["job"]] < 2 for r in rows)
+    stack = sum(r["proxy"] >= 3 and ref[r["job"]] >= 3 for r in rows)
+    assert perception > 0 and stack > 0, (perception, stack)  # the stand-ins give both kinds
+    st = c.status()
+    assert (st["perception"], st["stack"]) == (perception, stack)
+    s = store.summary("a")
+    assert (s["attributed"], s["perception_ge3"], s["stack_ge3"]) == (60, perception, stack)
+    assert s["differential_ge1"] == sum(r["proxy"] - ref[r["job"]] >= 1 for r in rows)
+    # A resumed campaign takes its counts from the store.
+    again = Campaign("a", exp, make_method("random", exp, 3, budget=60), store, FakePool(2, seed=1, gain=6.0), 60, 3,
+                     str(tmp_path / "a.ckpt"), slots=4, reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"))
+    again.resume()
+    assert (again.status()["perception"], again.status()["stack"]) == (perception, stack)
+    with pytest.raises(ValueError, match="needs a reference stack"):
+        Campaign("b", exp, make_method("random", exp, 3, budget=5), store, FakePool(1), 5, 3,
+                 str(tmp_path / "b.ckpt"), reward="differential")

@@ -2,6 +2,7 @@
 import math
 
 import numpy as np
+import pytest
 
 from asg_agent.optimal_path import Disc, shortest_path
 
@@ -68,6 +69,44 @@ def test_against_a_fine_grid_search():
         # A 16-connected grid of 0.25 m overestimates by a few per mille at most.
         assert exact <= grid + 1e-6
         assert grid <= exact * 1.02, (exact, grid)
+
+
+def test_discs_reaching_into_the_goal_circle_against_a_fine_grid_search():
+    # The worker removes obstacles by centre distance (safety radius 11 m = goal radius), so a
+    # disc centred 11-13 m from the goal reaches into the goal circle and can hide the head-on
+    # legs near it; the path then ends where the rim crosses the circle.
+    rng = np.random.default_rng(7)
+    for _ in range(6):
+        discs = []
+        for _ in range(3):
+            ang = math.radians(225 + rng.uniform(-35, 35))
+            rad = rng.uniform(11.0, 13.0)
+            discs.append(Disc(80 + rad * math.cos(ang), 80 + rad * math.sin(ang), rng.uniform(1.5, 2.7)))
+        exact = shortest_path((20.0, 20.0), (80.0, 80.0), 11.0, discs).length
+        grid = _grid_length(discs)
+        assert exact <= grid + 1e-6, (exact, grid)
+        assert grid <= exact * 1.01, (exact, grid)
+
+
+def test_a_disc_on_the_head_on_leg_inside_the_goal_circle():
+    # One disc across the line at the circle: the head-on leg is blocked, the path ends beside it,
+    # no further than where the disc's rim crosses the circle (found by direct search here).
+    d = Disc(21.0, 0.0, 2.0)
+    p = shortest_path((0.0, 0.0), (30.0, 0.0), 10.0, [d])
+    best = math.inf
+    for phi in np.linspace(-math.pi, math.pi, 200001):
+        q = (30 - 10 * math.cos(phi), 10 * math.sin(phi))
+        if math.dist(q, (d.x, d.y)) >= d.r - 1e-9 and not _blocked((0.0, 0.0), q, d):
+            best = min(best, math.dist((0.0, 0.0), q))
+    assert p.length <= best + 1e-6
+    assert p.length >= 20.0  # no shorter than the free head-on leg
+    assert p.length == pytest.approx(best, abs=0.02)  # the straight end is the best here
+
+
+def _blocked(p, q, d):
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    t = max(0.0, min(1.0, ((d.x - p[0]) * dx + (d.y - p[1]) * dy) / (dx * dx + dy * dy)))
+    return math.hypot(p[0] + t * dx - d.x, p[1] + t * dy - d.y) < d.r - 1e-7
 
 
 def _grid_length(discs, h=0.25):

@@ -95,7 +95,7 @@ class Campaign:
                  total: int, seed: int, checkpoint: str, slots: int = 4, max_attempts: int = 3,
                  checkpoint_every: int = 10, proxy_config: ProxyConfig = ProxyConfig(),
                  progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None,
-                 early_dispatch: bool = True, reference: Optional[Pool] = None):
+                 early_dispatch: bool = True, reference: Optional[Pool] = None, reward: str = "proxy"):
         if total < 1 or slots < 1:
             raise ValueError("total and slots must be >= 1")
         self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
@@ -103,9 +103,15 @@ class Campaign:
         self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, checkpoint_every, proxy_config
         self.progress, self.settings = progress, settings or {}
         self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
-        # Differential campaigns: every scenario also runs on the reference stack's workers and
-        # the search learns from proxy(stack under test) - proxy(reference).
-        self.reference = reference
+        # Attribution: every scenario also runs on the reference stack's workers (ground-truth
+        # labels, the same planner and follower), and each finding is counted as the perception's
+        # (reference < 2) or the stack's (reference >= 3). reward "proxy": the search learns from
+        # the stack under test's proxy (the paper); "differential": from proxy - reference proxy.
+        if reward not in ("proxy", "differential"):
+            raise ValueError(f"reward {reward!r}: must be proxy or differential")
+        if reward == "differential" and reference is None:
+            raise ValueError("the differential reward needs a reference stack")
+        self.reference, self.reward = reference, reward
         self.ref_queue: List[int] = []
         self.ref_running: Dict[int, str] = {}
         self.parts: Dict[int, Dict[str, Outcome]] = {}  # job -> {"test": .., "ref": ..} until both are in
@@ -120,8 +126,9 @@ class Campaign:
         self.episodes_done = 0
         # best/ge3/ge4: the proxy of the stack under test; diff_best/diff_ge1: differential
         # campaigns' reward (proxy - reference proxy), its largest and how often it reached 1.
+        # perception/stack: findings (proxy >= 3) with the reference below 2 / at least 3.
         self.stats = {"best": -math.inf, "ge3": 0, "ge4": 0, "errors": 0, "retries": 0,
-                      "diff_best": -math.inf, "diff_ge1": 0}
+                      "diff_best": -math.inf, "diff_ge1": 0, "perception": 0, "stack": 0}
         self.t0 = time.time()
         self.done_at_start = 0
         self.stages = Stages()
@@ -181,7 +188,9 @@ class Campaign:
         summary = self.store.summary(self.name, top=0)
         self.stats.update(best=summary["max_proxy"] if summary["max_proxy"] is not None else -math.inf,
                           ge3=summary["proxy_ge_3"], ge4=summary["proxy_ge_4"],
-                          errors=summary["terminations"].get("ERROR", 0))
+                          errors=summary["terminations"].get("ERROR", 0),
+                          perception=summary["perception_ge3"], stack=summary["stack_ge3"],
+                          diff_ge1=summary["differential_ge1"])
         self._apply_ready()
 
     # -- episodes and proposals -----------------------------------------------------------------
@@ -291,7 +300,7 @@ class Campaign:
     def _finish(self, job: Job, o: Outcome, ref: Optional[Outcome]):
         t0 = time.perf_counter()
         traj, terms = self._terms(job.request, o)
-        reference, reward = None, (terms.proxy if terms else None)
+        reference, reward, diff = None, (terms.proxy if terms else None), None
         if ref is not None:
             _, rterms = self._terms(job.request, ref)
             reference = json.dumps({"worker": ref.worker, "attempts": job.ref_attempts, "termination": ref.termination,
@@ -300,7 +309,9 @@ class Campaign:
                                     "plr": rterms.plr if rterms else None, "sim_time": ref.sim_time,
                                     "trajectory_xy": np.round(np.asarray(ref.trajectory, np.float32).reshape(-1, 5)[::6, 1:3], 2).tolist()},
                                    sort_keys=True)
-            reward = terms.proxy - rterms.proxy if terms and rterms else None
+            diff = terms.proxy - rterms.proxy if terms and rterms else None
+            if self.reward == "differential":
+                reward = diff
         row = {"campaign": self.name, "job": o.job, "method": self.method.name, "episode": job.episode,
                "step": job.step, "worker": o.worker, "attempts": job.attempts, "scenario_id": job.request["scenario_id"],
                "request": json.dumps(job.request, sort_keys=True), "termination": o.termination, "error": o.error,
@@ -321,9 +332,11 @@ class Campaign:
             self.stats["best"] = max(self.stats["best"], terms.proxy)
             self.stats["ge3"] += terms.proxy >= 3
             self.stats["ge4"] += terms.proxy >= 4
-            if self.reference is not None:
-                self.stats["diff_best"] = max(self.stats["diff_best"], reward)
-                self.stats["diff_ge1"] += reward >= 1
+            if self.reference is not None and diff is not None:
+                self.stats["diff_best"] = max(self.stats["diff_best"], diff)
+                self.stats["diff_ge1"] += diff >= 1
+                self.stats["perception"] += terms.proxy >= 3 and rterms.proxy < 2
+                self.stats["stack"] += terms.proxy >= 3 and rterms.proxy >= 3
         else:
             self.stats["errors"] += 1
         if self.progress:
@@ -378,4 +391,6 @@ class Campaign:
                 "best": self.stats["best"], "ge3": self.stats["ge3"], "ge4": self.stats["ge4"],
                 "errors": self.stats["errors"], "retries": self.stats["retries"],
                 "diff_best": self.stats["diff_best"] if self.reference is not None else None,
-                "diff_ge1": self.stats["diff_ge1"] if self.reference is not None else None}
+                "diff_ge1": self.stats["diff_ge1"] if self.reference is not None else None,
+                "perception": self.stats["perception"] if self.reference is not None else None,
+                "stack": self.stats["stack"] if self.reference is not None else None}

@@ -44,9 +44,13 @@ def parse(argv):
                    help="TD3 methods: weight of the behaviour-regularisation term (default 0: off)")
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
     p.add_argument("--reference-workers", default="",
-                   help="differential campaign: every scenario also runs on these workers (count, as "
-                        "--workers, numbered after them, or namespaces) and the search maximises "
-                        "proxy(--workers' stack) - proxy(reference stack)")
+                   help="attribution: every scenario also runs on these workers (count, as --workers, "
+                        "numbered after them, or namespaces), the reference stack (ground-truth labels, "
+                        "the same planner and follower); each finding is counted as the perception's "
+                        "(reference proxy < 2) or the stack's (reference proxy >= 3)")
+    p.add_argument("--reward", default="proxy", choices=("proxy", "differential"),
+                   help="what the search maximises: the stack under test's proxy (the paper), or "
+                        "proxy - reference proxy (needs --reference-workers)")
     p.add_argument("--stage-report", default="",
                    help="write where the time went (per-scenario stage breakdown, rate, inference bound) "
                         "to this JSON file at the end (`bench`, docs/benchmarks.md)")
@@ -58,6 +62,8 @@ def parse(argv):
     a = p.parse_args(argv)
     if a.scenarios < 1:
         p.error("--scenarios must be >= 1")
+    if a.reward == "differential" and not a.reference_workers:
+        p.error("--reward differential needs --reference-workers (the reference stack to subtract)")
     return a
 
 
@@ -76,6 +82,12 @@ def print_summary(store, name, out=sys.stdout):
     print(f"\ncampaign {name}: {s['scenarios']} scenarios, proxy >= 3: {s['proxy_ge_3']}, "
           f">= 4: {s['proxy_ge_4']}, largest proxy {best}", file=out)
     print("terminations: " + ", ".join(f"{k} {v}" for k, v in sorted(s["terminations"].items())), file=out)
+    if s["attributed"]:
+        print(f"attribution ({s['attributed']} scenarios re-run on the reference stack): of the proxy >= 3, "
+              f"{s['perception_ge3']} are the perception's (reference < 2), {s['stack_ge3']} the stack's "
+              f"(reference >= 3); proxy - reference >= 1: {s['differential_ge1']}", file=out)
+    if s["plr_below_0999"]:
+        print(f"warning: {s['plr_below_0999']} runs with PLR < 0.999 (the optimal path overestimated)", file=out)
     print("top 10 (store row id, job, episode.step, proxy = 0.1 vis + yaw term + PLR^2):", file=out)
     for r in s["top"]:
         print(f"  id {r['id']:>6}  job {r['job']:>5}  ep {r['episode']}.{r['step']}  proxy {r['proxy']:.3f}  "
@@ -176,12 +188,14 @@ def main(argv=None):
         bar.n = st["done"]
         best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
         diff = ""
+        if st.get("perception") is not None:
+            diff = f" perception {st['perception']} stack {st['stack']}"
         if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
-            diff = f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
+            diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
         bar.set_postfix_str(f"{st['rate_per_hour']:.0f}/h best {best} >=3 {st['ge3']} >=4 {st['ge4']}{diff}"
                             + (f" err {st['errors']}" if st["errors"] else ""), refresh=True)
 
-    settings = {"workers": workers, "reference_workers": ref_workers, "experiment_file": exp.source, "perception": exp.perception,
+    settings = {"workers": workers, "reference_workers": ref_workers, "reward": a.reward, "experiment_file": exp.source, "perception": exp.perception,
                 "model": exp.model, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
     collector = None
     if a.stage_report and not a.fake_workers:
@@ -193,7 +207,7 @@ def main(argv=None):
                   f"within 15 s; the breakdown will lack them", file=sys.stderr)
     c = Campaign(name, exp, method, store, pool, a.scenarios, a.seed, checkpoint, slots=slots,
                  checkpoint_every=a.checkpoint_every, progress=progress, settings=settings,
-                 early_dispatch=not a.no_early_dispatch, reference=reference)
+                 early_dispatch=not a.no_early_dispatch, reference=reference, reward=a.reward)
     try:
         if a.resume and store.campaign(name) is None:
             # Killed before it stored anything: "--resume" then means "start it" (restarts stay

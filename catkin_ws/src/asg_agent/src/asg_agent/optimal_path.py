@@ -13,10 +13,14 @@ discs and arcs along their rims, so a *tangent visibility graph* holds it exactl
   a shortest path to a circle meets it head on (towards G), so the last leg of every candidate is
   a segment towards G, shortened by R (checked for collisions only outside the goal circle).
 
-Dijkstra on this graph gives the exact length (to floating point) whenever the discs do not
-intersect the goal circle's boundary in a way that hides a shorter touching point (the worker's
-safety radius removes obstacles near the goal, so that does not happen in the experiments). The
-tests check it against analytic detours and a fine grid search.
+- a disc that reaches into the goal circle (the worker removes obstacles by their centre's
+  distance, so a disc centred just outside the safety radius does) can hide every head-on leg
+  near it; a path then ends where the disc's rim crosses the goal circle. Those crossing points
+  are nodes too, joined to the goal at no cost, to the start by a straight segment and to every
+  other disc by its tangents from the crossing point, and along their own rim by arcs.
+
+Dijkstra on this graph gives the exact length (to floating point). The tests check it against
+analytic detours and a fine grid search, with discs clear of the goal circle and reaching into it.
 """
 import heapq
 import math
@@ -95,6 +99,18 @@ def _bitangents(a, b):
     return out
 
 
+def _circle_crossings(c, R, d):
+    """Points where the rim of disc d crosses the circle of radius R around c."""
+    dx, dy = d.x - c[0], d.y - c[1]
+    L = math.hypot(dx, dy)
+    if L < EPS or L >= R + d.r or L <= abs(R - d.r):
+        return []
+    a = (R * R - d.r * d.r + L * L) / (2 * L)  # along c -> d
+    h = math.sqrt(max(0.0, R * R - a * a))
+    mx, my = c[0] + a * dx / L, c[1] + a * dy / L
+    return [(mx - h * dy / L, my + h * dx / L), (mx + h * dy / L, my - h * dx / L)]
+
+
 def _arc_free(d_index, a0, a1, discs, r):
     """The arc of disc d_index from angle a0 counter-clockwise to a1 is not inside another disc."""
     d = discs[d_index]
@@ -158,6 +174,21 @@ def shortest_path(start: Sequence[float], goal: Sequence[float], goal_radius: fl
         for t in _point_tangents(G, d):
             if math.dist(t, G) > goal_radius and goal_leg_free(t, (k,)):
                 add_edge(add_node(t, k), 1, math.dist(t, G) - goal_radius)
+    # Where a disc's rim crosses the goal circle (outside every other disc): an end point.
+    for k, d in enumerate(ds):
+        for c in _circle_crossings(G, goal_radius, d):
+            if any((c[0] - o.x) ** 2 + (c[1] - o.y) ** 2 < (o.r - 1e-7) ** 2 for j, o in enumerate(ds) if j != k):
+                continue
+            n = add_node(c, k)
+            add_edge(n, 1, 0.0)
+            if not _seg_blocked(S, c, ds):
+                add_edge(0, n, math.dist(S, c))
+            for j, e in enumerate(ds):
+                if j == k:
+                    continue
+                for t in _point_tangents(c, e):
+                    if not _seg_blocked(c, t, ds, (j,)):
+                        add_edge(n, add_node(t, j), math.dist(c, t))
     for i in range(len(ds)):
         for j in range(i + 1, len(ds)):
             for p, q in _bitangents(ds[i], ds[j]):
@@ -201,6 +232,8 @@ def shortest_path(start: Sequence[float], goal: Sequence[float], goal_radius: fl
         if b == 1:
             p = nodes[a]
             L = math.dist(p, G)
+            if L <= goal_radius + 1e-9:  # a rim crossing of the goal circle: the path ends here
+                continue
             t = (L - goal_radius) / L
             pts.append((p[0] + t * (G[0] - p[0]), p[1] + t * (G[1] - p[1])))
         elif on_disc[a] is not None and on_disc[a] == on_disc[b]:

@@ -88,6 +88,24 @@ def snapshot(bag_path: str, out: str, t: float, ns: str = "worker_0"):
     plt.close(fig)
 
 
+def _baseline_html(experiment: str) -> str:
+    """The baseline of the campaign's experiment (results/baseline/<exp>.json), if measured."""
+    from .baseline import REPO
+    path = os.path.join(REPO, "results", "baseline", f"{experiment}.json")
+    if not os.path.isfile(path):
+        return (f"<h2>Baseline</h2><p>No baseline of {html.escape(experiment)} yet: "
+                f"<code>bash scripts/baseline.sh {html.escape(experiment)}</code> measures it.</p>")
+    with open(path) as f:
+        b = json.load(f)
+    rows = "".join(
+        f"<tr><td>{html.escape(k)}</td><td>{g['runs']}</td><td>{100 * g['share_ge3']:.1f} %</td>"
+        f"<td>{g['median_yaw_term']:.3f} / {g['p90_yaw_term']:.3f}</td><td>{g['median_plr']:.3f} / {g['p90_plr']:.3f}</td>"
+        f"<td>{g['collisions']}</td></tr>" for k, g in b["stacks"].items())
+    return (f"<h2>Baseline: the stacks on seeded random layouts of {html.escape(experiment)}</h2>"
+            "<table><tr><th>stack</th><th>runs</th><th>proxy &gt;= 3</th><th>yaw term median / p90</th>"
+            f"<th>PLR median / p90</th><th>collisions</th></tr>{rows}</table>")
+
+
 def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10) -> str:
     import matplotlib
     matplotlib.use("Agg")
@@ -135,6 +153,14 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
     terms = "".join(f"<tr><td>{html.escape(k)}</td><td>{v}</td></tr>" for k, v in sorted(s["terminations"].items()))
     settings = json.loads(c["settings"])
     best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
+    attribution = ""
+    if s["attributed"]:
+        attribution = (f"<h2>Attribution</h2><p>{s['attributed']} scenarios also ran on the reference stack "
+                       f"(ground-truth labels, the same planner and follower). Of the {s['proxy_ge_3']} with proxy "
+                       f"&gt;= 3, <b>{s['perception_ge3']}</b> are the perception's (reference proxy &lt; 2) and "
+                       f"<b>{s['stack_ge3']}</b> the stack's own (reference &gt;= 3); proxy &minus; reference "
+                       f"&gt;= 1 on {s['differential_ge1']}. Reward: {html.escape(str(settings.get('reward', 'proxy')))}.</p>")
+    baseline = _baseline_html(c["experiment"])
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
 <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;
 padding:4px 8px;text-align:right}}code{{font-size:85%}}</style></head><body>
@@ -146,6 +172,7 @@ workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html
 <table><tr><th>scenarios</th><th>proxy &gt;= 3</th><th>proxy &gt;= 4</th><th>per 1,000: &gt;= 3 / &gt;= 4</th><th>largest proxy</th></tr>
 <tr><td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>
 <td>{1000 * s['proxy_ge_3'] / n:.0f} / {1000 * s['proxy_ge_4'] / n:.0f}</td><td>{best}</td></tr></table>
+{attribution}{baseline}
 <h2>Proxy over the campaign</h2><img src="curves.png" width="900">
 <h2>Terminations</h2><table>{terms}</table>
 <h2>Top {len(items)}</h2>

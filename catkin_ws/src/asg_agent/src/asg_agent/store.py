@@ -152,8 +152,17 @@ class Store:
         tops = [dict(r) for r in q("SELECT id, job, episode, step, scenario_id, proxy, vis, yaw_term, plr, termination "
                                    "FROM scenarios WHERE campaign = ? AND proxy IS NOT NULL ORDER BY proxy DESC, "
                                    "job LIMIT ?", (campaign, top))]
+        # Attribution (campaigns with a reference stack): a finding (proxy >= 3) is the perception's
+        # when the reference stack (ground-truth labels, same planner and follower) stays below 2
+        # on the same scene, and the stack's own when the reference reaches 3 as well.
+        ref = "CAST(json_extract(reference, '$.proxy') AS REAL)"
+        attributed = q(f"SELECT COUNT(*), SUM(proxy >= 3 AND {ref} < 2), SUM(proxy >= 3 AND {ref} >= 3), "
+                       f"SUM(proxy - {ref} >= 1) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
+                       f"AND proxy IS NOT NULL AND {ref} IS NOT NULL", (campaign,)).fetchone()
+        low_plr = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND plr < 0.999", (campaign,)).fetchone()[0]
         return {"scenarios": n, "proxy_ge_3": c3, "proxy_ge_4": c4, "max_proxy": best, "terminations": terms,
-                "top": tops}
+                "top": tops, "attributed": attributed[0], "perception_ge3": attributed[1] or 0,
+                "stack_ge3": attributed[2] or 0, "differential_ge1": attributed[3] or 0, "plr_below_0999": low_plr}
 
     def content_digest(self, campaign: str) -> List[tuple]:
         """What must repeat between two runs of a campaign with one seed (no workers, no times)."""
