@@ -30,9 +30,17 @@ def test_launch_file_parses(path):
 
 
 def test_train_launch_starts_n_workers_and_the_campaign():
-    nodes = roslaunch("--nodes", os.path.join(REPO, "launch", "train.launch"), "workers:=3").split()
-    assert [n for n in nodes if n.endswith("/scene_worker")] == [f"/worker_{i}/scene_worker" for i in range(3)]
+    path = os.path.join(REPO, "launch", "train.launch")
+    nodes = roslaunch("--nodes", path, "workers:=3").split()
+    # 3 workers under test with the U-Net, and 2 reference workers (ground-truth labels) after them
+    assert [n for n in nodes if n.endswith("/scene_worker")] == [f"/worker_{i}/scene_worker" for i in range(5)]
+    assert [n for n in nodes if n.endswith("/segmenter")] == [f"/worker_{i}/segmenter" for i in range(3)]
     assert "/campaign" in nodes
+    args = roslaunch("--args", "/campaign", path, "workers:=3")
+    assert "--workers 3" in args and "--reference-workers 2" in args and "--reward proxy" in args
+    nodes = roslaunch("--nodes", path, "workers:=3", "attribution:=false").split()
+    assert [n for n in nodes if n.endswith("/scene_worker")] == [f"/worker_{i}/scene_worker" for i in range(3)]
+    assert "--reference-workers" not in roslaunch("--args", "/campaign", path, "attribution:=false")
 
 
 def test_differential_launch_runs_two_stacks_and_a_reference_campaign():

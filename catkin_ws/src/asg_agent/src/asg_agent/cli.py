@@ -40,8 +40,9 @@ def parse(argv):
                    help="[s, wall] a worker that has not answered by then is reported and its job re-queued")
     p.add_argument("--updates-per-step", type=int, default=0,
                    help="TD3 methods: gradient updates per observed transition (default: TD3Config's)")
-    p.add_argument("--bc-weight", type=float, default=0.0,
-                   help="TD3 methods: weight of the behaviour-regularisation term (default 0: off)")
+    p.add_argument("--bc-weight", type=float, default=1.0,
+                   help="TD3 methods: weight of the behaviour-regularisation term (default 1, the setting of "
+                        "every documented campaign; 0: off, the variant that collapses to the border)")
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
     p.add_argument("--reference-workers", default="",
                    help="attribution: every scenario also runs on these workers (count, as --workers, "
