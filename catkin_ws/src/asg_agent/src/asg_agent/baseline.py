@@ -180,6 +180,7 @@ def summary_cmd(a) -> int:
     exp = load_experiment(a.experiment)
     s = summarize(exp.name, a.root)
     path = os.path.join(a.root or os.path.join(REPO, "results", "baseline"), f"{exp.name}.json")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as f:
         json.dump(s, f, indent=1, sort_keys=True)
         f.write("\n")
