@@ -13,27 +13,19 @@ N_GT="${2:-500}"
 N_UNET="${3:-300}"
 install_packages
 build_workspace ON
-export ROS_MASTER_URI="http://127.0.0.1:${ASG_BASELINE_PORT:-11395}" ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
-export LP_NUM_THREADS=1 ROS_LOG_DIR="$REPO/runs/baseline/logs"
-PORT="${ROS_MASTER_URI##*:}"
+use_local_master "${ASG_BASELINE_PORT:-11395}" "$REPO/runs/baseline/logs"
 CFG="${ASG_PLANNER_CONFIG:-$WS/src/asg_planner/config/planner.yaml}"
+trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
   args=(perception:=unet model:="$stack")
   [ "$stack" = ground_truth ] && args=(perception:=ground_truth)
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"
-  roscore -p "$PORT" >/dev/null 2>&1 & core=$!
-  sleep 3
-  pids=()
-  for w in 0 1; do
-    roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" "${args[@]}" planner_config:="$CFG" markers:=false \
-        >/dev/null 2>&1 & pids+=($!)
-  done
-  status=0
-  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 || status=$?
-  kill "${pids[@]}" 2>/dev/null; wait "${pids[@]}" 2>/dev/null || true
-  kill "$core"; wait "$core" 2>/dev/null || true
-  [ "$status" -eq 0 ] || exit "$status"
+  start_master
+  start_workers 2 "${args[@]}" planner_config:="$CFG"
+  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2
+  stop_workers
+  stop_master
 done
 /usr/bin/python3 -m asg_agent.baseline summary "$EXP"

@@ -67,3 +67,38 @@ build_workspace() {
   fi
   source_ros
 }
+
+# A ROS master of our own, on loopback and a port of our own (a user's roscore is left alone),
+# and scene workers for studies that drive workers directly (baseline, flaw_or_layout, soak).
+#   use_local_master PORT LOG_DIR     exports ROS_MASTER_URI and friends, one llvmpipe thread each
+#   start_master                      roscore on that port; its PID in MASTER_PID
+#   start_workers N ARGS...           N worker.launch (worker_0..), markers off; PIDs in WORKER_PIDS
+#   stop_workers; stop_master
+use_local_master() {
+  export ROS_MASTER_URI="http://127.0.0.1:$1" ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
+  export LP_NUM_THREADS=1 ROS_LOG_DIR="$2"
+  mkdir -p "$ROS_LOG_DIR"
+}
+start_master() {
+  roscore -p "${ROS_MASTER_URI##*:}" >/dev/null 2>&1 &
+  MASTER_PID=$!
+  sleep 3
+}
+start_workers() {
+  local n="$1" w
+  shift
+  WORKER_PIDS=()
+  for ((w = 0; w < n; w++)); do
+    roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" markers:=false "$@" >/dev/null 2>&1 &
+    WORKER_PIDS+=($!)
+  done
+}
+stop_workers() {
+  kill "${WORKER_PIDS[@]}" 2>/dev/null || true
+  wait "${WORKER_PIDS[@]}" 2>/dev/null || true
+  WORKER_PIDS=()
+}
+stop_master() {
+  kill "$MASTER_PID" 2>/dev/null || true
+  wait "$MASTER_PID" 2>/dev/null || true
+}

@@ -9,12 +9,8 @@ OUT="$(realpath -m "${2:-$REPO/runs/demo}")"
 install_packages
 build_workspace ON
 # A master of our own on a port of our own: a user's running roscore is left alone.
-export ROS_MASTER_URI="http://127.0.0.1:${ASG_DEMO_PORT:-11399}"
-export ROS_HOSTNAME=127.0.0.1
-export LP_NUM_THREADS=1
 LOG="$OUT/logs"
-mkdir -p "$LOG"
-export ROS_LOG_DIR="$LOG"
+use_local_master "${ASG_DEMO_PORT:-11399}" "$LOG"
 log "starting worker_0 and its stack (logs: $LOG)"
 roslaunch -p "${ROS_MASTER_URI##*:}" "$REPO/launch/worker.launch" >"$LOG/roslaunch.log" 2>&1 &
 LAUNCH_PID=$!

@@ -12,9 +12,8 @@ install_packages
 build_workspace ON
 OUT="$REPO/results/flaw_or_layout"
 mkdir -p "$OUT"
-export ROS_MASTER_URI="http://127.0.0.1:${ASG_RERUN_PORT:-11396}" ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
-export LP_NUM_THREADS=1 ROS_LOG_DIR="$REPO/runs/flaw_or_layout/logs"
-PORT="${ROS_MASTER_URI##*:}"
+use_local_master "${ASG_RERUN_PORT:-11396}" "$REPO/runs/flaw_or_layout/logs"
+trap 'stop_workers; stop_master' EXIT
 CFG="$WS/src/asg_planner/config"
 for spec in paper:full paper:ground_truth fine:flawed fine:full fine:ground_truth; do
   grid="${spec%%:*}"; stack="${spec##*:}"
@@ -23,16 +22,11 @@ for spec in paper:full paper:ground_truth fine:flawed fine:full fine:ground_trut
   args=(perception:=unet model:="$stack")
   [ "$stack" = ground_truth ] && args=(perception:=ground_truth)
   log "$grid grid, $stack stack: top $TOP of $(basename "$EXPORT")"
-  roscore -p "$PORT" >/dev/null 2>&1 & core=$!
-  sleep 3
-  pids=()
-  for w in 0 1; do
-    roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" "${args[@]}" planner_config:="$cfg" markers:=false \
-        >/dev/null 2>&1 & pids+=($!)
-  done
+  start_master
+  start_workers 2 "${args[@]}" planner_config:="$cfg"
   /usr/bin/python3 -m asg_agent.rerun run "$EXPORT" --top "$TOP" --workers 2 --label "$grid/$stack" \
       --out "$OUT/$grid-$stack.jsonl.part" && mv "$OUT/$grid-$stack.jsonl.part" "$OUT/$grid-$stack.jsonl"
-  kill "${pids[@]}" 2>/dev/null; wait "${pids[@]}" 2>/dev/null
-  kill "$core"; wait "$core" 2>/dev/null || true
+  stop_workers
+  stop_master
 done
 /usr/bin/python3 -m asg_agent.rerun summary "$OUT"/*.jsonl --json "$REPO/results/flaw_or_layout.json"

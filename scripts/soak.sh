@@ -20,22 +20,18 @@ EXP="${6:-exp1}"
 BIG=1000000  # the budget while the kills go on: the clock, not the count, ends the first leg
 install_packages
 build_workspace ON
-export ROS_MASTER_URI="http://127.0.0.1:${ASG_SOAK_PORT:-11395}" ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
-export LP_NUM_THREADS=1 ROS_LOG_DIR="$REPO/runs/soak/logs"
+use_local_master "${ASG_SOAK_PORT:-11395}" "$REPO/runs/soak/logs"
 OUT="$REPO/results/reliability"
 STORE="${ASG_STORE:-$REPO/results/reliability/soak.sqlite}"
 NAME="soak-$EXP-$METHOD-s$SEED"
 KILLS="$REPO/runs/soak/kills.log"
-mkdir -p "$OUT" "$ROS_LOG_DIR"
+mkdir -p "$OUT"
 : > "$KILLS"
 : > "$REPO/runs/soak/agent.log"
-roscore -p "${ROS_MASTER_URI##*:}" >/dev/null 2>&1 & core=$!
-sleep 3
-pids=()
-for w in 0 1; do
-  roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" perception:=unet markers:=false >/dev/null 2>&1 & pids+=($!)
-done
-cleanup() { kill "${pids[@]}" "$core" "$killer" 2>/dev/null || true; }
+start_master
+start_workers 2 perception:=unet
+killer=""
+cleanup() { [ -n "$killer" ] && kill "$killer" 2>/dev/null; stop_workers; stop_master; }
 trap cleanup EXIT
 # The killer: every MIN_GAP..MAX_GAP seconds one victim, by kind in turn of a random draw.
 (

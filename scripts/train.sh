@@ -12,13 +12,10 @@ shift || true
 install_packages
 build_workspace ON
 # A master of our own on a port of our own, on loopback: a user's roscore is left alone.
-export ROS_MASTER_URI="http://127.0.0.1:${ASG_TRAIN_PORT:-11398}"
-export ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
-export LP_NUM_THREADS=1
-STORE="${ASG_STORE:-$REPO/results/train.sqlite}"
 LOG="$REPO/runs/train/logs"
-mkdir -p "$LOG" "$(dirname "$STORE")"
-export ROS_LOG_DIR="$LOG"
+use_local_master "${ASG_TRAIN_PORT:-11398}" "$LOG"
+STORE="${ASG_STORE:-$REPO/results/train.sqlite}"
+mkdir -p "$(dirname "$STORE")"
 log "campaign: $SCENARIOS Exp. 1 scenarios, flawed U-Net, 2 workers (worker logs: $LOG)"
 roslaunch -p "${ROS_MASTER_URI##*:}" "$REPO/launch/${ASG_LAUNCH:-train}.launch" scenarios:="$SCENARIOS" \
     store:="$STORE" "$@"

@@ -7,10 +7,15 @@ layout k), so a baseline of N layouts is the first N scenarios of that campaign.
 
     python3 -m asg_agent.baseline run EXPERIMENT.yaml --stack ground_truth --layouts 500 --workers 2
     python3 -m asg_agent.baseline summary EXPERIMENT.yaml      # results/baseline/<exp>.json + table
+    python3 -m asg_agent.baseline offline EXPERIMENT.yaml --label reference \
+        --planner catkin_ws/src/asg_planner/config/planner_reference.yaml   # a planner variant, no ROS
 
 `run` talks to running workers (scripts/baseline.sh launches them per stack) and appends one JSON
 line per layout to results/baseline/<exp>/<stack>.jsonl as each run ends, so an interrupted run
-resumes where it stopped. `summary` needs no ROS.
+resumes where it stopped. `summary` needs no ROS. `offline` runs the ground-truth stack on the
+same layouts without ROS, through asg_planner's `asg_closed_loop` (the same cores in the lockstep
+order; its proxies equal the ROS stack's), for a planner or follower variant: it writes
+results/baseline/<exp>/offline/<label>.jsonl and compares it with the stored ground-truth rows.
 """
 import argparse
 import json
@@ -115,6 +120,90 @@ def run(a) -> int:
     return 0
 
 
+def closed_loop_tool() -> str:
+    """The built asg_closed_loop of this workspace (or $ASG_CLOSED_LOOP)."""
+    tool = os.environ.get("ASG_CLOSED_LOOP") or os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner",
+                                                             "asg_closed_loop")
+    if not os.access(tool, os.X_OK):
+        raise SystemExit(f"baseline offline: no asg_closed_loop at {tool}: build the workspace first "
+                         "(bash scripts/setup.sh) or set ASG_CLOSED_LOOP")
+    return tool
+
+
+def offline_rows(reqs: List[dict], todo: List[int], planner: str, sets: List[str], jobs: int, tmp: str,
+                 on_row) -> None:
+    """Runs reqs[k] for k in todo through asg_closed_loop, in `jobs` processes (one llvmpipe
+    thread each); on_row(k, row) as each process's batch ends."""
+    import subprocess
+    from concurrent.futures import ThreadPoolExecutor
+    from types import SimpleNamespace
+    from asg_scenario.schema import dump_scenario
+    tool = closed_loop_tool()
+    args = ([ "--planner", planner] if planner else []) + sum((["--set", kv] for kv in sets), [])
+    files = {}
+    for k in todo:
+        files[k] = os.path.join(tmp, f"layout-{k}.yaml")
+        with open(files[k], "w") as f:
+            f.write(dump_scenario(reqs[k]))
+    env = dict(os.environ, LP_NUM_THREADS="1")
+
+    def batch(ks):
+        out = []
+        for i in range(0, len(ks), 25):  # small batches: rows come back as they finish
+            chunk = ks[i:i + 25]
+            res = subprocess.run([tool, *args, "--out", tmp, *[files[k] for k in chunk]], capture_output=True,
+                                 text=True, env=env)
+            if res.returncode:
+                raise SystemExit(f"baseline offline: asg_closed_loop failed: {res.stderr.strip()[-2000:]}")
+            for k, line in zip(chunk, res.stdout.splitlines()):
+                j = json.loads(line)
+                tr = np.loadtxt(os.path.join(tmp, f"{j['name']}.csv"), delimiter=",", skiprows=1, ndmin=2)
+                o = SimpleNamespace(termination=j["termination"], error=j.get("error", ""),
+                                    collision_with=j.get("collision_with", ""), sim_time=j["sim_time"],
+                                    visibility=j["visibility"], removed=j["removed"], trajectory=tr.ravel())
+                on_row(k, o)
+        return out
+
+    with ThreadPoolExecutor(jobs) as ex:
+        list(ex.map(batch, [todo[w::jobs] for w in range(jobs)]))
+
+
+def offline(a) -> int:
+    import tempfile
+    import threading
+    from tqdm import tqdm
+    exp = load_experiment(a.experiment)
+    reqs = layouts(exp, a.layouts)
+    path = os.path.join(os.path.dirname(out_path(exp.name, "ground_truth", a.root)), "offline", f"{a.label}.jsonl")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    done = read_rows(path)
+    todo = [k for k in range(a.layouts) if k not in done]
+    print(f"{exp.name}/offline/{a.label}: {len(done)} of {a.layouts} layouts stored in {path}, {len(todo)} to run",
+          file=sys.stderr)
+    lock = threading.Lock()
+    bar = tqdm(total=len(todo), desc=f"{exp.name}/{a.label}", unit="run", dynamic_ncols=True, disable=not todo)
+    with open(path, "a") as f, tempfile.TemporaryDirectory(prefix="asg_offline_") as tmp:
+        def on_row(k, o):
+            r = dict(row_of(k, reqs[k], o), stack=f"ground_truth/{a.label}", planner=a.planner, set=a.set)
+            with lock:
+                f.write(json.dumps(r, sort_keys=True) + "\n")
+                f.flush()
+                done[k] = r
+                bar.update(1)
+        if todo:
+            offline_rows(reqs, todo, a.planner, a.set, a.jobs, tmp, on_row)
+    bar.close()
+    rows = [done[k] for k in range(a.layouts)]
+    g = stack_summary(rows)
+    ref = read_rows(out_path(exp.name, "ground_truth", a.root))
+    both = [k for k in range(a.layouts) if k in ref and ref[k]["proxy"] is not None and done[k]["proxy"] is not None]
+    d = np.array([done[k]["proxy"] - ref[k]["proxy"] for k in both])
+    print(f"| {a.label} | {100 * g['share_ge3']:.1f} % | {g['median_yaw_term']:.3f} / {g['p90_yaw_term']:.3f} | "
+          f"{g['median_plr']:.3f} / {g['p90_plr']:.3f} | {g['collisions']} | "
+          + (f"{100 * (abs(d) > 0.1).mean():.1f} % ({abs(d).max():.2f}) of {len(both)} |" if len(both) else "- |"))
+    return 0
+
+
 def stack_summary(rows: List[dict]) -> dict:
     ok = [r for r in rows if r["proxy"] is not None]
     p = np.array([r["proxy"] for r in ok])
@@ -201,9 +290,26 @@ def main(argv=None):
     s = sub.add_parser("summary", help="results/baseline/<exp>.json and the Markdown table")
     s.add_argument("experiment")
     s.add_argument("--root", default="")
+    o = sub.add_parser("offline", help="a planner variant on the layouts with ground-truth labels, no ROS")
+    o.add_argument("experiment")
+    o.add_argument("--label", required=True, help="name of the variant (results/baseline/<exp>/offline/LABEL.jsonl)")
+    o.add_argument("--planner", default="", help="planner YAML (default: asg_closed_loop's, planner.yaml's values)")
+    o.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="planner parameter, repeatable")
+    o.add_argument("--layouts", type=int, default=500, help="layouts 0..N-1")
+    o.add_argument("--jobs", type=int, default=2, help="processes side by side")
+    o.add_argument("--root", default="")
     a = p.parse_args(argv)
-    if a.cmd == "run" and a.layouts < 1:
+    if getattr(a, "layouts", 1) < 1:
         p.error("--layouts must be >= 1")
+    if a.cmd == "offline":
+        if a.jobs < 1:
+            p.error("--jobs must be >= 1")
+        if a.planner and not os.path.isfile(a.planner):
+            p.error(f"--planner {a.planner}: no such file")
+        bad = [kv for kv in a.set if "=" not in kv]
+        if bad:
+            p.error(f"--set {bad[0]}: expected KEY=VALUE")
+        return offline(a)
     return run(a) if a.cmd == "run" else summary_cmd(a)
 
 

@@ -14,6 +14,10 @@ namespace asg_planner {
 
 struct FollowerParams {
   double lookahead = 5.0;   ///< [m] distance of the look-ahead point
+  /// Which crossing of the look-ahead circle: false, the furthest along the path beyond the
+  /// closest path point; true, the first one after it (the reference's). They differ only when
+  /// the path leaves the circle and comes back into it (a hairpin within `lookahead`).
+  bool first_crossing = false;
   double kp = 10.0;         ///< [deg/rad] front-wheel angle per radian of heading error
   double kd = 5.0;          ///< [deg s/rad] front-wheel angle per rad/s of heading-error rate
   double steering_lock = 0.6;   ///< [rad] front-wheel angle at steering command 1 (the vehicle's)
@@ -51,11 +55,11 @@ class PathFollower {
   double kpCommand() const { return kp_cmd_; }
   double kdCommand() const { return kd_cmd_; }
 
-  /// Look-ahead point for a vehicle at p: the furthest-along intersection of the circle of
-  /// radius L around p with the path beyond the path point closest to p; the path end when it
-  /// lies within L; otherwise the closest point of the path.
+  /// Look-ahead point for a vehicle at p: the furthest-along (or, with first, the first)
+  /// intersection of the circle of radius L around p with the path beyond the path point
+  /// closest to p; the path end when it lies within L; otherwise the closest point of the path.
   static Eigen::Vector2d lookahead(const std::vector<Eigen::Vector2d>& path,
-                                   const Eigen::Vector2d& p, double L);
+                                   const Eigen::Vector2d& p, double L, bool first = false);
 
  private:
   FollowerParams params_;

@@ -24,7 +24,7 @@ void PathFollower::reset() {
 }
 
 Eigen::Vector2d PathFollower::lookahead(const std::vector<Eigen::Vector2d>& path,
-                                        const Eigen::Vector2d& p, double L) {
+                                        const Eigen::Vector2d& p, double L, bool first) {
   if (path.empty()) return p;
   if (path.size() == 1) return path[0];
   // Closest point on the path, by segment.
@@ -42,10 +42,10 @@ Eigen::Vector2d PathFollower::lookahead(const std::vector<Eigen::Vector2d>& path
     }
   }
   if ((path.back() - p).norm() <= L) return path.back();
-  // Furthest-along circle intersection from the closest point onwards.
+  // Furthest-along (or first) circle intersection from the closest point onwards.
   bool found = false;
-  Eigen::Vector2d result;
-  for (size_t i = best_seg; i + 1 < path.size(); ++i) {
+  Eigen::Vector2d result = Eigen::Vector2d::Zero();
+  for (size_t i = best_seg; i + 1 < path.size() && !(first && found); ++i) {
     const Eigen::Vector2d a = path[i], d = path[i + 1] - path[i];
     const Eigen::Vector2d f = a - p;
     const double A = d.squaredNorm(), B = 2 * f.dot(d), C = f.squaredNorm() - L * L;
@@ -56,6 +56,7 @@ Eigen::Vector2d PathFollower::lookahead(const std::vector<Eigen::Vector2d>& path
       if (u < 0 || u > 1 || (i == best_seg && u < best_u)) continue;
       result = a + u * d;
       found = true;
+      if (first) break;
     }
   }
   if (found) return result;
@@ -72,7 +73,7 @@ ControlCommand PathFollower::update(double t, const VehicleState2D& s, double ta
     return c;
   }
   const Eigen::Vector2d p(s.x, s.y);
-  lookahead_ = lookahead(path_, p, params_.lookahead);
+  lookahead_ = lookahead(path_, p, params_.lookahead, params_.first_crossing);
   const Eigen::Vector2d to = lookahead_ - p;
   double e = to.norm() > 1e-6 ? std::atan2(to.y(), to.x()) - s.yaw : 0.0;
   e = std::atan2(std::sin(e), std::cos(e));

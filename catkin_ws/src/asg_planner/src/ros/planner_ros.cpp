@@ -98,6 +98,7 @@ void PlannerROS::readParameters() {
   if (stride < 1 || stride > 64) throw std::runtime_error("parameter ~projection/stride: must be 1..64");
   p.projection.stride = stride;
   get("follower/lookahead", p.follower.lookahead, 0.1, 100.0);
+  pnh_.param("follower/first_crossing", p.follower.first_crossing, p.follower.first_crossing);
   get("follower/kp", p.follower.kp, 0.0, 10000.0);
   get("follower/kd", p.follower.kd, 0.0, 10000.0);
   get("follower/steering_lock", p.follower.steering_lock, 0.01, 1.5);

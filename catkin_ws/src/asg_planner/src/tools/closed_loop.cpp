@@ -36,6 +36,7 @@ void setParam(PlannerParams* p, const std::string& key, double v) {
   if (key == "max_votes") p->max_votes = uint32_t(v);
   else if (key == "astar/edge_points") p->astar.edge_points = int(v);
   else if (key == "projection/stride") p->projection.stride = int(v);
+  else if (key == "follower/first_crossing") p->follower.first_crossing = v != 0;
   else if (d.count(key)) *d[key] = v;
   else if (key == "ack_name" || key == "publish_markers") return;
   else throw std::runtime_error("unknown planner parameter '" + key + "'");
@@ -45,6 +46,7 @@ void loadYaml(PlannerParams* p, const YAML::Node& n, const std::string& prefix) 
   for (const auto& kv : n) {
     const std::string key = prefix + kv.first.as<std::string>();
     if (kv.second.IsMap()) loadYaml(p, kv.second, key + "/");
+    else if (key == "follower/first_crossing") p->follower.first_crossing = kv.second.as<bool>();
     else if (key != "ack_name" && key != "publish_markers") setParam(p, key, kv.second.as<double>());
   }
 }

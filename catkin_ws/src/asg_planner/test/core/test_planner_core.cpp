@@ -177,6 +177,18 @@ TEST(Follower, LookaheadOnPath) {
   EXPECT_TRUE(PathFollower::lookahead(path, {5, -30}, 5.0).isApprox(Eigen::Vector2d(5, 0)));
 }
 
+TEST(Follower, HairpinInsideTheCircleFirstOrFurthestCrossing) {
+  // The path leaves the 3 m circle at (3, 0), comes back in at (2.24, 2) and leaves again at
+  // (0, 3): the reference aims at the first exit, the default at the furthest one.
+  const std::vector<Eigen::Vector2d> path = {{0, 0}, {4, 0}, {4, 2}, {0, 2}, {0, 10}};
+  EXPECT_TRUE(PathFollower::lookahead(path, {0, 0}, 3.0, true).isApprox(Eigen::Vector2d(3, 0)));
+  EXPECT_TRUE(PathFollower::lookahead(path, {0, 0}, 3.0, false).isApprox(Eigen::Vector2d(0, 3)));
+  // Without a hairpin both agree.
+  const std::vector<Eigen::Vector2d> straight = {{0, 0}, {10, 0}, {10, 10}};
+  EXPECT_TRUE(PathFollower::lookahead(straight, {2, 1}, 5.0, true)
+                  .isApprox(PathFollower::lookahead(straight, {2, 1}, 5.0, false)));
+}
+
 TEST(Follower, ConvergesOntoStraightPathFromOffset) {
   PathFollower f;
   f.setPath({{0, 0}, {300, 0}});

@@ -1,0 +1,55 @@
+"""Issue #23: `baseline offline` runs planner variants on the baseline layouts without ROS, through
+asg_planner's asg_closed_loop and asg_agent's proxy. It is only worth its figures if, with the
+default planner, it reproduces what the ROS ground-truth stack stored in results/baseline: the
+same ending, simulated time and proxy on every layout it runs."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+for pkg in ("asg_agent", "asg_scenario"):
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
+from asg_agent import baseline  # noqa: E402
+
+EXP = os.path.join(REPO, "experiments", "exp1.yaml")
+STORED = os.path.join(REPO, "results", "baseline", "exp1", "ground_truth.jsonl")
+TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner", "asg_closed_loop")
+LAYOUTS = 6
+
+
+def offline(root, *extra):
+    return subprocess.run([sys.executable, "-m", "asg_agent.baseline", "offline", EXP, "--root", str(root),
+                           "--layouts", str(LAYOUTS), *extra], capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)), timeout=300)
+
+
+@pytest.mark.skipif(not os.access(TOOL, os.X_OK), reason="needs the built workspace (asg_closed_loop)")
+def test_offline_ground_truth_rows_equal_the_ros_stack_rows(tmp_path):
+    res = offline(tmp_path, "--label", "default")
+    assert res.returncode == 0, res.stderr
+    rows = baseline.read_rows(str(tmp_path / "exp1" / "offline" / "default.jsonl"))
+    stored = baseline.read_rows(STORED)
+    assert sorted(rows) == list(range(LAYOUTS))
+    for k in range(LAYOUTS):
+        a, b = rows[k], stored[k]
+        assert (a["termination"], a["collision_with"]) == (b["termination"], b["collision_with"]), k
+        assert a["sim_time"] == pytest.approx(b["sim_time"], abs=1e-3), k
+        # The tool writes trajectories to 5 decimals; the ROS result carries doubles.
+        for key in ("proxy", "yaw_term", "plr", "vis"):
+            assert a[key] == pytest.approx(b[key], abs=1e-4), (k, key)
+    # Resumable: a second call finds every layout stored and runs none.
+    again = offline(tmp_path, "--label", "default")
+    assert again.returncode == 0 and f"{LAYOUTS} of {LAYOUTS} layouts stored" in again.stderr
+    assert len(open(tmp_path / "exp1" / "offline" / "default.jsonl").read().splitlines()) == LAYOUTS
+
+
+@pytest.mark.skipif(not os.access(TOOL, os.X_OK), reason="needs the built workspace (asg_closed_loop)")
+def test_offline_names_a_bad_planner_parameter(tmp_path):
+    res = offline(tmp_path, "--label", "bad", "--set", "follower/kpp=3")
+    assert res.returncode != 0
+    assert "unknown planner parameter 'follower/kpp'" in res.stderr
+    res = offline(tmp_path, "--label", "bad", "--set", "follower/kp")
+    assert res.returncode == 2 and "expected KEY=VALUE" in res.stderr
