@@ -319,3 +319,23 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     with pytest.raises(ValueError, match="needs a reference stack"):
         Campaign("b", exp, make_method("random", exp, 3, budget=5), store, FakePool(1), 5, 3,
                  str(tmp_path / "b.ckpt"), reward="differential")
+
+
+@pytest.mark.parametrize("method,per,asp", [("td3-per-asp", True, True), ("td3-per", True, False),
+                                            ("td3-asp", False, True), ("td3", False, False)])
+def test_td3_methods_are_what_their_names_say_and_anneal_beta_over_the_campaign(method, per, asp):
+    # Issue #25: "td3" is plain TD3 (no scale-free objective, which exists for the penalty), and
+    # beta reaches 1 at the campaign's last batch, not after 20,000 batches a campaign never draws.
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp1.yaml"))
+    cfg = TD3Config(**SMALL, updates_per_step=2)
+    m = make_method(method, exp, 3, budget=1000, td3_config=cfg)
+    c = m.agent.config
+    assert (c.per, c.asp, c.normalize_q) == (per, asp, asp)
+    assert cfg.per and cfg.asp and cfg.per_beta_steps == 0  # the caller's config is left as it was
+    if per:
+        assert c.per_beta_steps == (1000 - SMALL["start_steps"]) * 2
+        buf = m.agent.buffer
+        buf.samples = c.per_beta_steps - 1
+        assert buf.beta() < 1.0
+        buf.samples += 1
+        assert buf.beta() == 1.0

@@ -61,3 +61,51 @@ def test_new_transitions_get_the_largest_priority_and_state_round_trips():
     assert np.array_equal(other.tree.tree, buf.tree.tree) and len(other) == 2
     with pytest.raises(ValueError, match="capacity"):
         PrioritizedReplay(4, 2, 1).load_state_dict(buf.state_dict())
+
+
+def test_new_transitions_get_the_largest_stored_priority_not_the_all_time_largest():
+    # Issue #25: a priority that has since fallen (or been overwritten) must not set the level.
+    buf = PrioritizedReplay(3, 1, 1, alpha=1.0)
+    for k in range(3):
+        buf.add([k], [0], 0.0, [k], False)
+    buf.update_priorities([0, 1, 2], np.array([100.0, 2.0, 3.0]) - buf.eps)
+    buf.update_priorities([0], [1.0 - buf.eps])  # the outlier's error has fallen
+    buf.add([3], [0], 0.0, [3], False)  # overwrites slot 0
+    assert buf.tree.get(0) == pytest.approx(3.0)  # the largest stored, not 100
+    # Overwriting the largest itself: the new one gets the largest of what is still stored.
+    buf.add([4], [0], 0.0, [4], False)  # overwrites slot 1 (2.0)
+    assert buf.tree.get(1) == pytest.approx(3.0)
+
+
+def test_sum_tree_never_returns_an_empty_slot_near_node_boundaries():
+    # Issue #25: rounding in the inner sums let find() walk into an empty leaf of a buffer that is
+    # not full (p = 0: an infinite importance weight, a NaN loss). Fuzz at and next to every
+    # prefix-sum boundary, and at the top of the range.
+    rng = np.random.default_rng(7)
+    bad = 0
+    for trial in range(300):
+        cap = int(rng.integers(2, 70))
+        count = int(rng.integers(1, cap + 1))
+        t = SumTree(cap)
+        for i in range(count):
+            t.set(i, float(rng.choice([rng.uniform(1e-3, 1.0), rng.uniform(1e-9, 1e-6), 10 ** rng.uniform(-3, 3)])))
+        prefix = np.cumsum(t.tree[t.size:t.size + count])
+        masses = [t.total, np.nextafter(t.total, 0)]
+        for b in prefix:
+            masses += [b, np.nextafter(b, 0), np.nextafter(b, np.inf)]
+        for m in masses:
+            m = min(m, np.nextafter(t.total, 0))
+            i = t.find(m)
+            bad += not (0 <= i < count and t.get(i) > 0)
+    assert bad == 0
+
+
+def test_sampling_a_partly_filled_buffer_gives_finite_weights():
+    rng = np.random.default_rng(3)
+    buf = PrioritizedReplay(1000, 1, 1, alpha=0.6)
+    for k in range(333):
+        buf.add([k], [0], 0.0, [k], False)
+    buf.update_priorities(np.arange(333), rng.lognormal(0, 3, 333))
+    for _ in range(300):
+        b = buf.sample(128, rng)
+        assert np.all(b["index"] < 333) and np.all(np.isfinite(b["weight"])) and np.all(b["weight"] > 0)

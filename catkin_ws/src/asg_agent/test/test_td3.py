@@ -25,7 +25,7 @@ class Reach:
 
 
 def small_config(**kw):
-    return TD3Config(**dict(dict(hidden=64, batch_size=64, start_steps=200, updates_per_step=1,
+    return TD3Config(**dict(dict(hidden=64, batch_size=64, start_steps=200, updates_per_step=1, per_beta_steps=2500,
                                  exploration_noise=0.1, gamma=0.9, actor_lr=1e-3, critic_lr=1e-3), **kw))
 
 
@@ -112,3 +112,29 @@ def test_saturation_penalty_pulls_pre_squash_outputs_in():
     assert with_asp < 2.3 and without > with_asp + 0.5, (with_asp, without)
     # Behaviour regularisation holds the actor near the replayed actions (uniform in the box).
     assert run(False, bc=5.0) < without - 0.3
+
+
+def test_actor_terms_carry_the_importance_weights():
+    # Issue #25: with PER the actor's objective and the behaviour term are expectations under the
+    # replay distribution, like the critic's loss: a transition of weight 0 changes neither.
+    agent = TD3Agent(2, 2, small_config(seed=0, bc_weight=1.0))
+    u = torch.tensor([[0.3, -0.2], [0.1, 0.4]])
+    q = torch.tensor([[2.0], [5.0]])
+    w = torch.tensor([[1.0], [0.0]])
+    a = torch.tensor([[0.0, 0.0], [0.9, -0.9]])
+    loss, bc = agent.actor_terms(u, q, a, w)
+    a2 = torch.tensor([[0.0, 0.0], [-0.9, 0.9]])
+    q2 = torch.tensor([[2.0], [50.0]])
+    loss2, bc2 = agent.actor_terms(u, q2, a2, w)
+    assert torch.isclose(bc, bc2)
+    assert torch.isclose(loss * q.abs().mean(), loss2 * q2.abs().mean())  # same weighted Q sum
+    # Equal weights: the plain means.
+    ones = torch.ones(2, 1)
+    loss, bc = agent.actor_terms(u, q, a, ones)
+    assert torch.isclose(bc, (torch.tanh(u) - a).pow(2).mean())
+
+
+def test_per_needs_a_beta_schedule():
+    with pytest.raises(ValueError, match="per_beta_steps"):
+        TD3Agent(2, 2, small_config(per_beta_steps=0))
+    TD3Agent(2, 2, small_config(per=False, per_beta_steps=0))  # uniform replay has no beta

@@ -3,8 +3,10 @@
 A sum tree holds one priority p_i = (|delta_i| + eps)^alpha per transition; sampling draws
 transition i with probability P(i) = p_i / sum_k p_k by splitting [0, total) into `batch` equal
 strata and drawing one point in each; importance weights w_i = (N P(i))^-beta / max_j w_j correct
-the bias (normalised by the largest possible weight, that of the smallest priority), with beta annealed from beta0 to 1 over `beta_steps` samples. New transitions get the
-largest priority seen so far, so each is replayed at least once soon.
+the bias (normalised by the largest possible weight, that of the smallest priority), with beta
+annealed from beta0 to 1 over `beta_steps` sampled batches (TD3Search sets it to the campaign's
+batches, so the correction is complete by its end). New transitions get the largest priority
+stored at the time, so each is replayed soon.
 """
 from typing import Dict
 
@@ -56,14 +58,18 @@ class SumTree:
         return float(self.tree[index + self.size])
 
     def find(self, mass: float) -> int:
-        """Smallest leaf index whose prefix sum exceeds `mass` (0 <= mass < total)."""
+        """Smallest leaf index whose prefix sum exceeds `mass` (0 <= mass < total), and always a
+        leaf with a positive priority while the total is positive: an inner sum may differ from
+        the sum of its leaves in the last bit, so the walk never enters a subtree whose sum is 0
+        and keeps the residual mass inside the subtree it enters (issue #25)."""
         i = 1
         while i < self.size:
-            left = self.tree[2 * i]
-            if mass < left:
+            left, right = self.tree[2 * i], self.tree[2 * i + 1]
+            if left > 0.0 and (mass < left or right <= 0.0):
+                mass = min(mass, float(np.nextafter(left, 0.0)))
                 i = 2 * i
             else:
-                mass -= left
+                mass = min(max(mass - left, 0.0), float(np.nextafter(right, 0.0)))
                 i = 2 * i + 1
         return min(i - self.size, self.capacity - 1)
 
@@ -83,7 +89,7 @@ class PrioritizedReplay:
         self.ptr = 0
         self.count = 0
         self.samples = 0  # batches drawn so far (beta annealing)
-        self.max_priority = 1.0
+        self.max_priority = 1.0  # the largest |delta| + eps ever seen: a statistic, not the level of new entries
 
     def __len__(self):
         return self.count
@@ -95,7 +101,9 @@ class PrioritizedReplay:
         i = self.ptr
         self.state[i], self.action[i], self.reward[i] = s, a, r
         self.next_state[i], self.not_done[i] = s2, 0.0 if done else 1.0
-        self.tree.set(i, self.max_priority ** self.alpha)
+        # The largest priority stored now (before this slot is overwritten), 1 in an empty buffer.
+        stored = self.tree.tree[self.tree.size:self.tree.size + self.count]
+        self.tree.set(i, float(stored.max()) if self.count else 1.0)
         self.ptr = (self.ptr + 1) % self.capacity
         self.count = min(self.count + 1, self.capacity)
 
@@ -126,6 +134,7 @@ class PrioritizedReplay:
     def state_dict(self) -> dict:
         n = self.count
         return {"capacity": self.capacity, "ptr": self.ptr, "count": n, "samples": self.samples,
+                "beta_steps": self.beta_steps,
                 "max_priority": self.max_priority, "priorities": self.tree.tree[self.tree.size:self.tree.size + self.capacity].copy(),
                 "state": self.state[:n].copy() if n < self.capacity else self.state.copy(),
                 "action": self.action[:n].copy() if n < self.capacity else self.action.copy(),
@@ -140,4 +149,6 @@ class PrioritizedReplay:
         for key in ("state", "action", "reward", "next_state", "not_done"):
             getattr(self, key)[:len(d[key])] = d[key]
         self.ptr, self.count, self.samples, self.max_priority = d["ptr"], n, d["samples"], d["max_priority"]
+        # A resumed campaign keeps the schedule it began with, whatever budget it resumes with.
+        self.beta_steps = d.get("beta_steps", self.beta_steps)
         self.tree.set_all(d["priorities"])

@@ -133,10 +133,16 @@ class Annealing(SearchMethod):
 class TD3Search(SearchMethod):
     """TD3 with or without PER and the saturation penalty (td3.py)."""
 
-    def __init__(self, experiment, seed, per=True, asp=True, config: Optional[TD3Config] = None):
+    def __init__(self, experiment, seed, per=True, asp=True, config: Optional[TD3Config] = None,
+                 budget: int = 1000):
         super().__init__(experiment, seed)
-        cfg = config or TD3Config()
-        cfg.per, cfg.asp, cfg.seed = per, asp, seed
+        from dataclasses import replace
+        # The method's name says what it is: PER and the penalty on or off, and the scale-free
+        # actor objective only with the penalty (it exists so that the penalty's weight means the
+        # same at any reward scale); plain "td3" is TD3's own -Q objective (issue #25).
+        cfg = replace(config or TD3Config(), per=per, asp=asp, seed=seed, normalize_q=asp)
+        if cfg.per and cfg.per_beta_steps < 1:  # anneal beta to 1 over this campaign's batches
+            cfg.per_beta_steps = max(1, (budget - cfg.start_steps) * cfg.updates_per_step)
         self.name = "td3" + ("-per" if per else "") + ("-asp" if asp else "")
         self.agent = TD3Agent(self.states.dim, experiment.action_dim, cfg)
 
@@ -167,5 +173,5 @@ def make_method(name: str, experiment: Experiment, seed: int, budget: int = 1000
     if name == "annealing":
         return Annealing(experiment, seed, budget=budget)
     if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
-        return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config)
+        return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
     raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")

@@ -53,13 +53,13 @@ class TD3Config:
     per: bool = True  #: prioritized replay (False: uniform replay, weights 1)
     per_alpha: float = 0.6  #: priority exponent
     per_beta0: float = 0.4  #: initial importance-weight exponent, annealed to 1
-    per_beta_steps: int = 20000  #: batches over which beta reaches 1
+    per_beta_steps: int = 0  #: batches over which beta reaches 1; 0: the campaign's, set by TD3Search
     per_eps: float = 1e-3  #: added to |TD error|
     asp: bool = True  #: action saturation penalty
     asp_lambda0: float = 1.0  #: its initial weight
     asp_u0: float = 2.0  #: pre-squash magnitude where it starts
     asp_tau: float = 3000.0  #: updates over which its weight falls by e
-    normalize_q: bool = True  #: divide the actor's -Q by its batch mean |Q| (scale-free objective)
+    normalize_q: bool = True  #: divide the actor's -Q by its batch mean |Q| (scale-free); TD3Search: on with ASP only
     bc_weight: float = 0.0  #: weight of mean((actor(s) - a)^2) over replayed (s, a): keeps the actor near its data
     seed: int = 0  #: seeds torch and numpy generators of this agent
 
@@ -92,6 +92,9 @@ class Critic(nn.Module):
 class TD3Agent:
     def __init__(self, state_dim: int, action_dim: int, config: Optional[TD3Config] = None):
         self.config = c = config or TD3Config()
+        if c.per and c.per_beta_steps < 1:
+            raise ValueError("TD3Config.per_beta_steps must be >= 1 with PER: the batches over which beta "
+                             "reaches 1 (TD3Search sets it to the campaign's)")
         self.state_dim, self.action_dim = state_dim, action_dim
         self.torch_gen = torch.Generator().manual_seed(c.seed)
         self.rng = np.random.default_rng(c.seed)
@@ -106,7 +109,7 @@ class TD3Agent:
         self.actor_opt = torch.optim.Adam(self.actor.parameters(), lr=c.actor_lr)
         self.critic_opt = torch.optim.Adam(self.critic.parameters(), lr=c.critic_lr)
         self.buffer = PrioritizedReplay(c.buffer_size, state_dim, action_dim, c.per_alpha if c.per else 0.0,
-                                        c.per_beta0, c.per_beta_steps, c.per_eps)
+                                        c.per_beta0, max(1, c.per_beta_steps), c.per_eps)
         self.observed = 0  # transitions observed
         self.acted = 0  # actions chosen
         self.updates = 0  # critic updates done
@@ -173,12 +176,11 @@ class TD3Agent:
             # so the penalty's weight means the same whatever the reward scale (the proxy is
             # 1 to 8, Q ten times that): without it the critic's gradient swamped the penalty and
             # the first Exp. 1 campaign's actor went to the landscape's edges (docs/agent.md).
-            scale = q.abs().mean().detach() + 1e-6 if c.normalize_q else 1.0
-            actor_loss = -q.mean() / scale
+            actor_loss, bc = self.actor_terms(u, q, a, w)
             asp = (F.relu(u.abs() - c.asp_u0).pow(2)).mean()
             loss = actor_loss + self.asp_weight() * asp
             if c.bc_weight > 0:  # behaviour regularisation (TD3+BC's term): no leap off the data
-                loss = loss + c.bc_weight * (torch.tanh(u) - a).pow(2).mean()
+                loss = loss + c.bc_weight * bc
             self.actor_opt.zero_grad()
             loss.backward()
             self.actor_opt.step()
@@ -188,6 +190,16 @@ class TD3Agent:
                         tp.mul_(1 - c.tau).add_(c.tau * p)
             out.update(actor_loss=float(actor_loss), asp=float(asp), asp_weight=self.asp_weight())
         return out
+
+    def actor_terms(self, u, q, a, w):
+        """The actor's objective and its behaviour term over a replayed batch: pre-squash actions
+        u, Q of the squashed actions q, replayed actions a, importance weights w (ones without
+        PER). Both are expectations under the replay distribution, so with PER both carry the
+        importance weights, as the critic's loss does (issue #25)."""
+        scale = q.abs().mean().detach() + 1e-6 if self.config.normalize_q else 1.0
+        actor_loss = -(w * q).mean() / scale
+        bc = (w * (torch.tanh(u) - a).pow(2)).mean()
+        return actor_loss, bc
 
     # -- persistence ----------------------------------------------------------------------------
     def state_dict(self) -> dict:

@@ -1,6 +1,7 @@
 // asg_planner_benchmark: vote insertion per camera frame and A* per replan, on frames rendered
 // by the simulator along the start -> goal line of a scenario (ground-truth labels).
 //   asg_planner_benchmark SCENARIO.yaml [vote_spacing=5] [vehicle_spacing=5] [frames=150] [repeats=5]
+//       [sigma=2.5] [edge_points=3]     (the fine grids of planner_fine.yaml: 1 2 150 7 1.5 1)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,13 +23,19 @@ static double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s SCENARIO.yaml [vote_spacing] [vehicle_spacing] [frames] [repeats]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s SCENARIO.yaml [vote_spacing] [vehicle_spacing] [frames] [repeats] [sigma] [edge_points]\n", argv[0]);
     return 2;
   }
   const double vote_spacing = argc > 2 ? std::atof(argv[2]) : 5.0;
   const double vehicle_spacing = argc > 3 ? std::atof(argv[3]) : 5.0;
   const int frames = argc > 4 ? std::atoi(argv[4]) : 150;
   const int repeats = argc > 5 ? std::atoi(argv[5]) : 5;
+  const double sigma = argc > 6 ? std::atof(argv[6]) : 2.5;   // [m] the pairs: 5 m grids 2.5, fine grids 1.5
+  const int edge_points = argc > 7 ? std::atoi(argv[7]) : 3;  // [-] 5 m grids 3, fine grids 1
+  if (frames < 1 || repeats < 1 || !(sigma > 0) || (edge_points != 1 && edge_points != 3)) {
+    std::fprintf(stderr, "error: frames and repeats >= 1, sigma > 0, edge_points 1 or 3\n");
+    return 2;
+  }
   try {
     const auto f = asg_sim::loadScenarioYaml(argv[1]);
     asg_sim::Renderer renderer;
@@ -52,6 +59,8 @@ int main(int argc, char** argv) {
     asg_planner::PlannerParams params;
     params.vote_spacing = vote_spacing;
     params.astar.vehicle_spacing = vehicle_spacing;
+    params.astar.sigma = sigma;
+    params.astar.edge_points = edge_points;
     std::vector<double> vote_ms, plan_ms, worst_ms;
     // Worst case: every pixel labelled non-traversable (a perception that sees obstacles everywhere).
     std::vector<uint8_t> all_obstacle(size_t(cam.width) * cam.height, 1);
@@ -80,8 +89,8 @@ int main(int argc, char** argv) {
       }
       plan_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t1).count() / plans);
     }
-    std::printf("scene %s, vote grid %.1f m, vehicle grid %.1f m, %d frames x %d repeats, medians:\n",
-                f.name.c_str(), vote_spacing, vehicle_spacing, frames, repeats);
+    std::printf("scene %s, vote grid %.1f m, vehicle grid %.1f m, sigma %.1f m, %d edge point(s), %d frames x %d "
+                "repeats, medians:\n", f.name.c_str(), vote_spacing, vehicle_spacing, sigma, edge_points, frames, repeats);
     std::printf("  vote insertion        %8.3f ms/frame (%.0f voting pixels/frame, %zu voted vertices)\n",
                 median(vote_ms), double(voters) / (frames * repeats), vertices);
     std::printf("  vote insertion, every pixel an obstacle %8.3f ms/frame\n", median(worst_ms));
