@@ -5,6 +5,9 @@
 # Writes results/baseline/<exp>.json and prints the table of docs/baseline.md.
 #   bash scripts/baseline.sh EXPERIMENT [N_GROUND_TRUTH=500] [N_UNET=300]
 #   e.g. bash scripts/baseline.sh exp1      (experiments/exp1.yaml)
+# ASG_PLANNER_CONFIG=FILE: another planner configuration; ASG_UNET_BACKEND=bf16: the U-Net stacks
+# on another inference backend, stored apart under results/baseline/backend_<B>/ (compare with
+# python3 -m asg_agent.baseline compare).
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -15,17 +18,20 @@ install_packages
 build_workspace ON
 use_local_master "${ASG_BASELINE_PORT:-11395}" "$REPO/runs/baseline/logs"
 CFG="${ASG_PLANNER_CONFIG:-$WS/src/asg_planner/config/planner.yaml}"
+BACKEND="${ASG_UNET_BACKEND:-channels_last}"
+ROOT=()
+[ "$BACKEND" = channels_last ] || ROOT=(--root "$REPO/results/baseline/backend_$BACKEND")
 trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
-  args=(perception:=unet model:="$stack")
+  args=(perception:=unet model:="$stack" unet_backend:="$BACKEND")
   [ "$stack" = ground_truth ] && args=(perception:=ground_truth)
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"
   start_master
   start_workers 2 "${args[@]}" planner_config:="$CFG"
-  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2
+  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 "${ROOT[@]}"
   stop_workers
   stop_master
 done
-/usr/bin/python3 -m asg_agent.baseline summary "$EXP"
+/usr/bin/python3 -m asg_agent.baseline summary "$EXP" "${ROOT[@]}"

@@ -52,3 +52,33 @@ def test_differential_launch_runs_two_stacks_and_a_reference_campaign():
                       "/worker_2/segmenter/model": "full", "/worker_3/segmenter/model": "full"}
     args = roslaunch("--args", "/campaign", path, "scenarios:=42")
     assert "--workers 2 --reference-workers 2" in args and "--scenarios 42" in args
+
+
+def test_train_launch_gives_every_worker_under_test_the_backend():
+    # Issue #24: the inference backend is part of the stack's identity (experiment `unet_backend`).
+    import yaml
+    path = os.path.join(REPO, "launch", "train.launch")
+    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "unet_backend:=bf16"))
+    assert [params[f"/worker_{i}/segmenter/backend"] for i in range(3)] == ["bf16"] * 3
+    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=2"))
+    assert params["/worker_0/segmenter/backend"] == "channels_last"
+
+
+def test_the_experiment_backends_are_the_segmenters():
+    import sys
+    for pkg in ("asg_agent", "asg_perception", "asg_scenario"):
+        sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
+    from asg_agent.experiment import UNET_BACKENDS, ExperimentError, load_experiment
+    from asg_perception.inference import BACKENDS
+    assert tuple(UNET_BACKENDS) == tuple(BACKENDS)
+    exp = os.path.join(REPO, "experiments", "exp1.yaml")
+    assert load_experiment(exp).unet_backend == "channels_last"
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        bad = os.path.join(d, "bad.yaml")
+        with open(bad, "w") as f:
+            f.write(open(exp).read().replace("scenario: ../scenarios/exp1.yaml",
+                                             f"scenario: {os.path.join(REPO, 'scenarios', 'exp1.yaml')}")
+                    + "unet_backend: fp8\n")
+        with pytest.raises(ExperimentError, match="unet_backend: 'fp8', must be one of"):
+            load_experiment(bad)

@@ -7,6 +7,7 @@ layout k), so a baseline of N layouts is the first N scenarios of that campaign.
 
     python3 -m asg_agent.baseline run EXPERIMENT.yaml --stack ground_truth --layouts 500 --workers 2
     python3 -m asg_agent.baseline summary EXPERIMENT.yaml      # results/baseline/<exp>.json + table
+    python3 -m asg_agent.baseline compare A.jsonl B.jsonl      # how many proxies move between two
     python3 -m asg_agent.baseline offline EXPERIMENT.yaml --label reference \
         --planner catkin_ws/src/asg_planner/config/planner_reference.yaml   # a planner variant, no ROS
 
@@ -204,6 +205,21 @@ def offline(a) -> int:
     return 0
 
 
+def compare(a_path: str, b_path: str, threshold: float = 0.1) -> dict:
+    """Two row files of the same layouts (two backends, two planner variants): how many layouts
+    both ran, the share whose proxy moves by more than `threshold`, the largest move, and the
+    endings that differ."""
+    a, b = read_rows(a_path), read_rows(b_path)
+    both = sorted(k for k in a if k in b and a[k]["proxy"] is not None and b[k]["proxy"] is not None)
+    if not both:
+        raise SystemExit(f"baseline compare: no layout with a proxy in both {a_path} and {b_path}")
+    d = np.array([b[k]["proxy"] - a[k]["proxy"] for k in both])
+    return {"layouts": len(both), "moved_share": float((np.abs(d) > threshold).mean()), "threshold": threshold,
+            "largest_move": float(np.abs(d).max()), "mean_change": float(d.mean()),
+            "endings_differ": [k for k in both if a[k]["termination"] != b[k]["termination"]],
+            "collisions": [int(sum(r[k]["termination"] == "COLLISION" for k in both)) for r in (a, b)]}
+
+
 def stack_summary(rows: List[dict]) -> dict:
     ok = [r for r in rows if r["proxy"] is not None]
     p = np.array([r["proxy"] for r in ok])
@@ -298,7 +314,21 @@ def main(argv=None):
     o.add_argument("--layouts", type=int, default=500, help="layouts 0..N-1")
     o.add_argument("--jobs", type=int, default=2, help="processes side by side")
     o.add_argument("--root", default="")
+    c = sub.add_parser("compare", help="two row files of the same layouts: how many proxies move")
+    c.add_argument("a", help="rows (jsonl), e.g. results/baseline/exp1/flawed.jsonl")
+    c.add_argument("b", help="rows (jsonl) to compare with them")
+    c.add_argument("--threshold", type=float, default=0.1, help="a proxy moves when it changes by more")
     a = p.parse_args(argv)
+    if a.cmd == "compare":
+        for f in (a.a, a.b):
+            if not os.path.isfile(f):
+                p.error(f"{f}: no such file")
+        r = compare(a.a, a.b, a.threshold)
+        print(f"{r['layouts']} layouts: the proxy moves by > {r['threshold']:g} on {100 * r['moved_share']:.1f} % "
+              f"(largest {r['largest_move']:.2f}, mean change {r['mean_change']:+.3f}); collisions "
+              f"{r['collisions'][0]} -> {r['collisions'][1]}; endings differ on {len(r['endings_differ'])}: "
+              f"{r['endings_differ'][:20]}")
+        return 0
     if getattr(a, "layouts", 1) < 1:
         p.error("--layouts must be >= 1")
     if a.cmd == "offline":

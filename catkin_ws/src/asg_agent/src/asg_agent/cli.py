@@ -197,7 +197,7 @@ def main(argv=None):
                             + (f" err {st['errors']}" if st["errors"] else ""), refresh=True)
 
     settings = {"workers": workers, "reference_workers": ref_workers, "reward": a.reward, "experiment_file": exp.source, "perception": exp.perception,
-                "model": exp.model, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
+                "model": exp.model, "unet_backend": exp.unet_backend, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
     collector = None
     if a.stage_report and not a.fake_workers:
         from .stages_ros import StageCollector

@@ -9,6 +9,7 @@ search varies it. The action is the x, y of every obstacle instance, each scaled
     scenario: ../scenarios/exp1.yaml   # relative to this file
     perception: unet                   # unet or ground_truth (the stack the workers must run)
     model: flawed                      # unet only: shipped model name or path
+    unet_backend: channels_last        # unet only: inference backend (asg_perception.inference)
     planner_config: planner.yaml       # a file of asg_planner/config, or a path
     episode_steps: 5
     sim_timeout: 60.0                  # [s] overrides the scenario's
@@ -30,8 +31,10 @@ class ExperimentError(ValueError):
     pass
 
 
-KEYS = {"name", "scenario", "perception", "model", "planner_config", "episode_steps", "sim_timeout",
-        "description"}
+KEYS = {"name", "scenario", "perception", "model", "unet_backend", "planner_config", "episode_steps",
+        "sim_timeout", "description"}
+#: asg_perception.inference.BACKENDS (a test keeps the two equal; asg_agent does not import torch models)
+UNET_BACKENDS = ("eager", "channels_last", "frozen", "bf16")
 
 
 @dataclass
@@ -42,6 +45,7 @@ class Experiment:
     model: str = "flawed"
     planner_config: str = "planner.yaml"
     episode_steps: int = 5
+    unet_backend: str = "channels_last"  #: part of the stack's identity: labels differ by backend
     source: str = ""
     text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
 
@@ -90,6 +94,8 @@ def load_experiment(path: str) -> Experiment:
             problems.append(f"{key}: required, a non-empty string")
     if data.get("perception", "unet") not in ("unet", "ground_truth"):
         problems.append(f"perception: {data.get('perception')!r}, must be unet or ground_truth")
+    if data.get("unet_backend", "channels_last") not in UNET_BACKENDS:
+        problems.append(f"unet_backend: {data.get('unet_backend')!r}, must be one of {', '.join(UNET_BACKENDS)}")
     steps = data.get("episode_steps", 5)
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 100:
         problems.append(f"episode_steps: {steps!r}, must be an integer in [1, 100]")
@@ -115,4 +121,5 @@ def load_experiment(path: str) -> Experiment:
         raise ExperimentError(f"{path}: the scenario has no obstacle to place")
     return Experiment(name=data["name"], scenario=scenario, perception=data.get("perception", "unet"),
                       model=data.get("model", "flawed"), planner_config=data.get("planner_config", "planner.yaml"),
-                      episode_steps=steps, source=os.path.abspath(path), text=text)
+                      episode_steps=steps, source=os.path.abspath(path), text=text,
+                      unet_backend=data.get("unet_backend", "channels_last"))

@@ -54,6 +54,11 @@ def stack_mismatch(worker: str, settings: dict) -> list:
             model = rospy.get_param(f"{worker}/segmenter/model")
             if os.path.splitext(os.path.basename(str(model)))[0] != os.path.splitext(os.path.basename(settings.get("model", "")))[0]:
                 out.append(f"the campaign ran model {settings.get('model')!r}, {worker} runs {model!r}")
+            # Campaigns from before the backend was recorded ran the default, channels_last.
+            backend, ran = rospy.get_param(f"{worker}/segmenter/backend", "channels_last"), settings.get(
+                "unet_backend", "channels_last")
+            if backend != ran:
+                out.append(f"the campaign ran the {ran!r} inference backend, {worker} runs {backend!r}")
     elif want == "ground_truth" and has_seg:
         out.append(f"the campaign ran ground-truth labels, {worker} runs a segmenter")
     return out
@@ -137,6 +142,7 @@ def main(argv=None):
     if not a.worker:
         stack = {"perception": a.perception or settings.get("perception", "unet"),
                  "model": a.model or settings.get("model", "flawed"),
+                 "unet_backend": settings.get("unet_backend", "channels_last"),
                  "planner_config": settings.get("planner_config", "planner.yaml")}
         launched = bring_up_worker(stack, a.port)
         settings = {}  # the worker is the stored stack by construction
@@ -162,7 +168,8 @@ def bring_up_worker(stack: dict, port: int):
     os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     os.environ.setdefault("ROS_HOSTNAME", "127.0.0.1")
     cmd = ["roslaunch", "-p", str(port), os.path.join(repo, "launch", "worker.launch"), "ns:=replay_worker",
-           f"perception:={stack['perception']}", f"model:={stack['model']}", f"planner_config:={planner}",
+           f"perception:={stack['perception']}", f"model:={stack['model']}", f"unet_backend:={stack.get('unet_backend', 'channels_last')}",
+           f"planner_config:={planner}",
            "odom_every_tick:=true"]  # a replay is for looking at: every tick's pose in the bag
     print(f"replay: bringing up a worker: {' '.join(cmd[3:])}", file=sys.stderr)
     return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid)

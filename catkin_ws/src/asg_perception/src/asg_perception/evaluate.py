@@ -49,22 +49,36 @@ def main(argv=None):
     p.add_argument("--json", default="", help="write the figures to this JSON file")
     p.add_argument("--panels", default="", help="write an example panel PNG here")
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--backend", default="eager", help="inference backend (asg_perception.inference): "
+                   "eager (the model as trained, batched), channels_last, frozen or bf16 (frame by frame)")
     a = p.parse_args(argv)
+    from .inference import BACKENDS, Segmenter
+    if a.backend not in BACKENDS:
+        p.error(f"--backend {a.backend!r}: one of {', '.join(BACKENDS)}")
     import torch
     torch.set_num_threads(a.threads)
     try:
         frames = load_frames(a.data, a.limit or None, progress=True)
-        models = {}
+        models, paths = {}, {}
         for spec in a.models:
             name, _, path = spec.rpartition("=")
             name = name or os.path.splitext(os.path.basename(path))[0]
-            models[name] = load_model(path)
+            models[name], paths[name] = load_model(path), path
     except (DatasetError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     results = {}
     for name, model in models.items():
-        r = evaluate(model, frames)
+        if a.backend == "eager":
+            r = evaluate(model, frames)
+        else:
+            seg = Segmenter(paths[name], a.backend, a.threads, *frames.rgb.shape[1:3])
+            r = evaluate(model, frames, labeller=seg.batch)
+            # Pixel agreement of this backend's labels with the eager model's, frame by frame.
+            same = sum(int((seg.batch(frames.rgb[i:i + 8]) == predict(model, frames.rgb[i:i + 8])).sum())
+                       for i in range(0, len(frames), 8))
+            r["backend"], r["agreement_with_eager"] = a.backend, same / frames.labels.size
+            print(f"{name:>8}: {a.backend} labels agree with eager on {100 * r['agreement_with_eager']:.3f} % of pixels")
         results[name] = r
         iou = "  ".join(f"{c} {r['iou'][c]:.3f}" for c in CLASSES)
         print(f"{name:>8}: IoU {iou}  |  pixel acc {r['pixel_accuracy']:.4f}  |  shadow "

@@ -7,13 +7,17 @@ the tests):
   default, 2.3x faster than eager on one core (docs/benchmarks.md).
 - ``frozen``: TorchScript, frozen and optimised for inference (conv/activation fusion), NHWC;
   measured no faster than eager with Debian's torch 1.13, kept for comparison.
+- ``bf16``: ``channels_last`` under torch's CPU autocast to bfloat16 (convolutions in bf16 with
+  fp32 accumulation, argmax on the bf16 logits). Not bit-equal to eager: its labels agree on a
+  measured share of pixels (docs/benchmarks.md), and it is deterministic run to run. Fast where
+  the CPU has AVX512-BF16 (or AMX); elsewhere oneDNN emulates it.
 """
 import numpy as np
 import torch
 
 from .train import load_model
 
-BACKENDS = ("eager", "channels_last", "frozen")
+BACKENDS = ("eager", "channels_last", "frozen", "bf16")
 
 
 class Segmenter:
@@ -38,6 +42,7 @@ class Segmenter:
                 traced = torch.jit.trace(model, example)
                 model = torch.jit.optimize_for_inference(torch.jit.freeze(traced))
         self.model = model
+        self.bf16 = backend == "bf16"
         self(np.zeros((height, width, 3), np.uint8))  # warm up (oneDNN primitive caches)
 
     def _input(self, rgb: np.ndarray) -> torch.Tensor:
@@ -52,6 +57,10 @@ class Segmenter:
         if rgb.shape[:2] != self.shape:
             raise ValueError(f"frame is {rgb.shape[1]}x{rgb.shape[0]}, the segmenter was made "
                              f"for {self.shape[1]}x{self.shape[0]}")
-        with torch.no_grad():
+        with torch.no_grad(), torch.autocast("cpu", dtype=torch.bfloat16, enabled=self.bf16):
             logits = self.model(self._input(rgb))
         return logits[0].argmax(0).to(torch.uint8).numpy()
+
+    def batch(self, rgb: np.ndarray) -> np.ndarray:
+        """Labels (N x H x W uint8) for N RGB frames, one at a time as the node runs them."""
+        return np.stack([self(f) for f in rgb]) if len(rgb) else np.zeros((0, *self.shape), np.uint8)
