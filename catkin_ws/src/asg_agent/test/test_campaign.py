@@ -311,6 +311,12 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     s = store.summary("a")
     assert (s["attributed"], s["perception_ge3"], s["stack_ge3"]) == (60, perception, stack)
     assert s["differential_ge1"] == sum(r["proxy"] - ref[r["job"]] >= 1 for r in rows)
+    # The compact export keeps the reference runs, and its counts are the store's.
+    from asg_agent.analysis import counts, export, read_export
+    export(store, "a", str(tmp_path / "a.jsonl.gz"))
+    k = counts(read_export(str(tmp_path / "a.jsonl.gz"))[1])
+    assert (k["attributed"], k["perception_ge3"], k["stack_ge3"], k["differential_ge1"]) == (
+        60, perception, stack, s["differential_ge1"])
     # A resumed campaign takes its counts from the store.
     again = Campaign("a", exp, make_method("random", exp, 3, budget=60), store, FakePool(2, seed=1, gain=6.0), 60, 3,
                      str(tmp_path / "a.ckpt"), slots=4, reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"))

@@ -109,10 +109,20 @@ def read_export(path: str):
 
 
 def counts(rows) -> dict:
+    """Counts of an export; with attribution (rows carrying the reference stack's run) also the
+    findings that are the perception's (proxy >= 3, reference < 2), the stack's (both >= 3), and
+    the differential ones (proxy - reference >= 1), as the store's summary counts them."""
     p = [r["proxy"] for r in rows if r["proxy"] is not None]
-    return {"scenarios": len(rows), "proxy_ge_3": sum(v >= 3 for v in p), "proxy_ge_4": sum(v >= 4 for v in p),
-            "max_proxy": max(p) if p else None,
-            "terminations": {t: sum(r["termination"] == t for r in rows) for t in sorted({r["termination"] for r in rows})}}
+    out = {"scenarios": len(rows), "proxy_ge_3": sum(v >= 3 for v in p), "proxy_ge_4": sum(v >= 4 for v in p),
+           "max_proxy": max(p) if p else None,
+           "terminations": {t: sum(r["termination"] == t for r in rows) for t in sorted({r["termination"] for r in rows})}}
+    pairs = [(r["proxy"], r["reference"]["proxy"]) for r in rows if r["proxy"] is not None
+             and r.get("reference") and r["reference"].get("proxy") is not None]
+    if pairs:
+        out.update(attributed=len(pairs), perception_ge3=sum(t >= 3 and ref < 2 for t, ref in pairs),
+                   stack_ge3=sum(t >= 3 and ref >= 3 for t, ref in pairs),
+                   differential_ge1=sum(t - ref >= 1 for t, ref in pairs))
+    return out
 
 
 def asp_effect(scenarios: int, seeds: int, experiment: str):
