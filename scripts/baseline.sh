@@ -7,7 +7,7 @@
 #   e.g. bash scripts/baseline.sh exp1      (experiments/exp1.yaml)
 # ASG_PLANNER_CONFIG=FILE: another planner configuration; ASG_UNET_BACKEND=bf16: the U-Net stacks
 # on another inference backend, stored apart under results/baseline/backend_<B>/ (compare with
-# python3 -m asg_agent.baseline compare).
+# python3 -m asg_agent.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -25,6 +25,7 @@ trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
+  [[ " ${ASG_BASELINE_STACKS:-ground_truth flawed full} " == *" $stack "* ]] || continue
   args=(perception:=unet model:="$stack" unet_backend:="$BACKEND")
   [ "$stack" = ground_truth ] && args=(perception:=ground_truth)
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"

@@ -8,6 +8,8 @@
 #   bash scripts/bench.sh [SCENARIOS=160] [TAG=now] [WORKER_COUNTS="1 2"]
 # BENCH_BASELINE=1: the pipeline as it was before issue #13's changes (odom and tf at every tick,
 # planner markers on, freed workers wait for the agent's update) - the "before" column.
+# BENCH_ATTRIBUTION=true: every scenario also runs on the ground-truth reference stack (2 more
+# workers). BENCH_EXPERIMENT=exp1-bf16: another experiment file (its unet_backend is passed on).
 # Run it on an otherwise idle machine: it measures the machine. docs/benchmarks.md.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SCENARIOS="${1:-160}"
@@ -22,10 +24,12 @@ trap 'rm -rf "$TMP"' EXIT
 log "U-Net alone on one core (FLOP a frame, ms a frame, practical peak)"
 /usr/bin/python3 -m asg_perception.peak "$WS/src/asg_perception/models/flawed.pt" --json "$OUT/$TAG-peak.json"
 files=()
-BASE_ARGS=()
+EXPF="$REPO/experiments/${BENCH_EXPERIMENT:-exp1}.yaml"
+BACKEND="$(/usr/bin/python3 -c "import sys; sys.path.insert(0, '$WS/src/asg_agent/src'); from asg_agent.experiment import load_experiment; print(load_experiment('$EXPF').unet_backend)")"
+BASE_ARGS=(experiment:="$EXPF" unet_backend:="$BACKEND" attribution:="${BENCH_ATTRIBUTION:-false}")
 BASE_EXTRA=""
 if [ "${BENCH_BASELINE:-0}" = 1 ]; then
-  BASE_ARGS=(odom_every_tick:=true markers:=true)
+  BASE_ARGS+=(odom_every_tick:=true markers:=true)
   BASE_EXTRA="--no-early-dispatch"
 fi
 for w in $COUNTS; do
