@@ -21,8 +21,11 @@ APT_PACKAGES=(
   libbullet-dev libosmesa6-dev mesa-common-dev liboctomap-dev libeigen3-dev libopencv-dev
   libgtest-dev googletest libyaml-cpp-dev
   python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-scipy python3-tqdm
-  python3-pytest python3-pil xvfb
+  python3-pytest python3-pil xvfb python3-pip python3-protobuf
 )
+# From PyPI, pinned, without dependencies (every dependency above is Debian's: pip's numpy 2 would
+# break Debian's torch): TensorBoard's event-file writer for campaign scalars (docs/agent.md).
+PIP_PACKAGES=(tensorboardX==2.6.2.2)
 
 log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
 
@@ -35,11 +38,24 @@ install_packages() {
   done
   if [ ${#missing[@]} -eq 0 ]; then
     log "all ${#APT_PACKAGES[@]} Debian packages present"
-    return
+  else
+    log "installing ${#missing[@]} Debian packages: ${missing[*]}"
+    as_root apt-get update
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "${missing[@]}"
   fi
-  log "installing ${#missing[@]} Debian packages: ${missing[*]}"
-  as_root apt-get update
-  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "${missing[@]}"
+  install_pip_packages
+}
+
+install_pip_packages() {
+  local p name want have
+  for p in "${PIP_PACKAGES[@]}"; do
+    name="${p%%==*}"; want="${p##*==}"
+    have="$(/usr/bin/python3 -m pip show "$name" 2>/dev/null | sed -n 's/^Version: //p')"
+    [ "$have" = "$want" ] && continue
+    log "installing $p from PyPI (no dependencies) for /usr/bin/python3"
+    as_root /usr/bin/python3 -m pip install --quiet --no-input --disable-pip-version-check \
+        --break-system-packages --no-deps "$p"
+  done
 }
 
 source_ros() {

@@ -345,3 +345,55 @@ def test_td3_methods_are_what_their_names_say_and_anneal_beta_over_the_campaign(
         assert buf.beta() < 1.0
         buf.samples += 1
         assert buf.beta() == 1.0
+
+
+def read_scalars(folder):
+    """tag -> {step: value} from the TFRecord event files of a TensorBoard log folder."""
+    import glob
+    import struct
+    from tensorboardX.proto import event_pb2
+    out = {}
+    for path in sorted(glob.glob(os.path.join(folder, "events.out.tfevents.*"))):
+        with open(path, "rb") as f:
+            while True:
+                head = f.read(8)
+                if len(head) < 8:
+                    break
+                n = struct.unpack("<Q", head)[0]
+                f.read(4)
+                data = f.read(n)
+                f.read(4)
+                e = event_pb2.Event()
+                e.ParseFromString(data)
+                for v in e.summary.value:
+                    out.setdefault(v.tag, {})[e.step] = v.simple_value
+    return out
+
+
+def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
+    """Issue #25: per-scenario and per-update scalars as TensorBoard event files: one proxy per
+    job equal to the store's, the attribution counts, and the agent's losses, PER beta (rising)
+    and actor saturation once it learns."""
+    from asg_agent.tensorboard_log import TensorBoardLog
+    store = Store(str(tmp_path / "t.sqlite"))
+    exp = load_experiment(EXP)
+    log = TensorBoardLog(str(tmp_path / "tb"))
+    c = Campaign("t", exp, make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)), store,
+                 FakePool(2, seed=2, gain=6.0), 60, 5, str(tmp_path / "t.ckpt"), slots=4,
+                 reference=FakePool(2, seed=12, gain=1.5, prefix="fake_ref"), scalars=log.scenario)
+    c.start()
+    c.run(poll_timeout=0.0)
+    log.close()
+    sc = read_scalars(str(tmp_path / "tb"))
+    rows = {r["job"]: r for r in store.rows("t")}
+    assert sorted(sc["scenario/proxy"]) == list(range(60))
+    for job, v in sc["scenario/proxy"].items():
+        assert v == pytest.approx(rows[job]["proxy"], rel=1e-6)
+    s = store.summary("t")
+    assert sc["findings/perception"][59] == s["perception_ge3"] and sc["findings/stack"][59] == s["stack_ge3"]
+    assert sc["findings/proxy_ge3"][59] == sum(r["proxy"] >= 3 for r in rows.values())
+    beta = [sc["agent/per_beta"][k] for k in sorted(sc["agent/per_beta"])]
+    assert len(beta) > 10 and beta == sorted(beta) and beta[-1] > beta[0]
+    assert {"agent/critic_loss", "agent/q", "agent/actor_loss", "agent/asp_weight",
+            "agent/actor_saturation"} <= set(sc)
+    assert all(0.0 <= v <= 1.0 for v in sc["agent/actor_saturation"].values())

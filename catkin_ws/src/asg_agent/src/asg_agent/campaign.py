@@ -95,13 +95,17 @@ class Campaign:
                  total: int, seed: int, checkpoint: str, slots: int = 4, max_attempts: int = 3,
                  checkpoint_every: int = 10, proxy_config: ProxyConfig = ProxyConfig(),
                  progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None,
-                 early_dispatch: bool = True, reference: Optional[Pool] = None, reward: str = "proxy"):
+                 early_dispatch: bool = True, reference: Optional[Pool] = None, reward: str = "proxy",
+                 scalars: Optional[Callable[[int, dict, dict], None]] = None):
         if total < 1 or slots < 1:
             raise ValueError("total and slots must be >= 1")
         self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
         self.total, self.seed, self.checkpoint_path, self.slots = total, seed, checkpoint, slots
         self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, checkpoint_every, proxy_config
         self.progress, self.settings = progress, settings or {}
+        # scalars(job, stored row, the method's update figures): called once per scenario as the
+        # search learns from it, in job order (tensorboard_log.TensorBoardLog.scenario).
+        self.scalars = scalars
         self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
         # Attribution: every scenario also runs on the reference stack's workers (ground-truth
         # labels, the same planner and follower), and each finding is counted as the perception's
@@ -350,6 +354,7 @@ class Campaign:
             slot = self.slot_state[job.slot]
             done = job.step >= self.exp.episode_steps - 1
             reward = row["reward"] if self.reference is not None else row["proxy"]
+            learnt = None
             if reward is None:  # ERROR after every attempt: no transition, the episode ends here
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)
                 done = True
@@ -357,11 +362,13 @@ class Campaign:
                 t0 = time.perf_counter()
                 traj = unpack_trajectory(row["trajectory"])
                 next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
-                self.method.observe(job.job, job.episode, job.step, job.state, job.action, float(reward),
-                                    next_state, done)
+                learnt = self.method.observe(job.job, job.episode, job.step, job.state, job.action, float(reward),
+                                             next_state, done)
                 self.stages.add("update", t0)
                 if not done:
                     slot.update(step=job.step + 1, state=next_state)
+            if self.scalars:
+                self.scalars(job.job, row, learnt or {})
             if done:
                 self.episodes_done += 1
                 self._new_episode(job.slot)

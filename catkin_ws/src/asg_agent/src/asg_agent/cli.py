@@ -24,6 +24,27 @@ from .store import Store, StoreError, checkpoint_path
 from .td3 import TD3Config
 
 
+def open_tensorboard(a, store, name, c):
+    """The campaign's TensorBoard log; a resumed one continues at its first job not yet learnt
+    from, with the running counts of the jobs before it."""
+    from .tensorboard_log import TensorBoardLog
+    logdir = a.tensorboard or os.path.join(os.path.dirname(os.path.abspath(a.store)), "tensorboard", name)
+    counts = {"proxy_ge3": 0, "perception": 0, "stack": 0}
+    for r in store.rows(name):
+        if r["job"] >= c.next_apply or r["proxy"] is None:
+            continue
+        counts["proxy_ge3"] += r["proxy"] >= 3
+        ref = json.loads(r["reference"]).get("proxy") if r["reference"] else None
+        if ref is not None:
+            counts["perception"] += r["proxy"] >= 3 and ref < 2
+            counts["stack"] += r["proxy"] >= 3 and ref >= 3
+    try:
+        return TensorBoardLog(logdir, purge_step=c.next_apply, counts=counts)
+    except RuntimeError as e:
+        print(f"campaign: {e}; going on without it", file=sys.stderr)
+        return None
+
+
 def parse(argv):
     p = argparse.ArgumentParser(prog="campaign", description=__doc__.split("\n\n")[0])
     p.add_argument("experiment", help="experiment file (experiments/expN.yaml)")
@@ -60,6 +81,10 @@ def parse(argv):
                         "learnt from the results (the order before issue #13)")
     p.add_argument("--label", default="", help="--stage-report: the column label of this run")
     p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--tensorboard", default="",
+                   help="TensorBoard event files of the campaign's scalars in this folder (default: "
+                        "tensorboard/NAME beside the store; docs/agent.md)")
+    p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard event files")
     a = p.parse_args(argv)
     if a.scenarios < 1:
         p.error("--scenarios must be >= 1")
@@ -209,6 +234,7 @@ def main(argv=None):
     c = Campaign(name, exp, method, store, pool, a.scenarios, a.seed, checkpoint, slots=slots,
                  checkpoint_every=a.checkpoint_every, progress=progress, settings=settings,
                  early_dispatch=not a.no_early_dispatch, reference=reference, reward=a.reward)
+    tb = None
     try:
         if a.resume and store.campaign(name) is None:
             # Killed before it stored anything: "--resume" then means "start it" (restarts stay
@@ -221,6 +247,9 @@ def main(argv=None):
                   file=sys.stderr)
         else:
             c.start()
+        tb = None if a.no_tensorboard else open_tensorboard(a, store, name, c)
+        if tb:
+            c.scalars = tb.scenario
         progress(c.status())
         t_wall, t_cpu = time.time(), time.process_time()
         c.run()
@@ -232,10 +261,15 @@ def main(argv=None):
     except KeyboardInterrupt:
         if bar:
             bar.close()
+        if tb:
+            tb.close()
         print(f"\ncampaign {name}: interrupted; `--resume` continues it", file=sys.stderr)
         return 130
     if bar:
         bar.close()
+    if tb:
+        tb.close()
+        print(f"tensorboard: {tb.logdir} (tensorboard --logdir {os.path.dirname(tb.logdir)})")
     print_summary(store, name)
     print(f"checkpoint: {checkpoint}")
     return 0

@@ -168,7 +168,8 @@ class TD3Agent:
         self.critic_opt.step()
         self.buffer.update_priorities(b["index"], (0.5 * (td1.abs() + td2.abs())).detach().numpy())
         self.updates += 1
-        out = {"critic_loss": float(critic_loss), "q": float(q1.mean())}
+        out = {"critic_loss": float(critic_loss), "q": float(q1.mean()),
+               "per_beta": self.buffer.beta() if c.per else None}
         if self.updates % c.policy_delay == 0:
             u = self.actor.pre_squash(s)
             q = self.critic(s, torch.tanh(u))[0]
@@ -188,7 +189,10 @@ class TD3Agent:
                 for net, tgt in ((self.actor, self.actor_target), (self.critic, self.critic_target)):
                     for p, tp in zip(net.parameters(), tgt.parameters()):
                         tp.mul_(1 - c.tau).add_(c.tau * p)
-            out.update(actor_loss=float(actor_loss), asp=float(asp), asp_weight=self.asp_weight())
+            # Saturation: the share of the batch's actions within 1 % of the border (|a| >= 0.99).
+            sat = float((torch.tanh(u.detach()).abs() >= 0.99).float().mean())
+            out.update(actor_loss=float(actor_loss), asp=float(asp), asp_weight=self.asp_weight(),
+                       actor_saturation=sat)
         return out
 
     def actor_terms(self, u, q, a, w):

@@ -1,0 +1,61 @@
+"""TensorBoard event files of a campaign (no ROS imports): what RL users look at while it learns.
+
+    log = TensorBoardLog("results/tensorboard/exp1-td3-per-asp-s0", purge_step=first_job)
+    log.scenario(job, row, stats)    # from Campaign's `scalars` hook, in job order
+    log.close()
+
+Per scenario (x axis: the job, in the order the search learnt from them): `scenario/proxy`,
+`scenario/reward`, `scenario/yaw_term`, `scenario/plr`, `scenario/reference_proxy` (attribution),
+and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/stack`. Per update
+(the agent's last gradient step after that scenario): `agent/critic_loss`, `agent/q`,
+`agent/actor_loss`, `agent/asp_penalty`, `agent/asp_weight`, `agent/per_beta`,
+`agent/actor_saturation`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
+campaign passes its first job as `purge_step`, so TensorBoard drops what the interrupted run
+wrote past it. View with `tensorboard --logdir results/tensorboard` (the `tensorboard` package,
+which this project does not need).
+"""
+import json
+from typing import Optional
+
+AGENT_KEYS = {"critic_loss": "agent/critic_loss", "q": "agent/q", "actor_loss": "agent/actor_loss",
+              "asp": "agent/asp_penalty", "asp_weight": "agent/asp_weight", "per_beta": "agent/per_beta",
+              "actor_saturation": "agent/actor_saturation"}
+
+
+class TensorBoardLog:
+    def __init__(self, logdir: str, purge_step: Optional[int] = None, counts: Optional[dict] = None):
+        try:
+            from tensorboardX import SummaryWriter
+        except ImportError as e:
+            raise RuntimeError(f"TensorBoard log: tensorboardX is not installed ({e}); run bash scripts/setup.sh, "
+                               "or pass --no-tensorboard") from None
+        self.logdir = logdir
+        self.writer = SummaryWriter(logdir, purge_step=purge_step, flush_secs=10)
+        # Running counts continue from the store's on resume.
+        self.counts = dict({"proxy_ge3": 0, "perception": 0, "stack": 0}, **(counts or {}))
+
+    def scenario(self, job: int, row: dict, stats: Optional[dict] = None):
+        w = self.writer
+        for key in ("proxy", "reward", "yaw_term", "plr"):
+            if row.get(key) is not None:
+                w.add_scalar(f"scenario/{key}", row[key], job)
+        ref = json.loads(row["reference"]).get("proxy") if row.get("reference") else None
+        if ref is not None:
+            w.add_scalar("scenario/reference_proxy", ref, job)
+        p = row.get("proxy")
+        if p is not None:
+            self.counts["proxy_ge3"] += p >= 3
+            if ref is not None:
+                self.counts["perception"] += p >= 3 and ref < 2
+                self.counts["stack"] += p >= 3 and ref >= 3
+        w.add_scalar("findings/proxy_ge3", self.counts["proxy_ge3"], job)
+        if row.get("reference"):
+            w.add_scalar("findings/perception", self.counts["perception"], job)
+            w.add_scalar("findings/stack", self.counts["stack"], job)
+        for key, tag in AGENT_KEYS.items():
+            v = (stats or {}).get(key)
+            if v is not None:
+                w.add_scalar(tag, v, job)
+
+    def close(self):
+        self.writer.close()
