@@ -317,6 +317,20 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     k = counts(read_export(str(tmp_path / "a.jsonl.gz"))[1])
     assert (k["attributed"], k["perception_ge3"], k["stack_ge3"], k["differential_ge1"]) == (
         60, perception, stack, s["differential_ge1"])
+    # Collisions are attributed too (the stand-ins never collide: make some). Jobs 0-4: the stack
+    # under test collides, the reference drives through; jobs 5-6: both collide.
+    assert (s["perception_collisions"], s["stack_collisions"]) == (0, 0)
+    for job in range(7):
+        r = next(x for x in rows if x["job"] == job)
+        refd = dict(_json.loads(r["reference"]), termination="COLLISION" if job >= 5 else "SUCCESS")
+        store.db.execute("UPDATE scenarios SET termination = 'COLLISION', reference = ? WHERE campaign = 'a' AND job = ?",
+                         (_json.dumps(refd), job))
+    store.db.commit()
+    s2 = store.summary("a")
+    assert (s2["perception_collisions"], s2["stack_collisions"]) == (5, 2)
+    export(store, "a", str(tmp_path / "a2.jsonl.gz"))
+    k2 = counts(read_export(str(tmp_path / "a2.jsonl.gz"))[1])
+    assert (k2["perception_collisions"], k2["stack_collisions"]) == (5, 2)
     # A resumed campaign takes its counts from the store.
     again = Campaign("a", exp, make_method("random", exp, 3, budget=60), store, FakePool(2, seed=1, gain=6.0), 60, 3,
                      str(tmp_path / "a.ckpt"), slots=4, reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"))

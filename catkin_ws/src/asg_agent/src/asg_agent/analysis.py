@@ -110,8 +110,9 @@ def read_export(path: str):
 
 def counts(rows) -> dict:
     """Counts of an export; with attribution (rows carrying the reference stack's run) also the
-    findings that are the perception's (proxy >= 3, reference < 2), the stack's (both >= 3), and
-    the differential ones (proxy - reference >= 1), as the store's summary counts them."""
+    findings that are the perception's (proxy >= 3, reference < 2), the stack's (both >= 3), the
+    differential ones (proxy - reference >= 1), and the collisions that are the perception's
+    (the reference drove through) or the stack's (both collided), as the store's summary counts them."""
     p = [r["proxy"] for r in rows if r["proxy"] is not None]
     out = {"scenarios": len(rows), "proxy_ge_3": sum(v >= 3 for v in p), "proxy_ge_4": sum(v >= 4 for v in p),
            "max_proxy": max(p) if p else None,
@@ -122,6 +123,10 @@ def counts(rows) -> dict:
         out.update(attributed=len(pairs), perception_ge3=sum(t >= 3 and ref < 2 for t, ref in pairs),
                    stack_ge3=sum(t >= 3 and ref >= 3 for t, ref in pairs),
                    differential_ge1=sum(t - ref >= 1 for t, ref in pairs))
+    refs = [(r["termination"], r["reference"].get("termination")) for r in rows if r.get("reference")]
+    if refs:
+        out.update(perception_collisions=sum(t == "COLLISION" and ref == "SUCCESS" for t, ref in refs),
+                   stack_collisions=sum(t == "COLLISION" and ref == "COLLISION" for t, ref in refs))
     return out
 
 

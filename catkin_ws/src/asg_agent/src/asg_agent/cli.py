@@ -112,6 +112,8 @@ def print_summary(store, name, out=sys.stdout):
         print(f"attribution ({s['attributed']} scenarios re-run on the reference stack): of the proxy >= 3, "
               f"{s['perception_ge3']} are the perception's (reference < 2), {s['stack_ge3']} the stack's "
               f"(reference >= 3); proxy - reference >= 1: {s['differential_ge1']}", file=out)
+        print(f"collisions: {s['perception_collisions']} the perception's (the reference stack drove through), "
+              f"{s['stack_collisions']} the stack's (the reference collided too)", file=out)
     if s["plr_below_0999"]:
         print(f"warning: {s['plr_below_0999']} runs with PLR < 0.999 (the optimal path overestimated)", file=out)
     print("top 10 (store row id, job, episode.step, proxy = 0.1 vis + yaw term + PLR^2):", file=out)

@@ -159,7 +159,10 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
                        f"(ground-truth labels, the same planner and follower). Of the {s['proxy_ge_3']} with proxy "
                        f"&gt;= 3, <b>{s['perception_ge3']}</b> are the perception's (reference proxy &lt; 2) and "
                        f"<b>{s['stack_ge3']}</b> the stack's own (reference &gt;= 3); proxy &minus; reference "
-                       f"&gt;= 1 on {s['differential_ge1']}. Reward: {html.escape(str(settings.get('reward', 'proxy')))}.</p>")
+                       f"&gt;= 1 on {s['differential_ge1']}. Reward: {html.escape(str(settings.get('reward', 'proxy')))}. "
+                       f"Collisions (the paper's proxy does not score them): <b>{s['perception_collisions']}</b> "
+                       f"the perception's (the reference stack drove through the same scene), "
+                       f"<b>{s['stack_collisions']}</b> the stack's (the reference collided too).</p>")
     baseline = _baseline_html(c["experiment"])
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
 <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;

@@ -159,10 +159,18 @@ class Store:
         attributed = q(f"SELECT COUNT(*), SUM(proxy >= 3 AND {ref} < 2), SUM(proxy >= 3 AND {ref} >= 3), "
                        f"SUM(proxy - {ref} >= 1) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
                        f"AND proxy IS NOT NULL AND {ref} IS NOT NULL", (campaign,)).fetchone()
+        # A collision of the stack under test where the reference stack drove through the same
+        # scene: the perception's fault whatever the proxy says (the paper's proxy does not score
+        # collisions), and the stack's when both collide.
+        rterm = "json_extract(reference, '$.termination')"
+        collided = q(f"SELECT SUM(termination = 'COLLISION' AND {rterm} = 'SUCCESS'), "
+                     f"SUM(termination = 'COLLISION' AND {rterm} = 'COLLISION') FROM scenarios "
+                     f"WHERE campaign = ? AND reference IS NOT NULL", (campaign,)).fetchone()
         low_plr = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND plr < 0.999", (campaign,)).fetchone()[0]
         return {"scenarios": n, "proxy_ge_3": c3, "proxy_ge_4": c4, "max_proxy": best, "terminations": terms,
                 "top": tops, "attributed": attributed[0], "perception_ge3": attributed[1] or 0,
-                "stack_ge3": attributed[2] or 0, "differential_ge1": attributed[3] or 0, "plr_below_0999": low_plr}
+                "stack_ge3": attributed[2] or 0, "differential_ge1": attributed[3] or 0, "plr_below_0999": low_plr,
+                "perception_collisions": collided[0] or 0, "stack_collisions": collided[1] or 0}
 
     def content_digest(self, campaign: str) -> List[tuple]:
         """What must repeat between two runs of a campaign with one seed (no workers, no times)."""

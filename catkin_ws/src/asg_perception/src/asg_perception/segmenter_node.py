@@ -106,7 +106,8 @@ class SegmenterNode:
         with self.lock:
             if not self.current(msg.header.stamp):
                 self.stale_dropped += 1
-                rospy.logwarn_throttle(5.0, f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
+                # Normal after a run ends early (late frames of the last run): counted, not a warning.
+                rospy.logdebug_throttle(5.0, f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
                                             f"is not of the current run: dropped ({self.stale_dropped} so far)")
                 return
             if self.failed:

@@ -180,7 +180,8 @@ bool PlannerROS::current(const ros::Time& stamp, const char* what) {
   if (have_run_ && stamp >= base_ && stamp < base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
     return true;
   ++stale_dropped_;
-  ROS_WARN_THROTTLE(5.0, "planner: %s stamped %.3f s is not of the current run (window from %.0f s): dropped",
+  // Normal after a run ends early (late frames of the last run): counted in PlannerState, not a warning.
+  ROS_DEBUG_THROTTLE(5.0, "planner: %s stamped %.3f s is not of the current run (window from %.0f s): dropped",
                     what, stamp.toSec(), base_.toSec());
   return false;
 }
