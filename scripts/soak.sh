@@ -31,7 +31,7 @@ mkdir -p "$OUT"
 start_master
 start_workers 2 perception:=unet
 killer=""
-cleanup() { [ -n "$killer" ] && kill "$killer" 2>/dev/null; stop_workers; stop_master; }
+cleanup() { if [ -n "$killer" ]; then kill "$killer" 2>/dev/null || true; fi; stop_workers; stop_master; }
 trap cleanup EXIT
 # The killer: every MIN_GAP..MAX_GAP seconds one victim, by kind in turn of a random draw.
 (
