@@ -109,12 +109,15 @@ start_workers() {
     WORKER_PIDS+=($!)
   done
 }
-stop_workers() {
+stop_workers() {  # safe to call before start_workers (an EXIT trap)
+  [ -n "${WORKER_PIDS[*]:-}" ] || return 0
   kill "${WORKER_PIDS[@]}" 2>/dev/null || true
   wait "${WORKER_PIDS[@]}" 2>/dev/null || true
   WORKER_PIDS=()
 }
 stop_master() {
+  [ -n "${MASTER_PID:-}" ] || return 0
   kill "$MASTER_PID" 2>/dev/null || true
   wait "$MASTER_PID" 2>/dev/null || true
+  MASTER_PID=""
 }
