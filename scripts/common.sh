@@ -24,8 +24,9 @@ APT_PACKAGES=(
   python3-pytest python3-pil xvfb python3-pip python3-protobuf
 )
 # From PyPI, pinned, without dependencies (every dependency above is Debian's: pip's numpy 2 would
-# break Debian's torch): TensorBoard's event-file writer for campaign scalars (docs/agent.md).
-PIP_PACKAGES=(tensorboardX==2.6.2.2)
+# break Debian's torch): TensorBoard's event-file writer for campaign scalars, and CMA-ES for the
+# `cmaes` search (docs/agent.md). Both are pure Python.
+PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0)
 
 log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
 

@@ -6,6 +6,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from asg_agent.campaign import Campaign
@@ -47,7 +48,7 @@ class DyingPool(FakePool):
         return out
 
 
-@pytest.mark.parametrize("method", ["td3-per-asp", "random", "annealing"])
+@pytest.mark.parametrize("method", ["td3-per-asp", "random", "annealing", "cmaes"])
 def test_same_seed_same_store_whatever_the_order(tmp_path, method):
     a = campaign(tmp_path, "a", FakePool(2, seed=1), method=method)
     a.start()
@@ -72,18 +73,19 @@ def test_error_is_retried_and_counted_once(tmp_path):
     assert c.status()["retries"] == 2
 
 
-def test_interrupted_mid_episode_and_resumed_equals_uninterrupted(tmp_path):
-    ref = campaign(tmp_path, "ref", FakePool(2, seed=4))
+@pytest.mark.parametrize("method", ["td3-per-asp", "cmaes"])
+def test_interrupted_mid_episode_and_resumed_equals_uninterrupted(tmp_path, method):
+    ref = campaign(tmp_path, "ref", FakePool(2, seed=4), method=method)
     ref.start()
     ref.run()
     store = ref.store
-    first = campaign(tmp_path, "cut", DyingPool(23, workers=2, seed=5), store=store)
+    first = campaign(tmp_path, "cut", DyingPool(23, workers=2, seed=5), store=store, method=method)
     first.start()
     with pytest.raises(Interrupt):
         first.run()
     stored = store.count("cut")
     assert 0 < stored < 40
-    second = campaign(tmp_path, "cut", FakePool(2, seed=6), store=store)
+    second = campaign(tmp_path, "cut", FakePool(2, seed=6), store=store, method=method)
     second.resume()
     second.run()
     jobs = store.jobs("cut")
@@ -411,3 +413,23 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     assert {"agent/critic_loss", "agent/q", "agent/actor_loss", "agent/asp_weight",
             "agent/actor_saturation"} <= set(sc)
     assert all(0.0 <= v <= 1.0 for v in sc["agent/actor_saturation"].values())
+
+
+def test_cmaes_climbs_a_smooth_objective_with_jobs_in_flight():
+    # Issue #25: CMA-ES from the `cma` package behind the search interface, with 4 jobs in flight
+    # (proposals run ahead of rewards, as in a campaign): the reward of its proposals rises.
+    exp = load_experiment(EXP)
+    m = make_method("cmaes", exp, 1, budget=600)
+    target = np.linspace(-0.6, 0.6, exp.action_dim)
+    reward = lambda a: -float(np.sum((np.asarray(a) - target) ** 2))  # noqa: E731
+    flight, got = [], []
+    for job in range(600):
+        a = m.propose(job, job // 5, job % 5, None)
+        flight.append((job, a))
+        if len(flight) > 4:
+            j, aj = flight.pop(0)
+            m.observe(j, j // 5, j % 5, None, aj, reward(aj), None, False)
+            got.append(reward(aj))
+    assert m.generations > 20
+    assert np.mean(got[-50:]) > 0.2 * np.mean(got[:50])  # closer to 0 (the best) by far
+    assert np.mean(got[-50:]) > -0.5

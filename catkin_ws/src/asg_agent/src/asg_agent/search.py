@@ -13,8 +13,9 @@ of the episode. An episode starts from a seeded random layout and the straight s
 (what a run without obstacles drives).
 
 Methods: `td3-per-asp` (the paper's), its ablations `td3-per`, `td3-asp`, `td3`, and the
-baselines `random` (uniform layouts) and `annealing` (simulated annealing, a prior method the
-paper names).
+baselines `random` (uniform layouts), `annealing` (simulated annealing, a prior method the
+paper names) and `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an engineer
+reaches for first).
 """
 import math
 from typing import Dict, Optional
@@ -25,7 +26,7 @@ from .experiment import Experiment
 from .proxy import resample_path
 from .td3 import TD3Agent, TD3Config
 
-METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing")
+METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing", "cmaes")
 
 
 def _rng(seed: int, *keys: int) -> np.random.Generator:
@@ -166,12 +167,72 @@ class TD3Search(SearchMethod):
         self.agent.load_state_dict(d["agent"])
 
 
+class CMAES(SearchMethod):
+    """CMA-ES (Hansen's `cma` package, pinned by scripts/common.sh) on the layout, maximising the
+    reward; each scenario is one candidate, the state is ignored (as random search ignores it).
+    Candidates are drawn one per job as jobs are proposed (`ask(1)`), and a generation is told
+    once `popsize` rewards are in, in job order. With W jobs in flight the first W candidates of
+    a generation come from the distribution before the previous generation was told (a delay of
+    one generation for them, which `cma` accepts); everything stays a function of the seed.
+    Bounds [-1, 1] by `cma`'s boundary transform; an ERROR run is no candidate."""
+    name = "cmaes"
+
+    def __init__(self, experiment, seed, sigma0: float = 0.5, popsize: int = 0):
+        super().__init__(experiment, seed)
+        import cma
+        self.sigma0 = sigma0
+        x0 = _rng(seed, 6).uniform(-0.8, 0.8, experiment.action_dim)
+        opts = {"seed": 1_000_003 + seed, "bounds": [-1.0, 1.0], "verbose": -9}
+        if popsize:
+            opts["popsize"] = popsize
+        self.es = cma.CMAEvolutionStrategy(x0, sigma0, opts)
+        self.popsize = int(self.es.popsize)
+        self.asked: Dict[int, np.ndarray] = {}  # job -> candidate, until its reward is in
+        self.batch_x, self.batch_f = [], []
+        self.generations = 0
+
+    def propose(self, job, episode, step, state):
+        x = np.asarray(self.es.ask(1)[0], np.float64)
+        self.asked[job] = x
+        return np.clip(x, -1.0, 1.0).astype(np.float32)
+
+    def observe(self, job, episode, step, state, action, reward, next_state, done):
+        x = self.asked.pop(job, None)
+        if reward is None or x is None:
+            return {}
+        self.batch_x.append(x)
+        self.batch_f.append(-float(reward))  # cma minimises
+        if len(self.batch_x) < self.popsize:
+            return {}
+        self.es.tell(self.batch_x, self.batch_f)
+        self.batch_x, self.batch_f = [], []
+        self.generations += 1
+        return {"cma_sigma": float(self.es.sigma), "cma_generation": self.generations,
+                "cma_best": -float(self.es.result.fbest)}
+
+    def config(self):
+        return {"sigma0": self.sigma0, "popsize": self.popsize}
+
+    def state_dict(self):
+        import pickle
+        return {"es": pickle.dumps(self.es), "asked": {int(k): v for k, v in self.asked.items()},
+                "batch_x": list(self.batch_x), "batch_f": list(self.batch_f), "generations": self.generations}
+
+    def load_state_dict(self, d):
+        import pickle
+        self.es = pickle.loads(d["es"])
+        self.asked = {int(k): np.asarray(v) for k, v in d["asked"].items()}
+        self.batch_x, self.batch_f, self.generations = list(d["batch_x"]), list(d["batch_f"]), d["generations"]
+
+
 def make_method(name: str, experiment: Experiment, seed: int, budget: int = 1000,
                 td3_config: Optional[TD3Config] = None) -> SearchMethod:
     if name == "random":
         return RandomSearch(experiment, seed)
     if name == "annealing":
         return Annealing(experiment, seed, budget=budget)
+    if name == "cmaes":
+        return CMAES(experiment, seed)
     if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
         return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
     raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")

@@ -9,7 +9,8 @@ Per scenario (x axis: the job, in the order the search learnt from them): `scena
 and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/stack`. Per update
 (the agent's last gradient step after that scenario): `agent/critic_loss`, `agent/q`,
 `agent/actor_loss`, `agent/asp_penalty`, `agent/asp_weight`, `agent/per_beta`,
-`agent/actor_saturation`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
+`agent/actor_saturation`; CMA-ES's `search/cma_sigma` and `search/cma_best`, annealing's
+`search/temperature` and `search/incumbent`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
 campaign passes its first job as `purge_step`, so TensorBoard drops what the interrupted run
 wrote past it. View with `tensorboard --logdir results/tensorboard` (the `tensorboard` package,
 which this project does not need).
@@ -19,7 +20,10 @@ from typing import Optional
 
 AGENT_KEYS = {"critic_loss": "agent/critic_loss", "q": "agent/q", "actor_loss": "agent/actor_loss",
               "asp": "agent/asp_penalty", "asp_weight": "agent/asp_weight", "per_beta": "agent/per_beta",
-              "actor_saturation": "agent/actor_saturation"}
+              "actor_saturation": "agent/actor_saturation",
+              # the other searches' own figures
+              "cma_sigma": "search/cma_sigma", "cma_best": "search/cma_best",
+              "temperature": "search/temperature", "incumbent": "search/incumbent"}
 
 
 class TensorBoardLog:
