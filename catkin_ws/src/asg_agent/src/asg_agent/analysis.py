@@ -25,7 +25,7 @@ from typing import List
 
 import numpy as np
 
-from .store import Store, StoreError, checkpoint_path, park, unpack_trajectory, unpark
+from .store import Store, StoreError, attribute, checkpoint_path, park, unpack_trajectory, unpark
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -120,8 +120,8 @@ def counts(rows) -> dict:
     pairs = [(r["proxy"], r["reference"]["proxy"]) for r in rows if r["proxy"] is not None
              and r.get("reference") and r["reference"].get("proxy") is not None]
     if pairs:
-        out.update(attributed=len(pairs), perception_ge3=sum(t >= 3 and ref < 2 for t, ref in pairs),
-                   stack_ge3=sum(t >= 3 and ref >= 3 for t, ref in pairs),
+        kinds = [attribute(t, ref) for t, ref in pairs]
+        out.update(attributed=len(pairs), perception_ge3=sum(k[1] for k in kinds), stack_ge3=sum(k[2] for k in kinds),
                    differential_ge1=sum(t - ref >= 1 for t, ref in pairs))
     refs = [(r["termination"], r["reference"].get("termination")) for r in rows if r.get("reference")]
     if refs:

@@ -30,6 +30,7 @@ import numpy as np
 from .experiment import load_experiment
 from .proxy import compute, placed_mask
 from .search import RandomSearch
+from .store import attribute
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 5))
 STACKS = ("ground_truth", "flawed", "full")
@@ -149,7 +150,6 @@ def offline_rows(reqs: List[dict], todo: List[int], planner: str, sets: List[str
     env = dict(os.environ, LP_NUM_THREADS="1")
 
     def batch(ks):
-        out = []
         for i in range(0, len(ks), 25):  # small batches: rows come back as they finish
             chunk = ks[i:i + 25]
             res = subprocess.run([tool, *args, "--out", tmp, *[files[k] for k in chunk]], capture_output=True,
@@ -163,7 +163,6 @@ def offline_rows(reqs: List[dict], todo: List[int], planner: str, sets: List[str
                                     collision_with=j.get("collision_with", ""), sim_time=j["sim_time"],
                                     visibility=j["visibility"], removed=j["removed"], trajectory=tr.ravel())
                 on_row(k, o)
-        return out
 
     with ThreadPoolExecutor(jobs) as ex:
         list(ex.map(batch, [todo[w::jobs] for w in range(jobs)]))
@@ -259,7 +258,7 @@ def summarize(exp_name: str, root: str = "") -> dict:
         out["against_ground_truth"][s] = {
             "layouts": len(both), "raises_by_0.5": float((d >= 0.5).mean()), "raises_by_1": float((d >= 1).mean()),
             "median_change": float(np.median(d)), "ge3_here_lt2_ground_truth": int(sum(
-                rows[s][k]["proxy"] >= 3 and gt[k]["proxy"] < 2 for k in both))}
+                attribute(rows[s][k]["proxy"], gt[k]["proxy"])[1] for k in both))}
     for k in sorted(set().union(*[set(r) for r in rows.values()])):
         out["per_layout"].append({"layout": k, **{s: (rows[s][k]["proxy"] if k in rows[s] else None) for s in STACKS},
                                   **{f"{s}_termination": rows[s][k]["termination"] for s in STACKS if k in rows[s]}})

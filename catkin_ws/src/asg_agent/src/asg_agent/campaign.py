@@ -27,7 +27,7 @@ from asg_scenario.schema import dump_scenario
 from .experiment import Experiment
 from .proxy import ProxyConfig, compute, placed_mask
 from .search import SearchMethod
-from .store import Store, pack_trajectory, unpack_trajectory
+from .store import Store, attribute, pack_trajectory, unpack_trajectory
 from .td3 import load_checked, save_atomic
 
 
@@ -339,8 +339,9 @@ class Campaign:
             if self.reference is not None and diff is not None:
                 self.stats["diff_best"] = max(self.stats["diff_best"], diff)
                 self.stats["diff_ge1"] += diff >= 1
-                self.stats["perception"] += terms.proxy >= 3 and rterms.proxy < 2
-                self.stats["stack"] += terms.proxy >= 3 and rterms.proxy >= 3
+                _, perception, stack = attribute(terms.proxy, rterms.proxy)
+                self.stats["perception"] += perception
+                self.stats["stack"] += stack
         else:
             self.stats["errors"] += 1
         if self.progress:

@@ -29,17 +29,9 @@ def open_tensorboard(a, store, name, c):
     from, with the running counts of the jobs before it."""
     from .tensorboard_log import TensorBoardLog
     logdir = a.tensorboard or os.path.join(os.path.dirname(os.path.abspath(a.store)), "tensorboard", name)
-    counts = {"proxy_ge3": 0, "perception": 0, "stack": 0}
-    for r in store.rows(name):
-        if r["job"] >= c.next_apply or r["proxy"] is None:
-            continue
-        counts["proxy_ge3"] += r["proxy"] >= 3
-        ref = json.loads(r["reference"]).get("proxy") if r["reference"] else None
-        if ref is not None:
-            counts["perception"] += r["proxy"] >= 3 and ref < 2
-            counts["stack"] += r["proxy"] >= 3 and ref >= 3
+    prior = [dict(r) for r in store.rows(name) if r["job"] < c.next_apply]
     try:
-        return TensorBoardLog(logdir, purge_step=c.next_apply, counts=counts)
+        return TensorBoardLog(logdir, purge_step=c.next_apply, prior_rows=prior)
     except RuntimeError as e:
         print(f"campaign: {e}; going on without it", file=sys.stderr)
         return None

@@ -145,7 +145,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
     for r in s["top"]:
         png = f"job{r['job']}.png"
         top_down(store, campaign, r["job"], os.path.join(out_dir, png))
-        cmd = f"rosrun asg_agent replay {os.path.abspath(store_path)} {campaign} {r['job']}"
+        cmd = f"rosrun asg_agent replay {store_path} {campaign} {r['job']}"
         items.append(f"<tr><td>{r['job']}</td><td>{r['id']}</td><td>{r['episode']}.{r['step']}</td>"
                      f"<td><b>{r['proxy']:.3f}</b></td><td>{r['vis']:+.2f}</td><td>{r['yaw_term']:.3f}</td>"
                      f"<td>{r['plr']:.3f}</td><td>{html.escape(r['termination'])}</td>"
@@ -170,7 +170,7 @@ padding:4px 8px;text-align:right}}code{{font-size:85%}}</style></head><body>
 <h1>Campaign {html.escape(campaign)}</h1>
 <p>method <b>{html.escape(c['method'])}</b>, experiment <b>{html.escape(c['experiment'])}</b>, seed {c['seed']},
 stack: {html.escape(str(settings.get('perception')))} / {html.escape(str(settings.get('model')))},
-workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html.escape(os.path.abspath(store_path))}</code></p>
+workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html.escape(store_path)}</code></p>
 <h2>Counts (as in the paper's Table 2)</h2>
 <table><tr><th>scenarios</th><th>proxy &gt;= 3</th><th>proxy &gt;= 4</th><th>per 1,000: &gt;= 3 / &gt;= 4</th><th>largest proxy</th></tr>
 <tr><td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>

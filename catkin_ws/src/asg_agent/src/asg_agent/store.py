@@ -67,6 +67,20 @@ ADDED = (("reference", "TEXT"),  # differential campaigns: JSON of the reference
          ("reward", "REAL"))     # what the search learnt from: the proxy, or proxy - reference proxy
 
 
+# Attribution, the one rule every count uses (summary, export, progress bar, TensorBoard, report):
+FINDING = 3.0          # [-] a run with proxy at or above this is a finding (the paper's count)
+REFERENCE_CLEAR = 2.0  # [-] a finding whose reference run stays below this is the perception's
+
+
+def attribute(proxy: float, reference: float):
+    """(finding, the perception's, the stack's) for a run's proxy and its reference run's: a
+    finding is the perception's when the reference stack (ground-truth labels, the same planner
+    and follower) stays below REFERENCE_CLEAR on the same scene, the stack's own when the
+    reference is a finding too."""
+    finding = proxy >= FINDING
+    return finding, finding and reference < REFERENCE_CLEAR, finding and reference >= FINDING
+
+
 class StoreError(RuntimeError):
     pass
 
@@ -156,7 +170,8 @@ class Store:
         # when the reference stack (ground-truth labels, same planner and follower) stays below 2
         # on the same scene, and the stack's own when the reference reaches 3 as well.
         ref = "CAST(json_extract(reference, '$.proxy') AS REAL)"
-        attributed = q(f"SELECT COUNT(*), SUM(proxy >= 3 AND {ref} < 2), SUM(proxy >= 3 AND {ref} >= 3), "
+        F, C = FINDING, REFERENCE_CLEAR  # attribute(), in SQL
+        attributed = q(f"SELECT COUNT(*), SUM(proxy >= {F} AND {ref} < {C}), SUM(proxy >= {F} AND {ref} >= {F}), "
                        f"SUM(proxy - {ref} >= 1) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
                        f"AND proxy IS NOT NULL AND {ref} IS NOT NULL", (campaign,)).fetchone()
         # A collision of the stack under test where the reference stack drove through the same

@@ -18,6 +18,8 @@ which this project does not need).
 import json
 from typing import Optional
 
+from .store import attribute
+
 AGENT_KEYS = {"critic_loss": "agent/critic_loss", "q": "agent/q", "actor_loss": "agent/actor_loss",
               "asp": "agent/asp_penalty", "asp_weight": "agent/asp_weight", "per_beta": "agent/per_beta",
               "actor_saturation": "agent/actor_saturation",
@@ -27,7 +29,7 @@ AGENT_KEYS = {"critic_loss": "agent/critic_loss", "q": "agent/q", "actor_loss": 
 
 
 class TensorBoardLog:
-    def __init__(self, logdir: str, purge_step: Optional[int] = None, counts: Optional[dict] = None):
+    def __init__(self, logdir: str, purge_step: Optional[int] = None, prior_rows=()):
         try:
             from tensorboardX import SummaryWriter
         except ImportError as e:
@@ -35,23 +37,34 @@ class TensorBoardLog:
                                "or pass --no-tensorboard") from None
         self.logdir = logdir
         self.writer = SummaryWriter(logdir, purge_step=purge_step, flush_secs=10)
-        # Running counts continue from the store's on resume.
-        self.counts = dict({"proxy_ge3": 0, "perception": 0, "stack": 0}, **(counts or {}))
+        # Running counts continue on resume from the rows learnt from before purge_step.
+        self.counts = {"proxy_ge3": 0, "perception": 0, "stack": 0}
+        for row in prior_rows:
+            self._count(row)
+
+    @staticmethod
+    def _reference_proxy(row: dict):
+        return json.loads(row["reference"]).get("proxy") if row.get("reference") else None
+
+    def _count(self, row: dict):
+        p, ref = row.get("proxy"), self._reference_proxy(row)
+        if p is None:
+            return
+        finding, perception, stack = attribute(p, ref if ref is not None else float("inf"))
+        self.counts["proxy_ge3"] += finding
+        if ref is not None:
+            self.counts["perception"] += perception
+            self.counts["stack"] += stack
 
     def scenario(self, job: int, row: dict, stats: Optional[dict] = None):
         w = self.writer
         for key in ("proxy", "reward", "yaw_term", "plr"):
             if row.get(key) is not None:
                 w.add_scalar(f"scenario/{key}", row[key], job)
-        ref = json.loads(row["reference"]).get("proxy") if row.get("reference") else None
+        ref = self._reference_proxy(row)
         if ref is not None:
             w.add_scalar("scenario/reference_proxy", ref, job)
-        p = row.get("proxy")
-        if p is not None:
-            self.counts["proxy_ge3"] += p >= 3
-            if ref is not None:
-                self.counts["perception"] += p >= 3 and ref < 2
-                self.counts["stack"] += p >= 3 and ref >= 3
+        self._count(row)
         w.add_scalar("findings/proxy_ge3", self.counts["proxy_ge3"], job)
         if row.get("reference"):
             w.add_scalar("findings/perception", self.counts["perception"], job)
