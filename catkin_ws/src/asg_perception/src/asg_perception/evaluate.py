@@ -73,10 +73,16 @@ def main(argv=None):
             r = evaluate(model, frames)
         else:
             seg = Segmenter(paths[name], a.backend, a.threads, *frames.rgb.shape[1:3])
-            r = evaluate(model, frames, labeller=seg.batch)
-            # Pixel agreement of this backend's labels with the eager model's, frame by frame.
-            same = sum(int((seg.batch(frames.rgb[i:i + 8]) == predict(model, frames.rgb[i:i + 8])).sum())
-                       for i in range(0, len(frames), 8))
+            # The backend labels every frame once; each batch is also compared with the eager
+            # model's labels (pixel agreement).
+            same = 0
+
+            def labeller(rgb):
+                nonlocal same
+                out = seg.batch(rgb)
+                same += int((out == predict(model, rgb)).sum())
+                return out
+            r = evaluate(model, frames, labeller=labeller)
             r["backend"], r["agreement_with_eager"] = a.backend, same / frames.labels.size
             print(f"{name:>8}: {a.backend} labels agree with eager on {100 * r['agreement_with_eager']:.3f} % of pixels")
         results[name] = r
