@@ -5,6 +5,8 @@
 #   bash scripts/campaigns.sh [PLAN=results/campaign_plan.txt] [ONLY=regex on names]
 #   ASG_DRY=1 bash scripts/campaigns.sh     # only list what would run
 #   ASG_PARK=1 bash scripts/campaigns.sh    # park the unfinished ones (to commit; see below)
+#   ASG_EXPORTS=results/comparison bash scripts/campaigns.sh results/comparison/plan.txt
+#                                           # exports (and parked stores) in another folder
 # A campaign whose committed export is finished at its budget is skipped, also on a fresh clone
 # without the store. A campaign resumes only from its store rows and checkpoint, which a fresh
 # clone lacks: ASG_PARK=1 packs each unfinished one into results/parked/NAME.tar.xz (a few MB, to
@@ -14,8 +16,11 @@
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 PLAN="${1:-$REPO/results/campaign_plan.txt}"
 ONLY="${2:-.}"
-STORE_DEFAULT="$REPO/results/campaigns/exp11.sqlite"
-PARKED="$REPO/results/parked"
+EXPORTS="$REPO/${ASG_EXPORTS:-results/campaigns}"
+STORE_DEFAULT="$EXPORTS/campaigns.sqlite"
+[ -z "${ASG_EXPORTS:-}" ] && STORE_DEFAULT="$REPO/results/campaigns/exp11.sqlite"
+PARKED="$EXPORTS/parked"
+[ -z "${ASG_EXPORTS:-}" ] && PARKED="$REPO/results/parked"
 [ -f "$PLAN" ] || { echo "campaigns.sh: no plan file $PLAN" >&2; exit 2; }
 if [ -z "${ASG_DRY:-}" ]; then
   install_packages
@@ -34,7 +39,7 @@ while read -r name scenarios launch args; do
       *) largs+=("$a") ;;
     esac
   done
-  export_file="$REPO/results/campaigns/$name.jsonl.gz"
+  export_file="$EXPORTS/$name.jsonl.gz"
   if [ -n "${ASG_PARK:-}" ]; then
     [ -f "$store" ] && analysis park --unfinished-only "$store" "$name" "$PARKED/$name.tar.xz"
     continue

@@ -22,11 +22,13 @@ APT_PACKAGES=(
   libgtest-dev googletest libyaml-cpp-dev
   python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-scipy python3-tqdm
   python3-pytest python3-pil xvfb python3-pip python3-protobuf
+  python3-numba python3-pandas python3-sklearn python3-threadpoolctl python3-sortedcontainers
 )
 # From PyPI, pinned, without dependencies (every dependency above is Debian's: pip's numpy 2 would
-# break Debian's torch): TensorBoard's event-file writer for campaign scalars, and CMA-ES for the
-# `cmaes` search (docs/agent.md). Both are pure Python.
-PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0)
+# break Debian's torch): TensorBoard's event-file writer for campaign scalars, CMA-ES for the
+# `cmaes` search, and pyribs (the last release for numpy 1) with its one dependency Debian lacks
+# for the `map-elites` search (docs/agent.md). All pure Python.
+PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0 numpy-groupies==0.11.2 ribs==0.7.1)
 
 log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
 

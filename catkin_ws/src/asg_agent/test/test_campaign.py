@@ -48,7 +48,7 @@ class DyingPool(FakePool):
         return out
 
 
-@pytest.mark.parametrize("method", ["td3-per-asp", "random", "annealing", "cmaes"])
+@pytest.mark.parametrize("method", ["td3-per-asp", "random", "annealing", "cmaes", "map-elites"])
 def test_same_seed_same_store_whatever_the_order(tmp_path, method):
     a = campaign(tmp_path, "a", FakePool(2, seed=1), method=method)
     a.start()
@@ -73,7 +73,7 @@ def test_error_is_retried_and_counted_once(tmp_path):
     assert c.status()["retries"] == 2
 
 
-@pytest.mark.parametrize("method", ["td3-per-asp", "cmaes"])
+@pytest.mark.parametrize("method", ["td3-per-asp", "cmaes", "map-elites"])
 def test_interrupted_mid_episode_and_resumed_equals_uninterrupted(tmp_path, method):
     ref = campaign(tmp_path, "ref", FakePool(2, seed=4), method=method)
     ref.start()
@@ -433,3 +433,37 @@ def test_cmaes_climbs_a_smooth_objective_with_jobs_in_flight():
     assert m.generations > 20
     assert np.mean(got[-50:]) > 0.2 * np.mean(got[:50])  # closer to 0 (the best) by far
     assert np.mean(got[-50:]) > -0.5
+
+
+def test_map_elites_fills_its_archive_and_keeps_the_best_of_each_cell():
+    # Issue #25: MAP-Elites (ribs' grid archive, iso+line emitter) behind the search interface,
+    # 4 jobs in flight. The descriptors are computed from the layout and the driven path; a path
+    # that swerves 6 m lands in the 6-7 m cell, and the archive keeps each cell's best.
+    exp = load_experiment(EXP)
+    m = make_method("map-elites", exp, 1, budget=400)
+    assert m.init_random == 40
+    start, goal = np.array(m.states.start), np.array(m.states.goal)
+    normal = np.array([-1.0, 1.0]) / np.sqrt(2.0)
+    reward = lambda a: float(np.sum(np.asarray(a)))  # noqa: E731
+
+    def next_state(a, swerve):
+        path = np.array([start, (start + goal) / 2 + swerve * normal, goal])
+        return m.states.build(a, path, 1)
+
+    flight = []
+    for job in range(400):
+        a = m.propose(job, job // 5, job % 5, None)
+        assert a.shape == (exp.action_dim,) and np.all(np.abs(a) <= 1.0)
+        flight.append((job, a))
+        if len(flight) > 4:
+            j, aj = flight.pop(0)
+            m.observe(j, j // 5, j % 5, None, aj, reward(aj), next_state(aj, j % 12), False)
+    d = m.descriptors(np.zeros(exp.action_dim), np.array([start, (start + goal) / 2 + 6.5 * normal, goal]))
+    assert d[1] == pytest.approx(6.5, abs=0.01)
+    # every obstacle at the landscape's centre (50, 50) stands on the route
+    assert d[0] == exp.action_dim // 2
+    data = m.archive.data()
+    assert len(data["objective"]) == len(set(map(tuple, data["index"].reshape(-1, 1)))) > 12
+    assert set(np.round(data["measures"][:, 1]).astype(int)) >= set(range(1, 11))
+    # later elites were mutated towards the reward: the best beats the best random layout by far
+    assert m.archive.stats.obj_max > 2.0

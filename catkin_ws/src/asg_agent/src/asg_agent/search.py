@@ -14,8 +14,9 @@ of the episode. An episode starts from a seeded random layout and the straight s
 
 Methods: `td3-per-asp` (the paper's), its ablations `td3-per`, `td3-asp`, `td3`, and the
 baselines `random` (uniform layouts), `annealing` (simulated annealing, a prior method the
-paper names) and `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an engineer
-reaches for first).
+paper names), `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an engineer
+reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `ribs` package's
+grid archive and iso+line emitter, over two behaviour descriptors).
 """
 import math
 from typing import Dict, Optional
@@ -26,7 +27,7 @@ from .experiment import Experiment
 from .proxy import resample_path
 from .td3 import TD3Agent, TD3Config
 
-METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing", "cmaes")
+METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing", "cmaes", "map-elites")
 
 
 def _rng(seed: int, *keys: int) -> np.random.Generator:
@@ -225,6 +226,84 @@ class CMAES(SearchMethod):
         self.batch_x, self.batch_f, self.generations = list(d["batch_x"]), list(d["batch_f"]), d["generations"]
 
 
+def _segment_distance(points: np.ndarray, a, b) -> np.ndarray:
+    """[m] distance of each point (n, 2) to the segment a-b."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    ab = b - a
+    t = np.clip(((points - a) @ ab) / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
+
+
+class MapElites(SearchMethod):
+    """MAP-Elites (Mouret and Clune 2015) with the `ribs` package (pinned by scripts/common.sh):
+    a grid archive keeps, per cell of two behaviour descriptors, the layout with the largest
+    reward; new layouts are iso+line mutations (Vassiliades and Mouret 2018) of elites drawn
+    from the archive, after `init_random` uniform random layouts (a tenth of the budget, at
+    most 100, by `make_method`). The descriptors, both [m]:
+
+    - `route_obstacles`: how many obstacles stand within `route_band` of the straight start-goal
+      segment (0 .. n, one cell each): how much of the layout the route has to deal with;
+    - `deviation`: the largest distance of the driven path from that segment, [0, `max_deviation`]
+      in `deviation_bins` cells (beyond the range: the last cell): how far the stack swerved.
+
+    One candidate per job (`ask` of a one-solution batch), added to the archive when its result
+    is applied, in job order: the archive a proposal sees depends on the seed alone. An ERROR
+    run is no candidate. The state is ignored (as random search and CMA-ES ignore it)."""
+    name = "map-elites"
+
+    def __init__(self, experiment, seed, init_random: int = 100, iso_sigma: float = 0.05,
+                 line_sigma: float = 0.2, route_band: float = 10.0, max_deviation: float = 16.0,
+                 deviation_bins: int = 16):
+        super().__init__(experiment, seed)
+        from ribs.archives import GridArchive
+        from ribs.emitters import IsoLineEmitter
+        self.init_random, self.iso_sigma, self.line_sigma = init_random, iso_sigma, line_sigma
+        self.route_band, self.max_deviation, self.deviation_bins = route_band, max_deviation, deviation_bins
+        n = experiment.action_dim // 2
+        self.archive = GridArchive(solution_dim=experiment.action_dim, dims=[n + 1, deviation_bins],
+                                   ranges=[(-0.5, n + 0.5), (0.0, max_deviation)], seed=2_000_003 + seed)
+        self.emitter = IsoLineEmitter(self.archive, iso_sigma=iso_sigma, line_sigma=line_sigma,
+                                      x0=np.zeros(experiment.action_dim), bounds=[(-1.0, 1.0)] * experiment.action_dim,
+                                      batch_size=1, seed=3_000_017 + seed)
+        self.added = 0
+
+    def descriptors(self, action, path_xy) -> np.ndarray:
+        """(route_obstacles, deviation) of a layout and the path driven through it."""
+        start, goal = self.states.start, self.states.goal
+        near = _segment_distance(self.exp.to_positions(action), start, goal) <= self.route_band
+        dev = float(np.max(_segment_distance(np.asarray(path_xy, np.float64).reshape(-1, 2), start, goal)))
+        return np.array([float(np.sum(near)), min(dev, self.max_deviation - 1e-6)])
+
+    def propose(self, job, episode, step, state):
+        if job < self.init_random:
+            return _rng(self.seed, 7, job).uniform(-1.0, 1.0, self.exp.action_dim).astype(np.float32)
+        return np.clip(self.emitter.ask()[0], -1.0, 1.0).astype(np.float32)
+
+    def observe(self, job, episode, step, state, action, reward, next_state, done):
+        if reward is None or next_state is None:
+            return {}
+        n = self.exp.action_dim
+        path = (np.asarray(next_state[n:n + 2 * self.states.n_path], np.float64).reshape(-1, 2) + 1.0) * 0.5 * self.exp.size
+        self.archive.add_single(np.asarray(action, np.float64), float(reward), self.descriptors(action, path))
+        self.added += 1
+        st = self.archive.stats
+        return {"qd_cells": int(st.num_elites), "qd_coverage": float(st.coverage), "qd_best": float(st.obj_max)}
+
+    def config(self):
+        return {"init_random": self.init_random, "iso_sigma": self.iso_sigma, "line_sigma": self.line_sigma,
+                "route_band": self.route_band, "max_deviation": self.max_deviation,
+                "deviation_bins": self.deviation_bins}
+
+    def state_dict(self):
+        import pickle
+        return {"archive_emitter": pickle.dumps((self.archive, self.emitter)), "added": self.added}
+
+    def load_state_dict(self, d):
+        import pickle
+        self.archive, self.emitter = pickle.loads(d["archive_emitter"])
+        self.added = d["added"]
+
+
 def make_method(name: str, experiment: Experiment, seed: int, budget: int = 1000,
                 td3_config: Optional[TD3Config] = None) -> SearchMethod:
     if name == "random":
@@ -233,6 +312,8 @@ def make_method(name: str, experiment: Experiment, seed: int, budget: int = 1000
         return Annealing(experiment, seed, budget=budget)
     if name == "cmaes":
         return CMAES(experiment, seed)
+    if name == "map-elites":
+        return MapElites(experiment, seed, init_random=max(1, min(100, budget // 10)))
     if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
         return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
     raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")

@@ -10,7 +10,8 @@ and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/st
 (the agent's last gradient step after that scenario): `agent/critic_loss`, `agent/q`,
 `agent/actor_loss`, `agent/asp_penalty`, `agent/asp_weight`, `agent/per_beta`,
 `agent/actor_saturation`; CMA-ES's `search/cma_sigma` and `search/cma_best`, annealing's
-`search/temperature` and `search/incumbent`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
+`search/temperature` and `search/incumbent`, MAP-Elites' `search/qd_cells`,
+`search/qd_coverage` and `search/qd_best`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
 campaign passes its first job as `purge_step`, so TensorBoard drops what the interrupted run
 wrote past it. View with `tensorboard --logdir results/tensorboard` (the `tensorboard` package,
 which this project does not need).
@@ -25,7 +26,8 @@ AGENT_KEYS = {"critic_loss": "agent/critic_loss", "q": "agent/q", "actor_loss": 
               "actor_saturation": "agent/actor_saturation",
               # the other searches' own figures
               "cma_sigma": "search/cma_sigma", "cma_best": "search/cma_best",
-              "temperature": "search/temperature", "incumbent": "search/incumbent"}
+              "temperature": "search/temperature", "incumbent": "search/incumbent",
+              "qd_cells": "search/qd_cells", "qd_coverage": "search/qd_coverage", "qd_best": "search/qd_best"}
 
 
 class TensorBoardLog:
