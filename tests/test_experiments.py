@@ -133,3 +133,41 @@ def test_distinct_counts_clusters_of_near_copies_once():
         fast = experiments.layout_distances(a["positions"], [r["positions"] for r in rows[:15]], meshes)
         slow = [experiments.layout_distance(a["positions"], r["positions"], meshes) for r in rows[:15]]
         assert np.allclose(fast, slow)
+
+
+def test_attributed_comparison_counts_known_findings(tmp_path):
+    """Round 3's comparison (issue #25) on a made-up attributed export: twenty scenarios of a real
+    Exp. 1 campaign given reference runs and outcomes with known counts. Two perception findings
+    (proxy >= 3, reference < 2) of which one is a near copy of the other, a stack finding (both
+    >= 3, not the perception's), three differential ones, two perception collisions and one where
+    both collided; 25 s per scenario with one 2-hour pause that wall time leaves out."""
+    import gzip
+    import json
+    camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
+    rows = sorted(rows, key=lambda r: r["job"])[:20]
+    for k, r in enumerate(rows):
+        r.update(proxy=1.2, termination="SUCCESS", finished=1000.0 + 25.0 * k + (7200.0 if k >= 10 else 0.0))
+        r["reference"] = {"proxy": 1.1, "termination": "SUCCESS"}
+    rows[3].update(proxy=3.4)                                     # perception finding, differential
+    rows[7].update(proxy=3.1, positions=[[x + 0.3, y] for x, y in rows[3]["positions"]])  # its near copy
+    rows[9].update(proxy=3.5)
+    rows[9]["reference"]["proxy"] = 3.2                           # the stack's: not the perception's
+    rows[12].update(proxy=2.6)                                    # differential only (2.6 - 1.1)
+    rows[14].update(termination="COLLISION")                     # perception collision
+    rows[15].update(termination="COLLISION")
+    rows[15]["reference"]["termination"] = "COLLISION"            # both collided: the stack's
+    rows[18].update(termination="COLLISION")                     # perception collision
+    with gzip.open(tmp_path / "a.jsonl.gz", "wt") as f:
+        f.write(json.dumps({"campaign": dict(camp, name="synthetic-attr")}) + "\n")
+        for r in rows:
+            f.write(json.dumps(r) + "\n")
+    (tmp_path / "m.yaml").write_text("attributed: {budget: 20, threshold_m: 5.0, arms: {random: [a.jsonl.gz]}}\n")
+    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["attributed"]["random"][0]
+    assert (s["scenarios"], s["attributed"]) == (20, 20)
+    assert (s["perception"], s["perception_distinct"]) == (2, 1)
+    assert (s["differential"], s["differential_distinct"]) == (3, 2)
+    assert (s["collisions"], s["collisions_distinct"]) == (2, 2)
+    assert abs(s["max_proxy"] - 3.5) < 1e-9 and abs(s["max_difference"] - 2.3) < 1e-9
+    assert abs(s["hours"] * 3600 - 20 * 25.0) < 1e-6  # the pause left out
+    for measure in ("scenarios", "hours"):
+        assert os.path.getsize(tmp_path / "out" / f"attributed_{measure}.png") > 10000

@@ -5,6 +5,9 @@ and re-run results under results/ (no simulation, no ROS; well under a minute).
 
 The manifest names which export serves which table (paths relative to the manifest):
 
+    attributed: {budget: 1000, threshold_m: 5.0, arms: {td3-per-asp: [A, B], random: [...], ...}}
+                                                         # round 3: searches on the fixed stack, every
+                                                         # scenario attributed (scored by ATTRIBUTED_SCORES)
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
     diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0, all_thresholds_m: [2, 5, 10]}
@@ -12,7 +15,8 @@ The manifest names which export serves which table (paths relative to the manife
     differential: {export: campaigns/D.jsonl.gz, under_test: flawed, reference: full}
                                                          # a --reference-workers campaign (optional)
 
-Writes OUT/tables.md (the tables, quoted in docs/experiments.md), OUT/search_comparison.png,
+Writes OUT/tables.md (the tables, quoted in docs/experiments.md), OUT/attributed_{scenarios,hours}.png,
+OUT/search_comparison.png,
 OUT/top_EXP.png, OUT/differential_{top,curve}.png and OUT/summary.json (every count, read back by the tests).
 """
 import argparse
@@ -26,6 +30,7 @@ import numpy as np
 import yaml
 
 from .analysis import counts, read_export
+from .store import FINDING, REFERENCE_CLEAR, attribute
 
 PAPER = {"exp1": (682, 138, 8.31), "exp2": (126, 7, 6.79), "exp3": (477, 82, 6.67), "exp4": (305, 67, 8.00)}
 PAPER_SCENARIOS = 5000
@@ -103,13 +108,150 @@ def distinct(rows, top: Optional[int], threshold: float, min_proxy: float = -np.
     return sum(_is_new(ranked, threshold))
 
 
-def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = 3.0) -> np.ndarray:
+def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = 3.0, pred=None) -> np.ndarray:
     """Count of distinct finds after each scenario, in job order up to the budget: the
-    scenarios with proxy >= `min_proxy` taken in the order found (_is_new)."""
+    scenarios with proxy >= `min_proxy` (or for which `pred(row)` holds) taken in the order
+    found (_is_new)."""
     rows = sorted(rows, key=lambda r: r["job"])[:budget]
-    finds = [r for r in rows if (r["proxy"] or 0) >= min_proxy]
+    pred = pred or (lambda r: (r["proxy"] or 0) >= min_proxy)
+    finds = [r for r in rows if pred(r)]
     new = dict(zip((id(r) for r in finds), _is_new(finds, threshold)))
     return np.cumsum([new.get(id(r), False) for r in rows]).astype(int)
+
+
+def _ref(r):
+    return r.get("reference") or {}
+
+
+def _perception_finding(r) -> bool:
+    return r["proxy"] is not None and _ref(r).get("proxy") is not None and attribute(r["proxy"], _ref(r)["proxy"])[1]
+
+
+def _differential(r) -> bool:
+    return r["proxy"] is not None and _ref(r).get("proxy") is not None and r["proxy"] - _ref(r)["proxy"] >= 1.0
+
+
+def _perception_collision(r) -> bool:
+    return r["termination"] == "COLLISION" and _ref(r).get("termination") == "SUCCESS"
+
+
+#: The scores of an attributed campaign (issue #25), each counted and counted distinct: (key, label, predicate)
+ATTRIBUTED_SCORES = (
+    ("perception", f"perception findings (proxy >= {FINDING:g}, reference < {REFERENCE_CLEAR:g})", _perception_finding),
+    ("differential", "differential findings (proxy - reference >= 1)", _differential),
+    ("collisions", "perception collisions (the reference drove through)", _perception_collision))
+
+
+def elapsed_hours(rows, budget: int) -> np.ndarray:
+    """[h] active wall time after each scenario in job order (active_hours' rule: gaps over 5
+    minutes, a campaign stopped and resumed, left out); None when the export has no times."""
+    rows = sorted(rows, key=lambda r: r["job"])[:budget]
+    t = np.array([r.get("finished") or np.nan for r in rows], float)
+    if np.isnan(t).any() or len(t) < 2:
+        return None
+    order = np.maximum.accumulate(t)  # rows finish out of job order; time spent is the latest finish
+    gaps = np.diff(order, prepend=order[0])
+    med = float(np.median(gaps[1:][gaps[1:] > 0])) if (gaps[1:] > 0).any() else 0.0
+    gaps[0] = med  # the first scenario took about what a typical one takes
+    return np.cumsum(np.where(gaps < 300, gaps, med)) / 3600.0
+
+
+def attributed_comparison(load, section: dict, out: str):
+    """Round 3's search comparison: per arm and seed, each of ATTRIBUTED_SCORES counted and
+    counted distinct (threshold_m, in the order found) against scenarios spent and wall time."""
+    budget, thr = int(section.get("budget", 1000)), float(section.get("threshold_m", 5.0))
+    runs, summary = {}, {}
+    for arm, rels in section["arms"].items():
+        runs[arm] = []
+        for rel in rels:
+            camp, rows = load(rel)
+            rows = sorted(rows, key=lambda r: r["job"])[:budget]
+            r = {"seed": camp["seed"], "name": camp["name"], "scenarios": len(rows), "export": rel,
+                 "hours": elapsed_hours(rows, budget), "max_proxy": max((x["proxy"] for x in rows if x["proxy"] is not None), default=None),
+                 "max_difference": max((x["proxy"] - _ref(x)["proxy"] for x in rows
+                                        if x["proxy"] is not None and _ref(x).get("proxy") is not None), default=None),
+                 "attributed": sum(bool(_ref(x)) for x in rows)}
+            for key, _, pred in ATTRIBUTED_SCORES:
+                r[key] = np.cumsum([pred(x) for x in rows]).astype(int)
+                r[key + "_distinct"] = distinct_curve(rows, budget, thr, pred=pred)
+            runs[arm].append(r)
+    full = lambda rs: [r for r in rs if r["scenarios"] >= budget]  # noqa: E731
+    md = ["", f"### Search comparison on the fixed stack (round 3: Exp. 1, flawed U-Net, bf16, every scenario "
+          f"attributed; budget {budget} scenarios per run; distinct at {thr:g} m)", "",
+          "| method | seed | scenarios | " + " | ".join(f"{lab}: count / distinct" for _, lab, _ in ATTRIBUTED_SCORES)
+          + " | largest proxy | largest difference | wall time | scenarios per hour |",
+          "|---|---|---|" + "---|" * len(ATTRIBUTED_SCORES) + "---|---|---|---|"]
+    for arm, rs in runs.items():
+        summary[arm] = []
+        for r in rs:
+            h = float(r["hours"][-1]) if r["hours"] is not None else None
+            summary[arm].append({"seed": r["seed"], "name": r["name"], "export": r["export"], "scenarios": r["scenarios"],
+                                 "attributed": r["attributed"], "hours": h, "max_proxy": r["max_proxy"],
+                                 "max_difference": r["max_difference"],
+                                 **{k: int(r[k][-1]) for k, _, _ in ATTRIBUTED_SCORES},
+                                 **{k + "_distinct": int(r[k + "_distinct"][-1]) for k, _, _ in ATTRIBUTED_SCORES}})
+            md.append(f"| {arm} | {r['seed']} | {r['scenarios']}" + ("" if r["scenarios"] >= budget else " (running)") + " | "
+                      + " | ".join(f"{int(r[k][-1])} / {int(r[k + '_distinct'][-1])}" for k, _, _ in ATTRIBUTED_SCORES)
+                      + f" | {fmt(r['max_proxy'])} | {fmt(r['max_difference'], '+.2f')} | "
+                      + (f"{h * 60:.0f} min | {r['scenarios'] / h:,.0f}" if h else "- | -") + " |")
+    rnd = full(runs.get("random", []))
+    if len(runs) > 1 and rnd:
+        md += ["", "Mean over the seeds that reached the budget (min-max), and the ratio to random search's mean:", "",
+               "| method | seeds | " + " | ".join(f"{lab}, distinct" for _, lab, _ in ATTRIBUTED_SCORES) + " |",
+               "|---|---|" + "---|" * len(ATTRIBUTED_SCORES)]
+        for arm, rs in runs.items():
+            rs = full(rs)
+            if not rs:
+                continue
+            cells = []
+            for k, _, _ in ATTRIBUTED_SCORES:
+                v = [int(r[k + "_distinct"][-1]) for r in rs]
+                base = np.mean([int(r[k + "_distinct"][-1]) for r in rnd])
+                cells.append(f"{np.mean(v):.1f} ({min(v)}-{max(v)})" + (f", {np.mean(v) / base:.2f}x" if base > 0 else ""))
+            md.append(f"| {arm} | {len(rs)} | " + " | ".join(cells) + " |")
+    for measure, xlabel in (("scenarios", "scenarios spent"), ("hours", "wall time [h]")):
+        attributed_figure(runs, budget, thr, measure, xlabel, os.path.join(out, f"attributed_{measure}.png"))
+    return summary, md
+
+
+def attributed_figure(runs, budget, thr, measure, xlabel, out):
+    """One panel per score, distinct finds against `measure` (scenarios or hours); an arm of
+    several seeds as its mean over the budget with the min-max shaded (against hours: each seed)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, len(ATTRIBUTED_SCORES), figsize=(5.0 * len(ATTRIBUTED_SCORES), 4.0))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, (key, label, _) in zip(axes, ATTRIBUTED_SCORES):
+        for k, (arm, rs) in enumerate(runs.items()):
+            c = colours[k % len(colours)]
+            done = [r for r in rs if r["scenarios"] >= budget]
+            if measure == "scenarios" and len(done) > 1:
+                a = np.stack([r[key + "_distinct"] for r in done])
+                x = np.arange(1, budget + 1)
+                ax.plot(x, a.mean(0), color=c, label=f"{arm} (mean of {len(done)} seeds, min-max)")
+                ax.fill_between(x, a.min(0), a.max(0), color=c, alpha=0.2)
+                continue
+            for j, r in enumerate(rs):
+                x = np.arange(1, r["scenarios"] + 1) if measure == "scenarios" else r["hours"]
+                if x is None:
+                    continue
+                ax.plot(x, r[key + "_distinct"], color=c, lw=1.2, ls=("-", "--", ":")[j % 3],
+                        label=f"{arm} (seed {r['seed']})")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"distinct ({thr:g} m)")
+        ax.set_title(label, fontsize=9)
+        ax.set_ylim(bottom=0, top=max(1.0, ax.get_ylim()[1]))
+        ax.yaxis.get_major_locator().set_params(integer=True)
+        ax.grid(alpha=0.3)
+        if measure == "scenarios":
+            ax.set_xlim(0, budget)
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"Exp. 1, flawed U-Net (bf16), every scenario attributed: distinct perception-attributable finds "
+                 f"against {xlabel}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
 
 
 def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]:
@@ -334,6 +476,10 @@ def run(manifest_path: str, out: str) -> dict:
         return cache[rel]
 
     summary, md = {"table2": {}, "comparison": {}, "diversity": {}}, []
+    # -- round 3: searches on the fixed stack, attributed ------------------------------------------
+    if (man.get("attributed") or {}).get("arms"):
+        summary["attributed"], lines = attributed_comparison(load, man["attributed"], out)
+        md += lines[1:] + ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
     # -- Table 2 ---------------------------------------------------------------------------------
     if man.get("table2"):
         md += ["### Table 2", "", "| experiment | scenarios | proxy >= 3 | >= 4 | largest | per 1,000: >= 3 / >= 4 "
