@@ -5,9 +5,11 @@
 # Writes results/baseline/<exp>.json and prints the table of docs/baseline.md.
 #   bash scripts/baseline.sh EXPERIMENT [N_GROUND_TRUTH=500] [N_UNET=300]
 #   e.g. bash scripts/baseline.sh exp1      (experiments/exp1.yaml)
-# ASG_PLANNER_CONFIG=FILE: another planner configuration; ASG_UNET_BACKEND=bf16: the U-Net stacks
-# on another inference backend, stored apart under results/baseline/backend_<B>/ (compare with
-# python3 -m asg_agent.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks.
+# ASG_PLANNER_CONFIG=FILE: another planner configuration. ASG_UNET_BACKEND: the U-Net stacks'
+# inference backend, default bf16 (the shipped one since issue #24); channels_last rows (every
+# baseline before it) are in results/baseline/<exp>/, another backend's in
+# results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
+# with python3 -m asg_agent.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -18,21 +20,23 @@ install_packages
 build_workspace ON
 use_local_master "${ASG_BASELINE_PORT:-11395}" "$REPO/runs/baseline/logs"
 CFG="${ASG_PLANNER_CONFIG:-$WS/src/asg_planner/config/planner.yaml}"
-BACKEND="${ASG_UNET_BACKEND:-channels_last}"
+BACKEND="${ASG_UNET_BACKEND:-bf16}"
 ROOT=()
 [ "$BACKEND" = channels_last ] || ROOT=(--root "$REPO/results/baseline/backend_$BACKEND")
+GT_ROOT=(--ground-truth-root "$REPO/results/baseline")
 trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
   [[ " ${ASG_BASELINE_STACKS:-ground_truth flawed full} " == *" $stack "* ]] || continue
   args=(perception:=unet model:="$stack" unet_backend:="$BACKEND")
-  [ "$stack" = ground_truth ] && args=(perception:=ground_truth)
+  root=("${ROOT[@]}")
+  [ "$stack" = ground_truth ] && args=(perception:=ground_truth) && root=()
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"
   start_master
   start_workers 2 "${args[@]}" planner_config:="$CFG"
-  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 "${ROOT[@]}"
+  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 "${root[@]}"
   stop_workers
   stop_master
 done
-/usr/bin/python3 -m asg_agent.baseline summary "$EXP" "${ROOT[@]}"
+/usr/bin/python3 -m asg_agent.baseline summary "$EXP" "${ROOT[@]}" "${GT_ROOT[@]}"

@@ -30,7 +30,16 @@ class CampaignEndToEnd(unittest.TestCase):
         rospy.init_node("campaign_test")
         su.client("worker_0")
         su.client("worker_1")
+        # Issue #24: an experiment whose backend is not what the workers run stores nothing.
         path = os.path.join(tempfile.mkdtemp(), "store.sqlite")
+        p = subprocess.run(["/usr/bin/python3", "-m", "asg_agent.cli",
+                            os.path.join(su.REPO, "experiments", "exp1-channels-last.yaml"), "--workers", "2",
+                            "--scenarios", "2", "--store", path, "--no-progress"], capture_output=True, text=True,
+                           timeout=120)
+        self.assertEqual(p.returncode, 2, p.stdout[-2000:] + p.stderr[-2000:])
+        self.assertIn("the campaign's stack runs the 'channels_last' inference backend, /worker_0 runs 'bf16'",
+                      p.stderr)
+        self.assertFalse(os.path.exists(path) and Store(path).campaign("exp1-channels-last-td3-per-asp-s0"))
         out = self.run_campaign(path, "first")
         self.assertIn("campaign first: 20 scenarios", out)
         self.run_campaign(path, "second")

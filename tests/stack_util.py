@@ -36,6 +36,19 @@ def client(ns, timeout=90.0):
     return c
 
 
+def wait_for_segmenter(ns, timeout=180.0):
+    """Until /ns/segmenter has loaded its model and subscribed to the camera (torch and the
+    model's warm-up take a while on a loaded machine)."""
+    import time
+    master, deadline = rosgraph.Master("/stack_util"), time.time() + timeout
+    while time.time() < deadline:
+        _, subs, _ = master.getSystemState()
+        if any(t == f"/{ns}/camera/image" and f"/{ns}/segmenter" in nodes for t, nodes in subs):
+            return
+        time.sleep(0.5)
+    raise AssertionError(f"/{ns}/segmenter did not subscribe to /{ns}/camera/image within {timeout:.0f} s")
+
+
 def run(c, scenario, timeout=300.0):
     """Sends a scenario, waits; (goal state, result)."""
     c.send_goal(to_goal_msg(scenario))
@@ -56,6 +69,43 @@ def trajectory_digest(result):
     """sha256 of trajectory_key: the stored form of a reference run (tests/reference/)."""
     import hashlib
     return hashlib.sha256(repr(trajectory_key(result)).encode()).hexdigest()
+
+
+REFERENCE_DIR = os.path.join(os.path.dirname(os.path.realpath(__file__)), "reference")
+
+
+def reference_path(worker_ns):
+    """The stored reference runs for the U-Net backend `worker_ns` runs: tests/reference/
+    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once)."""
+    backend = rospy.get_param(f"/{worker_ns}/segmenter/backend")
+    return os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.json")
+
+
+def check_reference(test, c, path, write=False):
+    """Runs every stored request of `path` on client `c`; each run must repeat its stored
+    termination, length and trajectory digest. write=True (ASG_WRITE_REFERENCE=1) stores what
+    the runs did instead."""
+    import json
+    with open(path) as f:
+        ref = json.load(f)
+    for k, entry in enumerate(ref["runs"]):
+        state, r = run(c, entry["request"])
+        test.assertEqual(state, SUCCEEDED, r.error)
+        got = {"termination": r.termination_name, "samples": len(r.trajectory),
+               "digest": trajectory_digest(r),
+               "final_xy": [r.trajectory[-1].pose.position.x, r.trajectory[-1].pose.position.y]}
+        if write:
+            entry.update(got)
+            continue
+        test.assertEqual((got["termination"], got["samples"]), (entry["termination"], entry["samples"]),
+                         f"reference run {k} ({entry['source']})")
+        test.assertEqual(got["digest"], entry["digest"],
+                         f"reference run {k} ({entry['source']}) of {os.path.basename(path)}: trajectory differs "
+                         f"from the stored one (final position {got['final_xy']} vs {entry['final_xy']})")
+    if write:
+        with open(path, "w") as f:
+            json.dump(ref, f, indent=1)
+            f.write("\n")
 
 
 def largest_difference(a, b):

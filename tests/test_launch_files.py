@@ -58,21 +58,30 @@ def test_train_launch_gives_every_worker_under_test_the_backend():
     # Issue #24: the inference backend is part of the stack's identity (experiment `unet_backend`).
     import yaml
     path = os.path.join(REPO, "launch", "train.launch")
-    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "unet_backend:=bf16"))
-    assert [params[f"/worker_{i}/segmenter/backend"] for i in range(3)] == ["bf16"] * 3
+    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "unet_backend:=channels_last"))
+    assert [params[f"/worker_{i}/segmenter/backend"] for i in range(3)] == ["channels_last"] * 3
     params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=2"))
-    assert params["/worker_0/segmenter/backend"] == "channels_last"
+    assert params["/worker_0/segmenter/backend"] == "bf16"  # the default since issue #24
+    diff = os.path.join(REPO, "launch", "differential.launch")
+    params = yaml.safe_load(roslaunch("--dump-params", diff, "unet_backend:=channels_last"))
+    assert [params[f"/worker_{i}/segmenter/backend"] for i in range(4)] == ["channels_last"] * 4
 
 
 def test_the_experiment_backends_are_the_segmenters():
     import sys
     for pkg in ("asg_agent", "asg_perception", "asg_scenario"):
         sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
-    from asg_agent.experiment import UNET_BACKENDS, ExperimentError, load_experiment
-    from asg_perception.inference import BACKENDS
+    from asg_agent.experiment import DEFAULT_UNET_BACKEND, UNET_BACKENDS, ExperimentError, load_experiment
+    from asg_perception.inference import BACKENDS, DEFAULT_BACKEND
     assert tuple(UNET_BACKENDS) == tuple(BACKENDS)
+    assert DEFAULT_UNET_BACKEND == DEFAULT_BACKEND
+    # the launch files' defaults are the shipped one too
+    for launch in ("worker.launch", "train.launch", "differential.launch"):
+        text = open(os.path.join(REPO, "launch", launch)).read()
+        assert f'<arg name="unet_backend" default="{DEFAULT_BACKEND}"' in text, launch
     exp = os.path.join(REPO, "experiments", "exp1.yaml")
-    assert load_experiment(exp).unet_backend == "channels_last"
+    assert load_experiment(exp).unet_backend == DEFAULT_BACKEND
+    assert load_experiment(os.path.join(REPO, "experiments", "exp1-channels-last.yaml")).unet_backend == "channels_last"
     import tempfile
     with tempfile.TemporaryDirectory() as d:
         bad = os.path.join(d, "bad.yaml")

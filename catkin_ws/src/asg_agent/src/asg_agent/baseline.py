@@ -237,10 +237,13 @@ def stack_summary(rows: List[dict]) -> dict:
             "plr_below_0999": int((plr < 0.999).sum())}
 
 
-def summarize(exp_name: str, root: str = "") -> dict:
+def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dict:
     """results/baseline/<exp>.json: per stack its summary, per layout the proxies of every stack,
-    and what each U-Net stack changes against ground truth on the layouts both ran."""
-    rows = {s: read_rows(out_path(exp_name, s, root)) for s in STACKS}
+    and what each U-Net stack changes against ground truth on the layouts both ran. The
+    ground-truth rows come from `ground_truth_root` where given (they do not depend on the
+    U-Net's backend, so a backend's folder shares the default one's)."""
+    rows = {s: read_rows(out_path(exp_name, s, ground_truth_root if s == "ground_truth" and ground_truth_root else root))
+            for s in STACKS}
     out = {"experiment": exp_name, "layouts": "uniform random search, seed 0: job k is layout k",
            "bounds_ground_truth": BOUNDS, "stacks": {}, "against_ground_truth": {}, "per_layout": []}
     for s in STACKS:
@@ -282,7 +285,7 @@ def table(summary: dict) -> str:
 
 def summary_cmd(a) -> int:
     exp = load_experiment(a.experiment)
-    s = summarize(exp.name, a.root)
+    s = summarize(exp.name, a.root, a.ground_truth_root)
     path = os.path.join(a.root or os.path.join(REPO, "results", "baseline"), f"{exp.name}.json")
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as f:
@@ -305,6 +308,7 @@ def main(argv=None):
     s = sub.add_parser("summary", help="results/baseline/<exp>.json and the Markdown table")
     s.add_argument("experiment")
     s.add_argument("--root", default="")
+    s.add_argument("--ground-truth-root", default="", help="where the ground-truth rows are, if not under --root")
     o = sub.add_parser("offline", help="a planner variant on the layouts with ground-truth labels, no ROS")
     o.add_argument("experiment")
     o.add_argument("--label", required=True, help="name of the variant (results/baseline/<exp>/offline/LABEL.jsonl)")

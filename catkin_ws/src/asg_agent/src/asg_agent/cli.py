@@ -217,6 +217,15 @@ def main(argv=None):
 
     settings = {"workers": workers, "reference_workers": ref_workers, "reward": a.reward, "experiment_file": exp.source, "perception": exp.perception,
                 "model": exp.model, "unet_backend": exp.unet_backend, "planner_config": exp.planner_config, "fake": bool(a.fake_workers)}
+    if not a.fake_workers:
+        # The stack identity stored with the campaign must be what the workers run (issue #24:
+        # a backend left at another value than the experiment's would be recorded falsely).
+        from .replay_ros import stack_mismatch
+        wrong = [m for w in workers for m in stack_mismatch(w, settings)]
+        if wrong:
+            print("campaign: the workers do not run the experiment's stack (" + exp.source + "): "
+                  + "; ".join(wrong), file=sys.stderr)
+            return 2
     collector = None
     if a.stage_report and not a.fake_workers:
         from .stages_ros import StageCollector

@@ -9,7 +9,7 @@ search varies it. The action is the x, y of every obstacle instance, each scaled
     scenario: ../scenarios/exp1.yaml   # relative to this file
     perception: unet                   # unet or ground_truth (the stack the workers must run)
     model: flawed                      # unet only: shipped model name or path
-    unet_backend: channels_last        # unet only: inference backend (asg_perception.inference)
+    unet_backend: bf16                 # unet only: inference backend (asg_perception.inference)
     planner_config: planner.yaml       # a file of asg_planner/config, or a path
     episode_steps: 5
     sim_timeout: 60.0                  # [s] overrides the scenario's
@@ -35,6 +35,10 @@ KEYS = {"name", "scenario", "perception", "model", "unet_backend", "planner_conf
         "sim_timeout", "description"}
 #: asg_perception.inference.BACKENDS (a test keeps the two equal; asg_agent does not import torch models)
 UNET_BACKENDS = ("eager", "channels_last", "frozen", "bf16")
+#: asg_perception.inference.DEFAULT_BACKEND: what a file without `unet_backend` means
+DEFAULT_UNET_BACKEND = "bf16"
+#: what a campaign whose settings lack `unet_backend` ran (every one before the key existed)
+LEGACY_UNET_BACKEND = "channels_last"
 
 
 @dataclass
@@ -45,7 +49,7 @@ class Experiment:
     model: str = "flawed"
     planner_config: str = "planner.yaml"
     episode_steps: int = 5
-    unet_backend: str = "channels_last"  #: part of the stack's identity: labels differ by backend
+    unet_backend: str = DEFAULT_UNET_BACKEND  #: part of the stack's identity: labels differ by backend
     source: str = ""
     text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
 
@@ -94,7 +98,7 @@ def load_experiment(path: str) -> Experiment:
             problems.append(f"{key}: required, a non-empty string")
     if data.get("perception", "unet") not in ("unet", "ground_truth"):
         problems.append(f"perception: {data.get('perception')!r}, must be unet or ground_truth")
-    if data.get("unet_backend", "channels_last") not in UNET_BACKENDS:
+    if data.get("unet_backend", DEFAULT_UNET_BACKEND) not in UNET_BACKENDS:
         problems.append(f"unet_backend: {data.get('unet_backend')!r}, must be one of {', '.join(UNET_BACKENDS)}")
     steps = data.get("episode_steps", 5)
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 100:
@@ -122,4 +126,4 @@ def load_experiment(path: str) -> Experiment:
     return Experiment(name=data["name"], scenario=scenario, perception=data.get("perception", "unet"),
                       model=data.get("model", "flawed"), planner_config=data.get("planner_config", "planner.yaml"),
                       episode_steps=steps, source=os.path.abspath(path), text=text,
-                      unet_backend=data.get("unet_backend", "channels_last"))
+                      unet_backend=data.get("unet_backend", DEFAULT_UNET_BACKEND))

@@ -27,6 +27,7 @@ import numpy as np
 from asg_scenario import ScenarioError, load_scenario
 
 from .campaign import Outcome
+from .experiment import LEGACY_UNET_BACKEND
 from .proxy import compute, placed_mask
 from .store import Store, unpack_trajectory
 
@@ -54,11 +55,12 @@ def stack_mismatch(worker: str, settings: dict) -> list:
             model = rospy.get_param(f"{worker}/segmenter/model")
             if os.path.splitext(os.path.basename(str(model)))[0] != os.path.splitext(os.path.basename(settings.get("model", "")))[0]:
                 out.append(f"the campaign ran model {settings.get('model')!r}, {worker} runs {model!r}")
-            # Campaigns from before the backend was recorded ran the default, channels_last.
-            backend, ran = rospy.get_param(f"{worker}/segmenter/backend", "channels_last"), settings.get(
-                "unet_backend", "channels_last")
+            # Campaigns from before the backend was recorded ran the then default, channels_last;
+            # a segmenter without the parameter predates bf16 too.
+            backend, ran = rospy.get_param(f"{worker}/segmenter/backend", LEGACY_UNET_BACKEND), settings.get(
+                "unet_backend", LEGACY_UNET_BACKEND)
             if backend != ran:
-                out.append(f"the campaign ran the {ran!r} inference backend, {worker} runs {backend!r}")
+                out.append(f"the campaign's stack runs the {ran!r} inference backend, {worker} runs {backend!r}")
     elif want == "ground_truth" and has_seg:
         out.append(f"the campaign ran ground-truth labels, {worker} runs a segmenter")
     return out
@@ -142,7 +144,7 @@ def main(argv=None):
     if not a.worker:
         stack = {"perception": a.perception or settings.get("perception", "unet"),
                  "model": a.model or settings.get("model", "flawed"),
-                 "unet_backend": settings.get("unet_backend", "channels_last"),
+                 "unet_backend": settings.get("unet_backend", LEGACY_UNET_BACKEND),
                  "planner_config": settings.get("planner_config", "planner.yaml")}
         launched = bring_up_worker(stack, a.port)
         settings = {}  # the worker is the stored stack by construction
@@ -168,7 +170,7 @@ def bring_up_worker(stack: dict, port: int):
     os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     os.environ.setdefault("ROS_HOSTNAME", "127.0.0.1")
     cmd = ["roslaunch", "-p", str(port), os.path.join(repo, "launch", "worker.launch"), "ns:=replay_worker",
-           f"perception:={stack['perception']}", f"model:={stack['model']}", f"unet_backend:={stack.get('unet_backend', 'channels_last')}",
+           f"perception:={stack['perception']}", f"model:={stack['model']}", f"unet_backend:={stack.get('unet_backend', LEGACY_UNET_BACKEND)}",
            f"planner_config:={planner}",
            "odom_every_tick:=true"]  # a replay is for looking at: every tick's pose in the bag
     print(f"replay: bringing up a worker: {' '.join(cmd[3:])}", file=sys.stderr)

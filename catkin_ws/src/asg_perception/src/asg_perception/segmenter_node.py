@@ -14,7 +14,7 @@ import rospy
 from asg_msgs.msg import ScenarioInfo, StackAck, StackError, StageTimes
 from sensor_msgs.msg import Image
 
-from .inference import BACKENDS, Segmenter
+from .inference import BACKENDS, DEFAULT_BACKEND, Segmenter
 from .stage_clock import StageClock
 
 MODELS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "models"))
@@ -34,7 +34,7 @@ def resolve_model(name: str) -> str:
 class SegmenterNode:
     def __init__(self):
         model = rospy.get_param("~model", "flawed")
-        backend = rospy.get_param("~backend", "channels_last")
+        backend = rospy.get_param("~backend", DEFAULT_BACKEND)
         threads = int(rospy.get_param("~threads", 1))
         width = int(rospy.get_param("~width", 256))
         height = int(rospy.get_param("~height", 256))

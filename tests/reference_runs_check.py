@@ -1,0 +1,23 @@
+#!/usr/bin/python3
+"""rostest (issue #24): the stored reference runs of the backend worker_0 runs (reference_runs.test
+starts it on channels_last) repeat bit for bit. ASG_WRITE_REFERENCE=1 records them instead."""
+import os
+import unittest
+
+import rospy
+import rostest
+
+import stack_util as su
+
+
+class ReferenceRuns(unittest.TestCase):
+    def test_stored_reference_bit_for_bit(self):
+        rospy.init_node("reference_runs_test")
+        path = su.reference_path("worker_0")
+        self.assertTrue(os.path.isfile(path), f"no reference runs for this backend: {path}")
+        su.wait_for_segmenter("worker_0")
+        su.check_reference(self, su.client("worker_0"), path, os.environ.get("ASG_WRITE_REFERENCE") == "1")
+
+
+if __name__ == "__main__":
+    rostest.rosrun("asg_tests", "reference_runs", ReferenceRuns)
