@@ -467,3 +467,31 @@ def test_map_elites_fills_its_archive_and_keeps_the_best_of_each_cell():
     assert set(np.round(data["measures"][:, 1]).astype(int)) >= set(range(1, 11))
     # later elites were mutated towards the reward: the best beats the best random layout by far
     assert m.archive.stats.obj_max > 2.0
+
+
+def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsys):
+    # Issue #25: `replay_ros STORE CAMPAIGN JOB --perception ground_truth` replays an attributed
+    # row's reference run; it counts as reproduced only when the termination, the proxy and the
+    # kept positions (campaign.kept_xy) equal what attribution stored.
+    import argparse
+    from asg_agent.campaign import Outcome, kept_xy
+    from asg_agent.proxy import compute, placed_mask
+    from asg_agent.replay_ros import check_reference_run
+    exp = load_experiment(EXP)
+    request = exp.request(np.linspace(-0.9, 0.9, exp.action_dim), 5)
+    t = np.arange(0, 16.0, 1 / 60.0)
+    traj = np.zeros((len(t), 5), np.float32)
+    traj[:, 0], traj[:, 1], traj[:, 2] = t, 20 + 3.0 * t, 20 + 3.0 * t
+    vis = [0.5] * (exp.action_dim // 2)
+    o = Outcome(0, "/worker_2", "SUCCESS", sim_time=16.0, trajectory=traj, visibility=vis)
+    terms = compute(request, traj[:, 0], traj[:, 1:3], traj[:, 4], vis, "SUCCESS", placed_mask(request, []))
+    ref = {"termination": "SUCCESS", "proxy": terms.proxy, "trajectory_xy": kept_xy(traj)}
+    a = argparse.Namespace(bag="")
+    assert check_reference_run(a, request, ref, o) == 0
+    assert "REPRODUCED (the reference run)" in capsys.readouterr().out
+    moved = traj.copy()
+    moved[300, 1] += 0.05  # one kept sample 5 cm off
+    assert check_reference_run(a, request, ref, Outcome(0, "/worker_2", "SUCCESS", sim_time=16.0,
+                                                        trajectory=moved, visibility=vis)) == 1
+    assert "NOT REPRODUCED" in capsys.readouterr().out
+    assert check_reference_run(a, request, dict(ref, termination="COLLISION"), o) == 1

@@ -45,6 +45,11 @@ class Stages:
         self.calls[name] += 1
 
 
+def kept_xy(trajectory) -> list:
+    """The positions attribution stores of a reference run: every 6th sample (10 Hz), to 1 cm."""
+    return np.round(np.asarray(trajectory, np.float32).reshape(-1, 5)[::6, 1:3], 2).tolist()
+
+
 @dataclass
 class Outcome:
     """What a pool returns for a job: the result as plain values."""
@@ -311,7 +316,7 @@ class Campaign:
                                     "error": ref.error, "proxy": rterms.proxy if rterms else None,
                                     "vis": rterms.vis if rterms else None, "yaw_term": rterms.yaw_term if rterms else None,
                                     "plr": rterms.plr if rterms else None, "sim_time": ref.sim_time,
-                                    "trajectory_xy": np.round(np.asarray(ref.trajectory, np.float32).reshape(-1, 5)[::6, 1:3], 2).tolist()},
+                                    "trajectory_xy": kept_xy(ref.trajectory)},
                                    sort_keys=True)
             diff = terms.proxy - rterms.proxy if terms and rterms else None
             if self.reward == "differential":

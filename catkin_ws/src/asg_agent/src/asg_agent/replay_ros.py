@@ -26,7 +26,7 @@ import numpy as np
 
 from asg_scenario import ScenarioError, load_scenario
 
-from .campaign import Outcome
+from .campaign import Outcome, kept_xy
 from .experiment import LEGACY_UNET_BACKEND
 from .proxy import compute, placed_mask
 from .store import Store, unpack_trajectory
@@ -102,6 +102,27 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
             bag.write(f"{worker}/replay/earlier_plans", arr, times.get(stamp, when))
 
 
+def check_reference_run(a, request, ref: dict, o: Outcome) -> int:
+    """The replay of a row's reference run against what attribution stored of it: termination,
+    proxy, and the positions it keeps (every 6th sample, to 1 cm)."""
+    terms = compute(request, o.trajectory[:, 0], o.trajectory[:, 1:3], o.trajectory[:, 4], o.visibility,
+                    o.termination, placed_mask(request, o.removed)) if o.termination != "ERROR" else None
+    proxy = terms.proxy if terms else None
+    kept = np.asarray(kept_xy(o.trajectory), float).reshape(-1, 2)
+    stored = np.asarray(ref.get("trajectory_xy") or [], float).reshape(-1, 2)
+    diff = float(np.abs(kept - stored).max()) if kept.shape == stored.shape and len(stored) else float("inf")
+    print(f"largest position difference to the stored reference run: {diff:.6f} m ({len(kept)} vs {len(stored)} kept samples)")
+    print(f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored reference "
+          f"{ref.get('proxy') if ref.get('proxy') is None else round(ref['proxy'], 6)}")
+    if a.bag:
+        print(f"bag: {os.path.abspath(a.bag)}")
+    same_proxy = (proxy is None and ref.get("proxy") is None) or (
+        proxy is not None and ref.get("proxy") is not None and abs(proxy - ref["proxy"]) <= 1e-6)
+    ok = diff <= 0.011 and same_proxy and o.termination == ref.get("termination")
+    print("REPRODUCED (the reference run)" if ok else "NOT REPRODUCED (the reference run)")
+    return 0 if ok else 1
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[0])
     p.add_argument("store", nargs="?")
@@ -109,7 +130,8 @@ def main(argv=None):
     p.add_argument("job", nargs="?", type=int)
     p.add_argument("--scenario", help="a scenario YAML file instead of a stored scenario")
     p.add_argument("--worker", default="", help="a running worker's namespace (default: bring one up)")
-    p.add_argument("--perception", default="", help="with --scenario: unet or ground_truth (default unet)")
+    p.add_argument("--perception", default="", help="unet or ground_truth (with --scenario, default unet); for a stored "
+                   "scenario of an attributed campaign, ground_truth replays its reference run and checks it")
     p.add_argument("--model", default="", help="with --scenario: the U-Net model (default flawed)")
     p.add_argument("--port", type=int, default=11390, help="ROS master port of the worker replay brings up")
     p.add_argument("--bag", default="", help="record the run's topics into this bag")
@@ -140,6 +162,9 @@ def main(argv=None):
             print(f"replay: campaign {a.campaign!r} has no job {a.job}", file=sys.stderr)
             return 2
         request = json.loads(row["request"])
+    # An attributed row replayed on the ground-truth stack is checked against its reference run.
+    a.against_reference = bool(row is not None and row["reference"] and a.perception == "ground_truth"
+                               and settings.get("perception") != "ground_truth")
     launched = None
     if not a.worker:
         stack = {"perception": a.perception or settings.get("perception", "unet"),
@@ -238,6 +263,8 @@ def run_replay(a, request, row, settings) -> int:
         plot_run(a.figure, request, o.trajectory[:, 1:3].tolist(), title=f"replay of {request.get('name', '')}")
     if row is None:
         return 0 if o.termination != "ERROR" else 1
+    if getattr(a, "against_reference", False):
+        return check_reference_run(a, request, json.loads(row["reference"]), o)
     stored = unpack_trajectory(row["trajectory"])
     diff = compare(stored, o.trajectory)
     terms = compute(request, o.trajectory[:, 0], o.trajectory[:, 1:3], o.trajectory[:, 4], o.visibility,
