@@ -27,8 +27,9 @@ APT_PACKAGES=(
 # From PyPI, pinned, without dependencies (every dependency above is Debian's: pip's numpy 2 would
 # break Debian's torch): TensorBoard's event-file writer for campaign scalars, CMA-ES for the
 # `cmaes` search, and pyribs (the last release for numpy 1) with its one dependency Debian lacks
-# for the `map-elites` search (docs/agent.md). All pure Python.
-PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0 numpy-groupies==0.11.2 ribs==0.7.1)
+# for the `map-elites` search (docs/agent.md), all pure Python; and ruff, the formatter and linter
+# that scripts/test.sh runs (ruff.toml; a static binary).
+PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0 numpy-groupies==0.11.2 ribs==0.7.1 ruff==0.8.4)
 
 log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
 

@@ -3,19 +3,26 @@
 stored exactly once, the kills by kind, the agent's restarts, the retries (from the store and, by
 reason, from the agent's log), SQLite integrity.
     soak_report.py STORE NAME N KILLS_LOG AGENT_LOG START END OUT.json"""
+
 import collections
 import json
 import os
 import re
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "catkin_ws", "src",
-                                "asg_agent", "src"))
+sys.path.insert(
+    0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "catkin_ws", "src", "asg_agent", "src")
+)
 from asg_agent.store import Store  # noqa: E402
 
-REASONS = [("scene worker died", r"scene worker died"), ("planner silent", r"planner: no command"),
-           ("segmenter silent", r"segmenter: no labels"), ("goal lost", r"goal ended LOST"),
-           ("no answer in time", r"did not answer"), ("never acknowledged", r"never acknowledged")]
+REASONS = [
+    ("scene worker died", r"scene worker died"),
+    ("planner silent", r"planner: no command"),
+    ("segmenter silent", r"segmenter: no labels"),
+    ("goal lost", r"goal ended LOST"),
+    ("no answer in time", r"did not answer"),
+    ("never acknowledged", r"never acknowledged"),
+]
 
 
 def main(argv):
@@ -33,16 +40,25 @@ def main(argv):
     for line in retries:
         by_reason[next((k for k, pat in REASONS if re.search(pat, line)), "other")] += 1
     camp = s.campaign(name)
-    res = {"campaign": name, "scenarios_expected": n, "scenarios_stored": len(rows),
-           "lost": len(set(range(n)) - set(jobs)), "duplicates": len(jobs) - len(set(jobs)),
-           "beyond_budget": sum(j >= n for j in jobs), "integrity_ok": s.integrity_ok(),
-           "finished": bool(camp and camp["finished"]), "hours": round((int(end) - int(start)) / 3600, 2),
-           "kills": dict(kills), "kills_total": sum(kills.values()),
-           "agent_restarts": sum("restarting with --resume" in line for line in log),
-           "retries_logged": len(retries), "retries_by_reason": dict(by_reason),
-           "retried_scenarios_in_store": sum(1 for r in rows if r["attempts"] > 1),
-           "stored_as_error": sum(1 for r in rows if r["termination"] == "ERROR"),
-           "proxy_ge_3": sum((r["proxy"] or 0) >= 3 for r in rows)}
+    res = {
+        "campaign": name,
+        "scenarios_expected": n,
+        "scenarios_stored": len(rows),
+        "lost": len(set(range(n)) - set(jobs)),
+        "duplicates": len(jobs) - len(set(jobs)),
+        "beyond_budget": sum(j >= n for j in jobs),
+        "integrity_ok": s.integrity_ok(),
+        "finished": bool(camp and camp["finished"]),
+        "hours": round((int(end) - int(start)) / 3600, 2),
+        "kills": dict(kills),
+        "kills_total": sum(kills.values()),
+        "agent_restarts": sum("restarting with --resume" in line for line in log),
+        "retries_logged": len(retries),
+        "retries_by_reason": dict(by_reason),
+        "retried_scenarios_in_store": sum(1 for r in rows if r["attempts"] > 1),
+        "stored_as_error": sum(1 for r in rows if r["termination"] == "ERROR"),
+        "proxy_ge_3": sum((r["proxy"] or 0) >= 3 for r in rows),
+    }
     with open(out, "w") as f:
         json.dump(res, f, indent=1)
     print(json.dumps(res, indent=1))

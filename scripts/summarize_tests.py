@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Count test cases in the JUnit XML files under a folder; print one line per failure and the
 closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or error, or if nothing ran."""
+
 import glob
 import os
 import sys

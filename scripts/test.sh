@@ -14,6 +14,10 @@ mkdir -p "$RESULTS/pytest"
 export ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
 unset ROS_MASTER_URI
 
+log "style: ruff format --check and ruff check (ruff.toml)"
+mkdir -p "$RESULTS/style"
+/usr/bin/python3 "$REPO/scripts/check_style.py" "$REPO" "$RESULTS/style/ruff.xml"
+
 log "gtest + rostest (catkin_make run_tests)"
 export LP_NUM_THREADS=1
 # Test binaries build on both cores; the tests then run one at a time: the end-to-end rostests

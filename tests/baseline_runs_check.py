@@ -2,6 +2,7 @@
 """Baseline layouts 10-19 of Exp. 1 (uniform random search, seed 0) on the ground-truth-label
 stack through ROS: each run reaches the goal with a small yaw term and a PLR near 1, far below the
 finding threshold, and repeats the proxy stored in results/baseline/exp1/ground_truth.jsonl."""
+
 import os
 import sys
 import unittest

@@ -1,9 +1,9 @@
 #!/usr/bin/python3
 """rostest (issue #10): `campaign` against two real workers fills the store, and a second
 campaign with the same seed stores the same scenarios, proxies and trajectories."""
+
 import os
 import subprocess
-import sys
 import tempfile
 import unittest
 
@@ -19,9 +19,23 @@ SCENARIOS = 20
 
 class CampaignEndToEnd(unittest.TestCase):
     def run_campaign(self, store, name):
-        cmd = ["/usr/bin/python3", "-m", "asg_agent.cli", os.path.join(su.REPO, "experiments", "exp1.yaml"),
-               "--workers", "2", "--scenarios", str(SCENARIOS), "--seed", "3", "--store", store, "--name", name,
-               "--no-progress"]
+        cmd = [
+            "/usr/bin/python3",
+            "-m",
+            "asg_agent.cli",
+            os.path.join(su.REPO, "experiments", "exp1.yaml"),
+            "--workers",
+            "2",
+            "--scenarios",
+            str(SCENARIOS),
+            "--seed",
+            "3",
+            "--store",
+            store,
+            "--name",
+            name,
+            "--no-progress",
+        ]
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=500)
         self.assertEqual(p.returncode, 0, p.stdout[-2000:] + p.stderr[-2000:])
         return p.stdout
@@ -32,13 +46,28 @@ class CampaignEndToEnd(unittest.TestCase):
         su.client("worker_1")
         # Issue #24: an experiment whose backend is not what the workers run stores nothing.
         path = os.path.join(tempfile.mkdtemp(), "store.sqlite")
-        p = subprocess.run(["/usr/bin/python3", "-m", "asg_agent.cli",
-                            os.path.join(su.REPO, "experiments", "exp1-channels-last.yaml"), "--workers", "2",
-                            "--scenarios", "2", "--store", path, "--no-progress"], capture_output=True, text=True,
-                           timeout=120)
+        p = subprocess.run(
+            [
+                "/usr/bin/python3",
+                "-m",
+                "asg_agent.cli",
+                os.path.join(su.REPO, "experiments", "exp1-channels-last.yaml"),
+                "--workers",
+                "2",
+                "--scenarios",
+                "2",
+                "--store",
+                path,
+                "--no-progress",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         self.assertEqual(p.returncode, 2, p.stdout[-2000:] + p.stderr[-2000:])
-        self.assertIn("the campaign's stack runs the 'channels_last' inference backend, /worker_0 runs 'bf16'",
-                      p.stderr)
+        self.assertIn(
+            "the campaign's stack runs the 'channels_last' inference backend, /worker_0 runs 'bf16'", p.stderr
+        )
         self.assertFalse(os.path.exists(path) and Store(path).campaign("exp1-channels-last-td3-per-asp-s0"))
         out = self.run_campaign(path, "first")
         self.assertIn("campaign first: 20 scenarios", out)
@@ -60,12 +89,28 @@ class CampaignEndToEnd(unittest.TestCase):
         # The top scenario replays exactly, and the bag of the replay holds the run's topics.
         top = store.summary("first", top=1)["top"][0]
         bag = os.path.join(os.path.dirname(path), "replay.bag")
-        p = subprocess.run(["/usr/bin/python3", "-m", "asg_agent.replay_ros", path, "first", str(top["job"]),
-                            "--worker", "/worker_0", "--bag", bag], capture_output=True, text=True, timeout=300)
+        p = subprocess.run(
+            [
+                "/usr/bin/python3",
+                "-m",
+                "asg_agent.replay_ros",
+                path,
+                "first",
+                str(top["job"]),
+                "--worker",
+                "/worker_0",
+                "--bag",
+                bag,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr[-2000:])
         self.assertIn("REPRODUCED", p.stdout)
         self.assertIn("largest position difference to the stored run: 0.000000 m", p.stdout)
         import rosbag
+
         with rosbag.Bag(bag) as b:
             counts = {t: i.message_count for t, i in b.get_type_and_topic_info().topics.items()}
         row = next(r for r in store.rows("first") if r["job"] == top["job"])
@@ -85,6 +130,7 @@ class CampaignEndToEnd(unittest.TestCase):
         # rviz with rviz/replay.rviz on that bag, under Xvfb: the vote grid, the plan and the
         # driven path are drawn (a blank view or an error panel has none of their colours).
         from asg_agent.replay_view import screenshot
+
         shot = os.path.join(os.path.dirname(path), "replay.png")
         px = screenshot(bag, shot, "worker_0", at=0.7)
         self.assertGreater(px["votes"], 300, px)
@@ -92,6 +138,7 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertGreater(px["trajectory"], 100, px)
         # A planner snapshot from the bag and the campaign's HTML report.
         from asg_agent.report import campaign_report, snapshot
+
         snap = os.path.join(os.path.dirname(path), "snapshot.png")
         snapshot(bag, snap, row["sim_time"] / 2)
         self.assertGreater(os.path.getsize(snap), 10000)

@@ -4,6 +4,7 @@ worker_1's planner are killed with SIGKILL mid-run, and then both planners hang 
 longer than three attempts take. Every scenario must be stored exactly once; the runs the deaths
 cut short are re-queued and counted once (attempts 2); the scenario that met hung planners
 everywhere is stored as ERROR after 3 attempts; the campaign goes on and finishes."""
+
 import os
 import signal
 import subprocess
@@ -29,12 +30,35 @@ class CampaignFaults(unittest.TestCase):
         tmp = tempfile.mkdtemp()
         exp = os.path.join(tmp, "exp1_gt.yaml")
         with open(exp, "w") as f:
-            f.write(f"name: exp1gt\nscenario: {su.REPO}/scenarios/exp1.yaml\nperception: ground_truth\n"
-                    f"planner_config: planner.yaml\nepisode_steps: 5\nsim_timeout: 30.0\n")
+            f.write(
+                f"name: exp1gt\nscenario: {su.REPO}/scenarios/exp1.yaml\nperception: ground_truth\n"
+                f"planner_config: planner.yaml\nepisode_steps: 5\nsim_timeout: 30.0\n"
+            )
         path = os.path.join(tmp, "store.sqlite")
-        p = subprocess.Popen(["/usr/bin/python3", "-m", "asg_agent.cli", exp, "--workers", "2", "--method", "random",
-                              "--scenarios", str(N), "--store", path, "--name", "f", "--no-progress",
-                              "--answer-timeout", "120"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        p = subprocess.Popen(
+            [
+                "/usr/bin/python3",
+                "-m",
+                "asg_agent.cli",
+                exp,
+                "--workers",
+                "2",
+                "--method",
+                "random",
+                "--scenarios",
+                str(N),
+                "--store",
+                path,
+                "--name",
+                "f",
+                "--no-progress",
+                "--answer-timeout",
+                "120",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         store = Store(path)
 
         def wait_stored(n, timeout=180):

@@ -1,6 +1,6 @@
 """RunScenario goals from a hostile or broken client (issue #14; run by fuzz_inputs.py goals and,
 shortly, by tests/bad_input.test). Needs a running worker (worker.launch, any stack)."""
-import copy
+
 import math
 import os
 import random
@@ -16,11 +16,29 @@ from asg_scenario import load_scenario
 from asg_scenario.convert import to_goal_msg
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
-FLOATS = [("nan", math.nan), ("inf", math.inf), ("-inf", -math.inf), ("huge", 1e300), ("negative", -1e6),
-          ("zero", 0.0), ("tiny", 1e-300), ("minus_one", -1.0)]
-UINTS = [("zero", 0), ("max", 2 ** 32 - 1), ("big", 10 ** 6)]
-NAMES = {0: "PENDING", 1: "ACTIVE", 2: "PREEMPTED", 3: "SUCCEEDED", 4: "ABORTED", 5: "REJECTED",
-         6: "PREEMPTING", 7: "RECALLING", 8: "RECALLED", 9: "LOST"}
+FLOATS = [
+    ("nan", math.nan),
+    ("inf", math.inf),
+    ("-inf", -math.inf),
+    ("huge", 1e300),
+    ("negative", -1e6),
+    ("zero", 0.0),
+    ("tiny", 1e-300),
+    ("minus_one", -1.0),
+]
+UINTS = [("zero", 0), ("max", 2**32 - 1), ("big", 10**6)]
+NAMES = {
+    0: "PENDING",
+    1: "ACTIVE",
+    2: "PREEMPTED",
+    3: "SUCCEEDED",
+    4: "ABORTED",
+    5: "REJECTED",
+    6: "PREEMPTING",
+    7: "RECALLING",
+    8: "RECALLED",
+    9: "LOST",
+}
 TERMINAL = {GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.PREEMPTED, GoalStatus.RECALLED, GoalStatus.REJECTED}
 
 
@@ -33,11 +51,30 @@ def base_goal(scenario_id):
 
 def float_fields(g):
     sc = g.scene
-    out = [(sc.structural.landscape, "size"), (sc.structural.landscape, "border"),
-           (sc.textural, "sun_inclination_deg"), (sc.textural, "sun_yaw_deg")]
-    out += [(sc.operational, f) for f in ("start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_radius",
-                                          "safety_radius", "speed", "sim_timeout", "idle_timeout", "stuck_timeout",
-                                          "max_roll_deg", "max_pitch_deg")]
+    out = [
+        (sc.structural.landscape, "size"),
+        (sc.structural.landscape, "border"),
+        (sc.textural, "sun_inclination_deg"),
+        (sc.textural, "sun_yaw_deg"),
+    ]
+    out += [
+        (sc.operational, f)
+        for f in (
+            "start_x",
+            "start_y",
+            "start_yaw",
+            "goal_x",
+            "goal_y",
+            "goal_radius",
+            "safety_radius",
+            "speed",
+            "sim_timeout",
+            "idle_timeout",
+            "stuck_timeout",
+            "max_roll_deg",
+            "max_pitch_deg",
+        )
+    ]
     for layout in sc.structural.layouts:
         for inst in layout.instances:
             out += [(inst, f) for f in ("x", "y", "yaw", "scale")]
@@ -53,8 +90,14 @@ def mutate(rng, g):
         setattr(obj, field, v)
         return f"float:{name}", g, f"{type(obj).__name__}.{field} = {v}"
     if k < 0.6:
-        obj, field = rng.choice([(g.scene.structural.landscape, "subdivisions"), (g.scene.textural, "ground_texture_seed"),
-                                 (g, "top_down_px"), (g, "scenario_id")])
+        obj, field = rng.choice(
+            [
+                (g.scene.structural.landscape, "subdivisions"),
+                (g.scene.textural, "ground_texture_seed"),
+                (g, "top_down_px"),
+                (g, "scenario_id"),
+            ]
+        )
         name, v = rng.choice(UINTS)
         setattr(obj, field, v)
         return f"uint:{field}:{name}", g, f"{field} = {v}"
@@ -65,8 +108,12 @@ def mutate(rng, g):
     if k < 0.8:
         layout = rng.choice(g.scene.structural.layouts)
         n = rng.choice([0, 513, 5000])
-        layout.instances = [ObstacleInstance(visible=True, cast_shadow=True, x=rng.uniform(0, 100),
-                                             y=rng.uniform(0, 100), yaw=0.0, scale=1.0) for _ in range(n)]
+        layout.instances = [
+            ObstacleInstance(
+                visible=True, cast_shadow=True, x=rng.uniform(0, 100), y=rng.uniform(0, 100), yaw=0.0, scale=1.0
+            )
+            for _ in range(n)
+        ]
         return f"instances:{n}", g, f"{layout.mesh_name}: {n} instances"
     if k < 0.85:
         g.scene.structural.layouts = []
@@ -92,9 +139,12 @@ def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
     # What the worker really answered, by goal id: tells a result the server never sent from one
     # that the client library lost.
     answered = {}
-    sub = rospy.Subscriber(f"{worker.rstrip('/')}/run_scenario/result", RunScenarioActionResult,
-                           lambda m: answered.__setitem__(m.status.goal_id.id, (m.status.status, m.result.error)),
-                           queue_size=100)
+    sub = rospy.Subscriber(
+        f"{worker.rstrip('/')}/run_scenario/result",
+        RunScenarioActionResult,
+        lambda m: answered.__setitem__(m.status.goal_id.id, (m.status.status, m.result.error)),
+        queue_size=100,
+    )
     rospy.sleep(0.5)
     lost = []
     pid0 = pid_of() if pid_of else None
@@ -114,8 +164,14 @@ def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
         if not c.wait_for_result(rospy.Duration(20)):
             gid = c.gh.comm_state_machine.action_goal.goal_id.id if c.gh else ""
             if gid in answered:  # the worker answered; SimpleActionClient did not deliver it
-                lost.append({"class": cls, "detail": detail, "answer": NAMES.get(answered[gid][0]),
-                             "error": answered[gid][1][:200]})
+                lost.append(
+                    {
+                        "class": cls,
+                        "detail": detail,
+                        "answer": NAMES.get(answered[gid][0]),
+                        "error": answered[gid][1][:200],
+                    }
+                )
                 states["answered, lost by the client"] += 1
             else:
                 failures.append({"class": cls, "detail": detail, "n": n, "why": "no result within 20 s"})
@@ -137,8 +193,16 @@ def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
             print(f"  {n + 1}/{count} goals, {len(failures)} failure(s), {time.time() - t0:.0f} s")
     sub.unregister()
     growth = (rss[-1] - rss[len(rss) // 4]) if len(rss) >= 4 else 0
-    return {"mode": "goals", "inputs": count, "seed": seed, "seconds": round(time.time() - t0, 1),
-            "classes": dict(sorted(classes.items())), "outcomes": dict(sorted(states.items())),
-            "rss_kb": rss, "rss_growth_kb_after_warmup": growth, "lost_by_client": lost[:50],
-            "failures": failures[:50],
-            "failure_count": len(failures)}
+    return {
+        "mode": "goals",
+        "inputs": count,
+        "seed": seed,
+        "seconds": round(time.time() - t0, 1),
+        "classes": dict(sorted(classes.items())),
+        "outcomes": dict(sorted(states.items())),
+        "rss_kb": rss,
+        "rss_growth_kb_after_warmup": growth,
+        "lost_by_client": lost[:50],
+        "failures": failures[:50],
+        "failure_count": len(failures),
+    }

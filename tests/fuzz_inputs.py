@@ -18,10 +18,10 @@ zero, an empty or long string, a list, a mapping, null or a bool; a key deleted 
 added; obstacle lists emptied or grown past the budget; and for files also truncation, flipped
 and inserted bytes, duplicated keys, deep nesting, binary garbage and empty files.
 """
+
 import argparse
 import copy
 import json
-import math
 import os
 import random
 import subprocess
@@ -33,16 +33,32 @@ from collections import Counter
 import yaml
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
-SEEDS = [os.path.join(REPO, "scenarios", f) for f in sorted(os.listdir(os.path.join(REPO, "scenarios")))
-         if f.endswith(".yaml")] + \
-        [os.path.join(REPO, "scenarios", "corpus", "good", f)
-         for f in sorted(os.listdir(os.path.join(REPO, "scenarios", "corpus", "good")))]
+SEEDS = [
+    os.path.join(REPO, "scenarios", f)
+    for f in sorted(os.listdir(os.path.join(REPO, "scenarios")))
+    if f.endswith(".yaml")
+] + [
+    os.path.join(REPO, "scenarios", "corpus", "good", f)
+    for f in sorted(os.listdir(os.path.join(REPO, "scenarios", "corpus", "good")))
+]
 EXPERIMENTS = [os.path.join(REPO, "experiments", f) for f in sorted(os.listdir(os.path.join(REPO, "experiments")))]
 
-WEIRD = [("nan", float("nan")), ("inf", float("inf")), ("-inf", float("-inf")), ("huge_int", 10 ** 30),
-         ("huge_float", 1e308), ("negative", -12345.5), ("zero", 0), ("empty_string", ""),
-         ("long_string", "x" * 5000), ("list", [1, 2, 3]), ("mapping", {"a": 1}), ("null", None),
-         ("bool", True), ("tiny", 1e-300)]
+WEIRD = [
+    ("nan", float("nan")),
+    ("inf", float("inf")),
+    ("-inf", float("-inf")),
+    ("huge_int", 10**30),
+    ("huge_float", 1e308),
+    ("negative", -12345.5),
+    ("zero", 0),
+    ("empty_string", ""),
+    ("long_string", "x" * 5000),
+    ("list", [1, 2, 3]),
+    ("mapping", {"a": 1}),
+    ("null", None),
+    ("bool", True),
+    ("tiny", 1e-300),
+]
 
 
 def leaves(d, path=()):
@@ -92,7 +108,12 @@ def mutate_dict(rng, base):
         target[f"unknown_{rng.randrange(1000)}"] = 1
         return "unknown_key", d
     layouts = d.get("structural", {}).get("layouts") if isinstance(d.get("structural"), dict) else None
-    if isinstance(layouts, list) and layouts and isinstance(layouts[0], dict) and isinstance(layouts[0].get("instances"), list):
+    if (
+        isinstance(layouts, list)
+        and layouts
+        and isinstance(layouts[0], dict)
+        and isinstance(layouts[0].get("instances"), list)
+    ):
         if kind < 0.86:
             layouts[0]["instances"] = []
             return "empty_instances", d
@@ -106,7 +127,7 @@ def mutate_text(rng, text):
     b = text.encode()
     kind = rng.random()
     if kind < 0.25:
-        return "truncate", b[:rng.randrange(len(b) + 1)]
+        return "truncate", b[: rng.randrange(len(b) + 1)]
     if kind < 0.45:
         arr = bytearray(b)
         for _ in range(rng.randint(1, 8)):
@@ -118,7 +139,7 @@ def mutate_text(rng, text):
     if kind < 0.72:
         lines = text.splitlines(keepends=True)
         i = rng.randrange(len(lines))
-        return "duplicate_line", "".join(lines[:i + 1] + [lines[i]] + lines[i + 1:]).encode()
+        return "duplicate_line", "".join(lines[: i + 1] + [lines[i]] + lines[i + 1 :]).encode()
     if kind < 0.80:
         n = rng.choice([50, 1000, 20000])
         return "deep_nesting", ("a: " + "[" * n + "]" * n + "\n").encode()
@@ -128,12 +149,14 @@ def mutate_text(rng, text):
 
 
 def dump(d) -> bytes:
-    return yaml.dump(d, Dumper=getattr(yaml, "CSafeDumper", yaml.SafeDumper), sort_keys=False,
-                     allow_unicode=True).encode()
+    return yaml.dump(
+        d, Dumper=getattr(yaml, "CSafeDumper", yaml.SafeDumper), sort_keys=False, allow_unicode=True
+    ).encode()
 
 
 def python_scenario(path):
     from asg_scenario import ScenarioError, load_scenario
+
     try:
         load_scenario(path)
         return "OK", ""
@@ -144,6 +167,7 @@ def python_scenario(path):
 def python_experiment(path):
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
     from asg_agent.experiment import ExperimentError, load_experiment
+
     try:
         load_experiment(path)
         return "OK", ""
@@ -184,8 +208,13 @@ def fuzz_loaders(count, seed, tool, progress=True):
             if cpp[0] == "CRASH":
                 failures.append({"class": cls, "file": path, "why": cpp[1]})
             elif py[0] != cpp[0]:
-                failures.append({"class": cls, "file": path,
-                                 "why": f"loaders disagree: python {py[0]} {py[1][:300]!r}, C++ {cpp[1][:300]!r}"})
+                failures.append(
+                    {
+                        "class": cls,
+                        "file": path,
+                        "why": f"loaders disagree: python {py[0]} {py[1][:300]!r}, C++ {cpp[1][:300]!r}",
+                    }
+                )
             else:
                 os.remove(path)
         batch.clear()
@@ -238,12 +267,22 @@ def fuzz_loaders(count, seed, tool, progress=True):
         if len(batch) >= 400:
             flush()
             if progress:
-                print(f"  {n}/{count} inputs, {len(failures)} failure(s), {time.time() - started:.0f} s", file=sys.stderr)
+                print(
+                    f"  {n}/{count} inputs, {len(failures)} failure(s), {time.time() - started:.0f} s", file=sys.stderr
+                )
     if batch:
         flush()
-    return {"mode": "loaders", "inputs": n, "seed": seed, "seconds": round(time.time() - started, 1),
-            "classes": dict(sorted(classes.items())), "outcomes": dict(sorted(outcomes.items())),
-            "failures": failures[:50], "failure_count": len(failures), "kept": tmp}
+    return {
+        "mode": "loaders",
+        "inputs": n,
+        "seed": seed,
+        "seconds": round(time.time() - started, 1),
+        "classes": dict(sorted(classes.items())),
+        "outcomes": dict(sorted(outcomes.items())),
+        "failures": failures[:50],
+        "failure_count": len(failures),
+        "kept": tmp,
+    }
 
 
 def main(argv=None):
@@ -264,6 +303,7 @@ def main(argv=None):
         import rospy
         import stack_util as su
         from fuzz_goals import fuzz_goals
+
         rospy.init_node("fuzz_goals", anonymous=True)
         out = fuzz_goals(a.worker, a.count, a.seed, pid_of=lambda: su.node_pid(a.worker.rstrip("/") + "/scene_worker"))
     print(json.dumps({k: v for k, v in out.items() if k != "failures"}, indent=1))

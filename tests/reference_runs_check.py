@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """rostest (issue #24): the stored reference runs of the backend worker_0 runs (reference_runs.test
 starts it on channels_last) repeat bit for bit. ASG_WRITE_REFERENCE=1 records them instead."""
+
 import os
 import unittest
 

@@ -1,12 +1,12 @@
 #!/usr/bin/python3
 """rostest (issue #9): every number a campaign stores is what the simulator really did, with the
 flawed U-Net in the loop, whatever came before the run and however loaded the machine is."""
+
 import os
 import threading
 import time
 import unittest
 
-import numpy as np
 import rospy
 import rostest
 from asg_msgs.msg import PlannerState, RunScenarioResult, ScenarioInfo
@@ -58,8 +58,11 @@ class SoundRuns(unittest.TestCase):
 
     def assertSameRun(self, a, b, what):
         self.assertEqual(a.termination_name, b.termination_name, what)
-        self.assertEqual(su.trajectory_key(a), su.trajectory_key(b),
-                         f"{what}: trajectories differ by up to {su.largest_difference(a, b):.3f} m")
+        self.assertEqual(
+            su.trajectory_key(a),
+            su.trajectory_key(b),
+            f"{what}: trajectories differ by up to {su.largest_difference(a, b):.3f} m",
+        )
 
     def test_1_reverse_order_on_a_loaded_machine(self):
         busy = su.busy_cores(2)
@@ -104,10 +107,18 @@ class SoundRuns(unittest.TestCase):
     def test_3_visibility_with_the_unet(self):
         s = su.exp1(150, sim_timeout=6.0)
         s["structural"]["layouts"] = [
-            {"mesh_name": "juniper", "instances": [  # on the start-goal line, 21 m ahead
-                {"visible": True, "cast_shadow": True, "x": 35.0, "y": 35.0, "yaw": 0.0, "scale": 1.0}]},
-            {"mesh_name": "barberry", "instances": [  # inside the start's safety radius: removed
-                {"visible": True, "cast_shadow": True, "x": 24.0, "y": 22.0, "yaw": 0.0, "scale": 1.0}]},
+            {
+                "mesh_name": "juniper",
+                "instances": [  # on the start-goal line, 21 m ahead
+                    {"visible": True, "cast_shadow": True, "x": 35.0, "y": 35.0, "yaw": 0.0, "scale": 1.0}
+                ],
+            },
+            {
+                "mesh_name": "barberry",
+                "instances": [  # inside the start's safety radius: removed
+                    {"visible": True, "cast_shadow": True, "x": 24.0, "y": 22.0, "yaw": 0.0, "scale": 1.0}
+                ],
+            },
         ]
         state, r = su.run(self.w0, s)
         self.assertEqual(state, su.SUCCEEDED, r.error)
@@ -130,8 +141,7 @@ class SoundRuns(unittest.TestCase):
     def test_5_cancel_in_the_first_milliseconds_is_a_cancel(self):
         # Before the server took the goal: RECALLED; after, while the scene is built or the stack
         # acknowledges: PREEMPTED. Never ABORTED.
-        for delay, states in ((0.0, (su.PREEMPTED, su.RECALLED)), (0.02, (su.PREEMPTED,)),
-                              (0.2, (su.PREEMPTED,))):
+        for delay, states in ((0.0, (su.PREEMPTED, su.RECALLED)), (0.02, (su.PREEMPTED,)), (0.2, (su.PREEMPTED,))):
             self.w0.send_goal(su.to_goal_msg(self.scenes[1]))
             time.sleep(delay)
             self.w0.cancel_goal()

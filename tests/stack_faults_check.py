@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """rostest (issue #9): a stack node that cannot serve a run ends it at once, naming itself;
 free-running mode drives and can be cancelled; scenes beyond the budget are refused at once."""
+
 import math
 import time
 import unittest
@@ -73,8 +74,11 @@ class StackFaults(unittest.TestCase):
         wide.scene.structural.landscape.size = 10000.0
         endless = su.to_goal_msg(su.exp1(208))
         endless.scene.operational.sim_timeout = -1.0
-        for goal, field in ((huge, "structural.landscape.subdivisions"), (wide, "structural.landscape.size"),
-                            (endless, "operational.sim_timeout")):
+        for goal, field in (
+            (huge, "structural.landscape.subdivisions"),
+            (wide, "structural.landscape.size"),
+            (endless, "operational.sim_timeout"),
+        ):
             t0 = time.time()
             self.w3.send_goal(goal)
             self.assertTrue(self.w3.wait_for_result(rospy.Duration(30)))

@@ -1,4 +1,5 @@
 """Helpers shared by the end-to-end checks (rospy; not a test themselves)."""
+
 import math
 import os
 import signal
@@ -40,6 +41,7 @@ def wait_for_segmenter(ns, timeout=180.0):
     """Until /ns/segmenter has loaded its model and subscribed to the camera (torch and the
     model's warm-up take a while on a loaded machine)."""
     import time
+
     master, deadline = rosgraph.Master("/stack_util"), time.time() + timeout
     while time.time() < deadline:
         _, subs, _ = master.getSystemState()
@@ -58,16 +60,31 @@ def run(c, scenario, timeout=300.0):
 
 def trajectory_key(result):
     """Everything a run produced that must repeat bit for bit."""
-    return (result.termination, result.num_control_msgs,
-            tuple((s.t, s.pose.position.x, s.pose.position.y, s.pose.position.z,
-                   s.pose.orientation.x, s.pose.orientation.y, s.pose.orientation.z,
-                   s.pose.orientation.w, s.twist.linear.x, s.twist.angular.z)
-                  for s in result.trajectory))
+    return (
+        result.termination,
+        result.num_control_msgs,
+        tuple(
+            (
+                s.t,
+                s.pose.position.x,
+                s.pose.position.y,
+                s.pose.position.z,
+                s.pose.orientation.x,
+                s.pose.orientation.y,
+                s.pose.orientation.z,
+                s.pose.orientation.w,
+                s.twist.linear.x,
+                s.twist.angular.z,
+            )
+            for s in result.trajectory
+        ),
+    )
 
 
 def trajectory_digest(result):
     """sha256 of trajectory_key: the stored form of a reference run (tests/reference/)."""
     import hashlib
+
     return hashlib.sha256(repr(trajectory_key(result)).encode()).hexdigest()
 
 
@@ -86,22 +103,32 @@ def check_reference(test, c, path, write=False):
     termination, length and trajectory digest. write=True (ASG_WRITE_REFERENCE=1) stores what
     the runs did instead."""
     import json
+
     with open(path) as f:
         ref = json.load(f)
     for k, entry in enumerate(ref["runs"]):
         state, r = run(c, entry["request"])
         test.assertEqual(state, SUCCEEDED, r.error)
-        got = {"termination": r.termination_name, "samples": len(r.trajectory),
-               "digest": trajectory_digest(r),
-               "final_xy": [r.trajectory[-1].pose.position.x, r.trajectory[-1].pose.position.y]}
+        got = {
+            "termination": r.termination_name,
+            "samples": len(r.trajectory),
+            "digest": trajectory_digest(r),
+            "final_xy": [r.trajectory[-1].pose.position.x, r.trajectory[-1].pose.position.y],
+        }
         if write:
             entry.update(got)
             continue
-        test.assertEqual((got["termination"], got["samples"]), (entry["termination"], entry["samples"]),
-                         f"reference run {k} ({entry['source']})")
-        test.assertEqual(got["digest"], entry["digest"],
-                         f"reference run {k} ({entry['source']}) of {os.path.basename(path)}: trajectory differs "
-                         f"from the stored one (final position {got['final_xy']} vs {entry['final_xy']})")
+        test.assertEqual(
+            (got["termination"], got["samples"]),
+            (entry["termination"], entry["samples"]),
+            f"reference run {k} ({entry['source']})",
+        )
+        test.assertEqual(
+            got["digest"],
+            entry["digest"],
+            f"reference run {k} ({entry['source']}) of {os.path.basename(path)}: trajectory differs "
+            f"from the stored one (final position {got['final_xy']} vs {entry['final_xy']})",
+        )
     if write:
         with open(path, "w") as f:
             json.dump(ref, f, indent=1)
@@ -112,8 +139,13 @@ def largest_difference(a, b):
     """[m] largest position difference between two trajectories (inf if lengths differ)."""
     if len(a.trajectory) != len(b.trajectory):
         return math.inf
-    return max((math.dist((p.pose.position.x, p.pose.position.y), (q.pose.position.x, q.pose.position.y))
-                for p, q in zip(a.trajectory, b.trajectory)), default=0.0)
+    return max(
+        (
+            math.dist((p.pose.position.x, p.pose.position.y), (q.pose.position.x, q.pose.position.y))
+            for p, q in zip(a.trajectory, b.trajectory)
+        ),
+        default=0.0,
+    )
 
 
 def node_pid(name):
@@ -139,4 +171,9 @@ def busy_cores(n=2):
 
 
 SUCCEEDED, ABORTED, PREEMPTED, ACTIVE, RECALLED = (
-    GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.PREEMPTED, GoalStatus.ACTIVE, GoalStatus.RECALLED)
+    GoalStatus.SUCCEEDED,
+    GoalStatus.ABORTED,
+    GoalStatus.PREEMPTED,
+    GoalStatus.ACTIVE,
+    GoalStatus.RECALLED,
+)

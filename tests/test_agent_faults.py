@@ -3,6 +3,7 @@ campaign process killed with SIGKILL at random moments (with a checkpoint after 
 so kills land during checkpoints and store writes too), resumed each time, must end with exactly
 the store an uninterrupted campaign of the same seed writes: no scenario lost, none twice, the
 SQLite integrity check passing. Damaged checkpoints, stores and model files get clear errors."""
+
 import os
 import random
 import signal
@@ -17,14 +18,36 @@ sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
 from asg_agent.store import Store  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
-ENV = dict(os.environ, PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src") + os.pathsep
-           + os.environ.get("PYTHONPATH", ""))
+ENV = dict(
+    os.environ,
+    PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+    + os.pathsep
+    + os.environ.get("PYTHONPATH", ""),
+)
 N = 200
 
 
 def cmd(store, name, *extra):
-    return [sys.executable, "-m", "asg_agent.cli", EXP, "--fake-workers", "2", "--scenarios", str(N), "--store",
-            store, "--name", name, "--checkpoint-every", "1", "--no-progress", "--seed", "5", *extra]
+    return [
+        sys.executable,
+        "-m",
+        "asg_agent.cli",
+        EXP,
+        "--fake-workers",
+        "2",
+        "--scenarios",
+        str(N),
+        "--store",
+        store,
+        "--name",
+        name,
+        "--checkpoint-every",
+        "1",
+        "--no-progress",
+        "--seed",
+        "5",
+        *extra,
+    ]
 
 
 def test_random_kill_9_of_the_agent_then_resume_equals_an_uninterrupted_campaign(tmp_path):
@@ -38,8 +61,12 @@ def test_random_kill_9_of_the_agent_then_resume_equals_an_uninterrupted_campaign
     # milliseconds later (so they land in store writes, learning and checkpoints alike).
     schedule = [None] + sorted(rng.sample(range(2, N - 5), 7))
     for k, at in enumerate(schedule):
-        p = subprocess.Popen(cmd(path, "c", *([] if k == 0 else ["--resume"])), env=ENV,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        p = subprocess.Popen(
+            cmd(path, "c", *([] if k == 0 else ["--resume"])),
+            env=ENV,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         if at is None:
             time.sleep(rng.uniform(0.3, 1.2))
         else:
@@ -70,8 +97,9 @@ def test_truncated_checkpoint_is_named_and_the_previous_state_is_not_lost(tmp_pa
     ckpt = os.path.splitext(path)[0] + ".t.ckpt"
     data = open(ckpt, "rb").read()
     open(ckpt, "wb").write(data[: len(data) // 2])
-    r = subprocess.run(cmd(path, "t", "--scenarios", "40", "--resume"), env=ENV, capture_output=True, text=True,
-                       timeout=300)
+    r = subprocess.run(
+        cmd(path, "t", "--scenarios", "40", "--resume"), env=ENV, capture_output=True, text=True, timeout=300
+    )
     assert r.returncode == 2
     assert ckpt in r.stderr and "not a readable checkpoint" in r.stderr
     assert Store(path).count("t") == 30  # the stored scenarios are untouched
@@ -88,6 +116,7 @@ def test_corrupt_store_is_named(tmp_path):
 def test_truncated_model_file_is_named(tmp_path):
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_perception", "src"))
     from asg_perception.train import load_model
+
     src = os.path.join(REPO, "catkin_ws", "src", "asg_perception", "models", "flawed.pt")
     bad = tmp_path / "flawed.pt"
     bad.write_bytes(open(src, "rb").read()[:5000])
@@ -100,7 +129,12 @@ def test_replay_of_an_unknown_job_is_named(tmp_path):
     path = str(tmp_path / "s.sqlite")
     r = subprocess.run(cmd(path, "u", "--scenarios", "10"), env=ENV, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0
-    r = subprocess.run([sys.executable, "-m", "asg_agent.replay_ros", path, "u", "999"], env=ENV,
-                       capture_output=True, text=True, timeout=120)
+    r = subprocess.run(
+        [sys.executable, "-m", "asg_agent.replay_ros", path, "u", "999"],
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 2
     assert "has no job 999" in r.stderr

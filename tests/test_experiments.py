@@ -1,6 +1,7 @@
 """Issue #11: one command recomputes every table and figure of docs/experiments.md from
 results/ in under a minute; its counts equal those of the exports (and of the SQLite stores
 where they are on this machine), and the tables quoted in the docs are the ones it makes."""
+
 import glob
 import os
 import sys
@@ -60,14 +61,21 @@ def test_differential_counts_on_a_known_export(tmp_path):
     scenarios of a real Exp. 1 campaign, each given a reference proxy at a known offset."""
     import gzip
     import json
+
     camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
     rows = sorted(rows, key=lambda r: r["job"])[:12]
     offsets = [0.0, 0.0, 0.0, 0.5, -0.5, 1.0, 1.5, 2.5, 3.5, -1.2, -2.4, None]  # reward = proxy - reference
     for r, off in zip(rows, offsets):
         ref = None if off is None else r["proxy"] - off
-        r["reference"] = {"proxy": ref, "vis": r["vis"], "yaw_term": r["yaw_term"], "plr": r["plr"],
-                          "termination": "SUCCESS" if off is None or off < 2 else "COLLISION", "sim_time": 10.0,
-                          "trajectory_xy": r["trajectory_xy"][::2]}
+        r["reference"] = {
+            "proxy": ref,
+            "vis": r["vis"],
+            "yaw_term": r["yaw_term"],
+            "plr": r["plr"],
+            "termination": "SUCCESS" if off is None or off < 2 else "COLLISION",
+            "sim_time": 10.0,
+            "trajectory_xy": r["trajectory_xy"][::2],
+        }
         r["reward"] = None if off is None else r["proxy"] - ref
     with gzip.open(tmp_path / "d.jsonl.gz", "wt") as f:
         f.write(json.dumps({"campaign": dict(camp, name="synthetic-diff")}) + "\n")
@@ -80,8 +88,10 @@ def test_differential_counts_on_a_known_export(tmp_path):
     assert abs(d["max_reward"] - 3.5) < 1e-9 and abs(d["min_reward"] + 2.4) < 1e-9
     assert d["top"][0]["reward"] == d["max_reward"] and len(d["top"]) == 10
     from collections import Counter
-    assert d["terminations"] == dict(Counter(f"{r['termination']} / {r['reference']['termination']}"
-                                             for r in rows[5:9]))
+
+    assert d["terminations"] == dict(
+        Counter(f"{r['termination']} / {r['reference']['termination']}" for r in rows[5:9])
+    )
     assert sum(d["cross"].values()) == 11
     # Made-up reference runs drive every second sample of the real path, so they part from it
     # (except where the vehicle stood still), and the parting pairs are sorted by the sign.
@@ -96,6 +106,7 @@ def test_shadow_ahead_sees_a_cast_shadow_in_front_not_behind():
     """Exp. 1's sun (35 degrees up, yaw 150) casts a juniper's shadow 6.4 m towards +x, -y: a
     vehicle 10 m before the tree and driving at it has the shadow ahead; driving away, it has not."""
     import numpy as np
+
     camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
     r = dict(rows[0])
     r["positions"] = [[95.0, 95.0]] * len(r["positions"])
@@ -111,6 +122,7 @@ def test_distinct_counts_clusters_of_near_copies_once():
     """Three layouts, each with near copies 0.5-1.5 m away and one 3 m away: at 2 m the far copies
     count as layouts of their own, at 5 m only the three; the fast distance equals the Hungarian one."""
     import numpy as np
+
     rng = np.random.default_rng(4)
     meshes = ["juniper"] * 4 + ["barberry"] * 4
     bases = [rng.uniform(0, 100, (8, 2)) for _ in range(3)]
@@ -143,20 +155,21 @@ def test_attributed_comparison_counts_known_findings(tmp_path):
     both collided; 25 s per scenario with one 2-hour pause that wall time leaves out."""
     import gzip
     import json
+
     camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
     rows = sorted(rows, key=lambda r: r["job"])[:20]
     for k, r in enumerate(rows):
         r.update(proxy=1.2, termination="SUCCESS", finished=1000.0 + 25.0 * k + (7200.0 if k >= 10 else 0.0))
         r["reference"] = {"proxy": 1.1, "termination": "SUCCESS"}
-    rows[3].update(proxy=3.4)                                     # perception finding, differential
+    rows[3].update(proxy=3.4)  # perception finding, differential
     rows[7].update(proxy=3.1, positions=[[x + 0.3, y] for x, y in rows[3]["positions"]])  # its near copy
     rows[9].update(proxy=3.5)
-    rows[9]["reference"]["proxy"] = 3.2                           # the stack's: not the perception's
-    rows[12].update(proxy=2.6)                                    # differential only (2.6 - 1.1)
-    rows[14].update(termination="COLLISION")                     # perception collision
+    rows[9]["reference"]["proxy"] = 3.2  # the stack's: not the perception's
+    rows[12].update(proxy=2.6)  # differential only (2.6 - 1.1)
+    rows[14].update(termination="COLLISION")  # perception collision
     rows[15].update(termination="COLLISION")
-    rows[15]["reference"]["termination"] = "COLLISION"            # both collided: the stack's
-    rows[18].update(termination="COLLISION")                     # perception collision
+    rows[15]["reference"]["termination"] = "COLLISION"  # both collided: the stack's
+    rows[18].update(termination="COLLISION")  # perception collision
     with gzip.open(tmp_path / "a.jsonl.gz", "wt") as f:
         f.write(json.dumps({"campaign": dict(camp, name="synthetic-attr")}) + "\n")
         for r in rows:

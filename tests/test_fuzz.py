@@ -2,6 +2,7 @@
 loaders (Python and the simulator's own), and the two defects it found, pinned: files that are
 not UTF-8 and keys given twice were accepted by one loader and refused by the other (or made the
 Python loader raise UnicodeDecodeError / RecursionError instead of its own error)."""
+
 import os
 import subprocess
 import sys
@@ -26,14 +27,18 @@ def test_short_fuzz_run_of_the_loaders():
 EXP1 = open(os.path.join(fuzz_inputs.REPO, "scenarios", "exp1.yaml"), "rb").read()
 
 
-@pytest.mark.parametrize("name,data,needle,cpp_needle", [
-    ("latin1", EXP1.replace(b"name:", b"n\xe4me:", 1), "not UTF-8 text (byte 0xe4", "not UTF-8 text (byte 0xe4"),
-    ("duplicate", EXP1 + b"\nname: again\n", "given twice", "given twice"),
-    ("deep", b"a: " + b"[" * 5000 + b"]" * 5000 + b"\n", "", ""),
-    ("control", EXP1.replace(b"name:", b"na\x18me:", 1), "#x0018", "control character YAML does not allow"),
-])
+@pytest.mark.parametrize(
+    "name,data,needle,cpp_needle",
+    [
+        ("latin1", EXP1.replace(b"name:", b"n\xe4me:", 1), "not UTF-8 text (byte 0xe4", "not UTF-8 text (byte 0xe4"),
+        ("duplicate", EXP1 + b"\nname: again\n", "given twice", "given twice"),
+        ("deep", b"a: " + b"[" * 5000 + b"]" * 5000 + b"\n", "", ""),
+        ("control", EXP1.replace(b"name:", b"na\x18me:", 1), "#x0018", "control character YAML does not allow"),
+    ],
+)
 def test_both_loaders_refuse_with_their_own_error(tmp_path, name, data, needle, cpp_needle):
     from asg_scenario import ScenarioError, load_scenario
+
     path = tmp_path / f"{name}.yaml"
     path.write_bytes(data)
     with pytest.raises(ScenarioError) as e:
@@ -47,6 +52,7 @@ def test_both_loaders_refuse_with_their_own_error(tmp_path, name, data, needle, 
 def test_experiment_loader_refuses_bytes_and_duplicates(tmp_path):
     sys.path.insert(0, os.path.join(fuzz_inputs.REPO, "catkin_ws", "src", "asg_agent", "src"))
     from asg_agent.experiment import ExperimentError, load_experiment
+
     for data, needle in ((b"name: e\xff\n", "not UTF-8"), (b"name: a\nname: b\n", "given twice")):
         p = tmp_path / "e.yaml"
         p.write_bytes(data)

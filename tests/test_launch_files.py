@@ -1,6 +1,7 @@
 """Every launch file in launch/ parses and resolves its includes (`roslaunch --nodes`, no master
 needed), and the campaign launch files wire the stacks they promise. A comment holding "--" is
 invalid XML and made replay.launch unusable until this test existed."""
+
 import glob
 import os
 import subprocess
@@ -46,10 +47,17 @@ def test_train_launch_starts_n_workers_and_the_campaign():
 def test_differential_launch_runs_two_stacks_and_a_reference_campaign():
     path = os.path.join(REPO, "launch", "differential.launch")
     params = roslaunch("--dump-params", path, "model:=flawed", "ref_model:=full")
-    models = {line.split(":")[0]: line.split(":")[1].strip() for line in params.splitlines()
-              if line.endswith(("flawed", "full")) and "/segmenter/model" in line}
-    assert models == {"/worker_0/segmenter/model": "flawed", "/worker_1/segmenter/model": "flawed",
-                      "/worker_2/segmenter/model": "full", "/worker_3/segmenter/model": "full"}
+    models = {
+        line.split(":")[0]: line.split(":")[1].strip()
+        for line in params.splitlines()
+        if line.endswith(("flawed", "full")) and "/segmenter/model" in line
+    }
+    assert models == {
+        "/worker_0/segmenter/model": "flawed",
+        "/worker_1/segmenter/model": "flawed",
+        "/worker_2/segmenter/model": "full",
+        "/worker_3/segmenter/model": "full",
+    }
     args = roslaunch("--args", "/campaign", path, "scenarios:=42")
     assert "--workers 2 --reference-workers 2" in args and "--scenarios 42" in args
 
@@ -57,6 +65,7 @@ def test_differential_launch_runs_two_stacks_and_a_reference_campaign():
 def test_train_launch_gives_every_worker_under_test_the_backend():
     # Issue #24: the inference backend is part of the stack's identity (experiment `unet_backend`).
     import yaml
+
     path = os.path.join(REPO, "launch", "train.launch")
     params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "unet_backend:=channels_last"))
     assert [params[f"/worker_{i}/segmenter/backend"] for i in range(3)] == ["channels_last"] * 3
@@ -69,10 +78,12 @@ def test_train_launch_gives_every_worker_under_test_the_backend():
 
 def test_the_experiment_backends_are_the_segmenters():
     import sys
+
     for pkg in ("asg_agent", "asg_perception", "asg_scenario"):
         sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
     from asg_agent.experiment import DEFAULT_UNET_BACKEND, UNET_BACKENDS, ExperimentError, load_experiment
     from asg_perception.inference import BACKENDS, DEFAULT_BACKEND
+
     assert tuple(UNET_BACKENDS) == tuple(BACKENDS)
     assert DEFAULT_UNET_BACKEND == DEFAULT_BACKEND
     # the launch files' defaults are the shipped one too
@@ -83,11 +94,17 @@ def test_the_experiment_backends_are_the_segmenters():
     assert load_experiment(exp).unet_backend == DEFAULT_BACKEND
     assert load_experiment(os.path.join(REPO, "experiments", "exp1-channels-last.yaml")).unet_backend == "channels_last"
     import tempfile
+
     with tempfile.TemporaryDirectory() as d:
         bad = os.path.join(d, "bad.yaml")
         with open(bad, "w") as f:
-            f.write(open(exp).read().replace("scenario: ../scenarios/exp1.yaml",
-                                             f"scenario: {os.path.join(REPO, 'scenarios', 'exp1.yaml')}")
-                    + "unet_backend: fp8\n")
+            f.write(
+                open(exp)
+                .read()
+                .replace(
+                    "scenario: ../scenarios/exp1.yaml", f"scenario: {os.path.join(REPO, 'scenarios', 'exp1.yaml')}"
+                )
+                + "unet_backend: fp8\n"
+            )
         with pytest.raises(ExperimentError, match="unet_backend: 'fp8', must be one of"):
             load_experiment(bad)

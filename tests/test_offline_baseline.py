@@ -2,7 +2,7 @@
 asg_planner's asg_closed_loop and asg_agent's proxy. It is only worth its figures if, with the
 default planner, it reproduces what the ROS ground-truth stack stored in results/baseline: the
 same ending, simulated time and proxy on every layout it runs."""
-import json
+
 import os
 import subprocess
 import sys
@@ -23,9 +23,24 @@ LAYOUTS = 6
 def offline(root, *extra):
     # The suite runs after the build (scripts/test.sh): a missing tool is a failure, not a skip.
     assert os.access(TOOL, os.X_OK), f"{TOOL}: not built"
-    return subprocess.run([sys.executable, "-m", "asg_agent.baseline", "offline", EXP, "--root", str(root),
-                           "--layouts", str(LAYOUTS), *extra], capture_output=True, text=True,
-                          env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)), timeout=300)
+    return subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "asg_agent.baseline",
+            "offline",
+            EXP,
+            "--root",
+            str(root),
+            "--layouts",
+            str(LAYOUTS),
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)),
+        timeout=300,
+    )
 
 
 def test_offline_ground_truth_rows_equal_the_ros_stack_rows(tmp_path):

@@ -1,5 +1,6 @@
 """bench: per-scenario breakdown from stage readings (asg_agent.bench) and the campaign's own
 stage timers."""
+
 import json
 import os
 import subprocess
@@ -11,17 +12,26 @@ from asg_agent.bench import breakdown, table
 
 
 def reading(node, runs, cpu, **stages):
-    return {"node": node, "runs": runs, "cpu_seconds": cpu,
-            "seconds": {k: v[0] for k, v in stages.items()}, "calls": {k: v[1] for k, v in stages.items()}}
+    return {
+        "node": node,
+        "runs": runs,
+        "cpu_seconds": cpu,
+        "seconds": {k: v[0] for k, v in stages.items()},
+        "calls": {k: v[1] for k, v in stages.items()},
+    }
 
 
 def test_breakdown_subtracts_first_readings_and_divides_by_scenarios():
-    first = {("/worker_0", "scene_worker"): reading("scene_worker", 3, 10.0, render=(1.0, 10), wait=(5.0, 10)),
-             ("/worker_0", "segmenter"): reading("segmenter", 3, 20.0, inference=(3.0, 100), decode=(0.1, 100)),
-             ("/worker_0", "planner"): reading("planner", 3, 4.0, votes=(0.5, 100), plan=(0.2, 50))}
-    last = {("/worker_0", "scene_worker"): reading("scene_worker", 13, 14.0, render=(3.0, 110), wait=(25.0, 210)),
-            ("/worker_0", "segmenter"): reading("segmenter", 13, 38.0, inference=(19.0, 1100), decode=(0.3, 1100)),
-            ("/worker_0", "planner"): reading("planner", 13, 6.0, votes=(1.5, 1100), plan=(0.6, 450))}
+    first = {
+        ("/worker_0", "scene_worker"): reading("scene_worker", 3, 10.0, render=(1.0, 10), wait=(5.0, 10)),
+        ("/worker_0", "segmenter"): reading("segmenter", 3, 20.0, inference=(3.0, 100), decode=(0.1, 100)),
+        ("/worker_0", "planner"): reading("planner", 3, 4.0, votes=(0.5, 100), plan=(0.2, 50)),
+    }
+    last = {
+        ("/worker_0", "scene_worker"): reading("scene_worker", 13, 14.0, render=(3.0, 110), wait=(25.0, 210)),
+        ("/worker_0", "segmenter"): reading("segmenter", 13, 38.0, inference=(19.0, 1100), decode=(0.3, 1100)),
+        ("/worker_0", "planner"): reading("planner", 13, 6.0, votes=(1.5, 1100), plan=(0.6, 450)),
+    }
     agent = {"seconds": {"update": 0.5, "store": 0.1}, "calls": {"update": 10, "store": 10}, "cpu": 1.0}
     b = breakdown(first, last, agent, scenarios=10, wall=36.0, sim_seconds=160.0, workers=1)
     assert b["rate_per_hour"] == pytest.approx(1000.0)
@@ -52,9 +62,28 @@ def test_campaign_times_its_own_stages(tmp_path):
     (without ROS the node readings are absent, the agent's own stages present)."""
     out = tmp_path / "stages.json"
     exp = os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "experiments", "exp1.yaml")
-    r = subprocess.run([sys.executable, "-m", "asg_agent.cli", exp, "--fake-workers", "2", "--scenarios", "30",
-                        "--store", str(tmp_path / "s.sqlite"), "--no-progress", "--method", "td3-per-asp",
-                        "--stage-report", str(out)], capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "asg_agent.cli",
+            exp,
+            "--fake-workers",
+            "2",
+            "--scenarios",
+            "30",
+            "--store",
+            str(tmp_path / "s.sqlite"),
+            "--no-progress",
+            "--method",
+            "td3-per-asp",
+            "--stage-report",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     rep = json.loads(out.read_text())
     assert rep["scenarios"] == 30 and rep["workers"] == 2

@@ -1,5 +1,6 @@
 """Campaign loop with the in-process pool: determinism whatever the workers' order, exactly-once
 storage, retries, resume after an interruption and after kill -9 of the campaign process."""
+
 import os
 import signal
 import subprocess
@@ -25,8 +26,7 @@ def campaign(tmp_path, name, pool, total=40, method="td3-per-asp", seed=7, store
     exp = load_experiment(EXP)
     store = store or Store(str(tmp_path / "store.sqlite"))
     m = make_method(method, exp, seed, budget=total, td3_config=TD3Config(**SMALL))
-    return Campaign(name, exp, m, store, pool, total, seed, str(tmp_path / f"{name}.ckpt"), slots=4,
-                    checkpoint_every=1)
+    return Campaign(name, exp, m, store, pool, total, seed, str(tmp_path / f"{name}.ckpt"), slots=4, checkpoint_every=1)
 
 
 class Interrupt(Exception):
@@ -175,14 +175,34 @@ def test_a_finished_campaign_is_extended_by_a_resume_with_a_larger_budget(tmp_pa
 
 
 def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
-    env = dict(os.environ, PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src") + os.pathsep
-               + os.environ.get("PYTHONPATH", ""))
-    cmd = [sys.executable, "-m", "asg_agent.cli", EXP, "--fake-workers", "2", "--scenarios", "150",
-           "--store", str(tmp_path / "k.sqlite"), "--name", "k", "--checkpoint-every", "1", "--no-progress"]
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+        + os.pathsep
+        + os.environ.get("PYTHONPATH", ""),
+    )
+    cmd = [
+        sys.executable,
+        "-m",
+        "asg_agent.cli",
+        EXP,
+        "--fake-workers",
+        "2",
+        "--scenarios",
+        "150",
+        "--store",
+        str(tmp_path / "k.sqlite"),
+        "--name",
+        "k",
+        "--checkpoint-every",
+        "1",
+        "--no-progress",
+    ]
     store = Store(str(tmp_path / "k.sqlite"))
     for kill_at in (15, 60):  # kill -9 at two moments, resuming in between
-        p = subprocess.Popen(cmd + (["--resume"] if kill_at != 15 else []), env=env, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.PIPE)
+        p = subprocess.Popen(
+            cmd + (["--resume"] if kill_at != 15 else []), env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        )
         deadline = time.time() + 120
         while store.count("k") < kill_at and time.time() < deadline and p.poll() is None:
             time.sleep(0.002)
@@ -212,6 +232,7 @@ def test_bad_experiment_files_are_named(tmp_path):
 def test_export_summary_and_report_agree_with_the_store(tmp_path):
     from asg_agent.analysis import counts, export, read_export
     from asg_agent.report import campaign_report
+
     c = campaign(tmp_path, "rep", FakePool(2, seed=8), total=30, method="random")
     c.start()
     c.run()
@@ -237,6 +258,7 @@ def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input
     export of a finished campaign holding at least the budget; `park` and `unpark` exit 2 naming
     what is wrong."""
     from asg_agent.analysis import export, main
+
     c = campaign(tmp_path, "done", FakePool(2, seed=8), total=12, method="random")
     c.start()
     c.run()
@@ -265,13 +287,24 @@ def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
     0.3 m per nearby obstacle); the stored reward is the proxy difference, the reference run is
     kept, and the same seed gives the same store whatever the two pools' speeds."""
     import json as _json
+
     digests = []
     for name, seed in (("d1", 1), ("d2", 2)):
         store = Store(str(tmp_path / "d.sqlite"))
         exp = load_experiment(EXP)
-        c = Campaign(name, exp, make_method("td3-per-asp", exp, 4, budget=40), store, FakePool(2, seed=seed), 40, 4,
-                     str(tmp_path / f"{name}.ckpt"), slots=4,
-                     reference=FakePool(2, seed=seed + 10, gain=0.3, prefix="fake_ref"), reward="differential")
+        c = Campaign(
+            name,
+            exp,
+            make_method("td3-per-asp", exp, 4, budget=40),
+            store,
+            FakePool(2, seed=seed),
+            40,
+            4,
+            str(tmp_path / f"{name}.ckpt"),
+            slots=4,
+            reference=FakePool(2, seed=seed + 10, gain=0.3, prefix="fake_ref"),
+            reward="differential",
+        )
         c.start()
         c.run(poll_timeout=0.0)
         rows = list(store.rows(name))
@@ -294,10 +327,21 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     figures, the store's summary and a resumed campaign all count a finding (proxy >= 3) as the
     perception's when the reference stays below 2 and as the stack's when it reaches 3."""
     import json as _json
+
     store = Store(str(tmp_path / "a.sqlite"))
     exp = load_experiment(EXP)
-    c = Campaign("a", exp, make_method("random", exp, 3, budget=60), store, FakePool(2, seed=1, gain=6.0), 60, 3,
-                 str(tmp_path / "a.ckpt"), slots=4, reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"))
+    c = Campaign(
+        "a",
+        exp,
+        make_method("random", exp, 3, budget=60),
+        store,
+        FakePool(2, seed=1, gain=6.0),
+        60,
+        3,
+        str(tmp_path / "a.ckpt"),
+        slots=4,
+        reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"),
+    )
     c.start()
     c.run(poll_timeout=0.0)
     rows = list(store.rows("a"))
@@ -315,18 +359,25 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     assert s["differential_ge1"] == sum(r["proxy"] - ref[r["job"]] >= 1 for r in rows)
     # The compact export keeps the reference runs, and its counts are the store's.
     from asg_agent.analysis import counts, export, read_export
+
     export(store, "a", str(tmp_path / "a.jsonl.gz"))
     k = counts(read_export(str(tmp_path / "a.jsonl.gz"))[1])
     assert (k["attributed"], k["perception_ge3"], k["stack_ge3"], k["differential_ge1"]) == (
-        60, perception, stack, s["differential_ge1"])
+        60,
+        perception,
+        stack,
+        s["differential_ge1"],
+    )
     # Collisions are attributed too (the stand-ins never collide: make some). Jobs 0-4: the stack
     # under test collides, the reference drives through; jobs 5-6: both collide.
     assert (s["perception_collisions"], s["stack_collisions"]) == (0, 0)
     for job in range(7):
         r = next(x for x in rows if x["job"] == job)
         refd = dict(_json.loads(r["reference"]), termination="COLLISION" if job >= 5 else "SUCCESS")
-        store.db.execute("UPDATE scenarios SET termination = 'COLLISION', reference = ? WHERE campaign = 'a' AND job = ?",
-                         (_json.dumps(refd), job))
+        store.db.execute(
+            "UPDATE scenarios SET termination = 'COLLISION', reference = ? WHERE campaign = 'a' AND job = ?",
+            (_json.dumps(refd), job),
+        )
     store.db.commit()
     s2 = store.summary("a")
     assert (s2["perception_collisions"], s2["stack_collisions"]) == (5, 2)
@@ -334,17 +385,38 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     k2 = counts(read_export(str(tmp_path / "a2.jsonl.gz"))[1])
     assert (k2["perception_collisions"], k2["stack_collisions"]) == (5, 2)
     # A resumed campaign takes its counts from the store.
-    again = Campaign("a", exp, make_method("random", exp, 3, budget=60), store, FakePool(2, seed=1, gain=6.0), 60, 3,
-                     str(tmp_path / "a.ckpt"), slots=4, reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"))
+    again = Campaign(
+        "a",
+        exp,
+        make_method("random", exp, 3, budget=60),
+        store,
+        FakePool(2, seed=1, gain=6.0),
+        60,
+        3,
+        str(tmp_path / "a.ckpt"),
+        slots=4,
+        reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"),
+    )
     again.resume()
     assert (again.status()["perception"], again.status()["stack"]) == (perception, stack)
     with pytest.raises(ValueError, match="needs a reference stack"):
-        Campaign("b", exp, make_method("random", exp, 3, budget=5), store, FakePool(1), 5, 3,
-                 str(tmp_path / "b.ckpt"), reward="differential")
+        Campaign(
+            "b",
+            exp,
+            make_method("random", exp, 3, budget=5),
+            store,
+            FakePool(1),
+            5,
+            3,
+            str(tmp_path / "b.ckpt"),
+            reward="differential",
+        )
 
 
-@pytest.mark.parametrize("method,per,asp", [("td3-per-asp", True, True), ("td3-per", True, False),
-                                            ("td3-asp", False, True), ("td3", False, False)])
+@pytest.mark.parametrize(
+    "method,per,asp",
+    [("td3-per-asp", True, True), ("td3-per", True, False), ("td3-asp", False, True), ("td3", False, False)],
+)
 def test_td3_methods_are_what_their_names_say_and_anneal_beta_over_the_campaign(method, per, asp):
     # Issue #25: "td3" is plain TD3 (no scale-free objective, which exists for the penalty), and
     # beta reaches 1 at the campaign's last batch, not after 20,000 batches a campaign never draws.
@@ -368,6 +440,7 @@ def read_scalars(folder):
     import glob
     import struct
     from tensorboardX.proto import event_pb2
+
     out = {}
     for path in sorted(glob.glob(os.path.join(folder, "events.out.tfevents.*"))):
         with open(path, "rb") as f:
@@ -391,12 +464,23 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     job equal to the store's, the attribution counts, and the agent's losses, PER beta (rising)
     and actor saturation once it learns."""
     from asg_agent.tensorboard_log import TensorBoardLog
+
     store = Store(str(tmp_path / "t.sqlite"))
     exp = load_experiment(EXP)
     log = TensorBoardLog(str(tmp_path / "tb"))
-    c = Campaign("t", exp, make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)), store,
-                 FakePool(2, seed=2, gain=6.0), 60, 5, str(tmp_path / "t.ckpt"), slots=4,
-                 reference=FakePool(2, seed=12, gain=1.5, prefix="fake_ref"), scalars=log.scenario)
+    c = Campaign(
+        "t",
+        exp,
+        make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)),
+        store,
+        FakePool(2, seed=2, gain=6.0),
+        60,
+        5,
+        str(tmp_path / "t.ckpt"),
+        slots=4,
+        reference=FakePool(2, seed=12, gain=1.5, prefix="fake_ref"),
+        scalars=log.scenario,
+    )
     c.start()
     c.run(poll_timeout=0.0)
     log.close()
@@ -410,8 +494,7 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     assert sc["findings/proxy_ge3"][59] == sum(r["proxy"] >= 3 for r in rows.values())
     beta = [sc["agent/per_beta"][k] for k in sorted(sc["agent/per_beta"])]
     assert len(beta) > 10 and beta == sorted(beta) and beta[-1] > beta[0]
-    assert {"agent/critic_loss", "agent/q", "agent/actor_loss", "agent/asp_weight",
-            "agent/actor_saturation"} <= set(sc)
+    assert {"agent/critic_loss", "agent/q", "agent/actor_loss", "agent/asp_weight", "agent/actor_saturation"} <= set(sc)
     assert all(0.0 <= v <= 1.0 for v in sc["agent/actor_saturation"].values())
 
 
@@ -477,6 +560,7 @@ def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsy
     from asg_agent.campaign import Outcome, kept_xy
     from asg_agent.proxy import compute, placed_mask
     from asg_agent.replay_ros import check_reference_run
+
     exp = load_experiment(EXP)
     request = exp.request(np.linspace(-0.9, 0.9, exp.action_dim), 5)
     t = np.arange(0, 16.0, 1 / 60.0)
@@ -491,7 +575,11 @@ def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsy
     assert "REPRODUCED (the reference run)" in capsys.readouterr().out
     moved = traj.copy()
     moved[300, 1] += 0.05  # one kept sample 5 cm off
-    assert check_reference_run(a, request, ref, Outcome(0, "/worker_2", "SUCCESS", sim_time=16.0,
-                                                        trajectory=moved, visibility=vis)) == 1
+    assert (
+        check_reference_run(
+            a, request, ref, Outcome(0, "/worker_2", "SUCCESS", sim_time=16.0, trajectory=moved, visibility=vis)
+        )
+        == 1
+    )
     assert "NOT REPRODUCED" in capsys.readouterr().out
     assert check_reference_run(a, request, dict(ref, termination="COLLISION"), o) == 1

@@ -1,4 +1,5 @@
 """The optimal path against cases with known answers."""
+
 import math
 
 import numpy as np
@@ -111,6 +112,7 @@ def _blocked(p, q, d):
 
 def _grid_length(discs, h=0.25):
     import heapq
+
     n = int(100 / h) + 1
     xs = np.arange(n) * h
     X, Y = np.meshgrid(xs, xs, indexing="ij")
@@ -118,8 +120,9 @@ def _grid_length(discs, h=0.25):
     for d in discs:
         free &= np.hypot(X - d.x, Y - d.y) >= d.r
     goal = np.hypot(X - 80, Y - 80) <= 11.0
-    moves = [(dx, dy) for dx in range(-2, 3) for dy in range(-2, 3)
-             if (dx, dy) != (0, 0) and math.gcd(abs(dx), abs(dy)) == 1]
+    moves = [
+        (dx, dy) for dx in range(-2, 3) for dy in range(-2, 3) if (dx, dy) != (0, 0) and math.gcd(abs(dx), abs(dy)) == 1
+    ]
     start = (int(20 / h), int(20 / h))
     dist = np.full((n, n), np.inf)
     dist[start] = 0

@@ -1,4 +1,5 @@
 """Proxy terms on hand-made trajectories."""
+
 import math
 
 import numpy as np
@@ -8,9 +9,17 @@ from asg_agent import proxy
 
 
 def scene(layouts=()):
-    return {"structural": {"landscape": {"size": 100.0}, "layouts": list(layouts)},
-            "operational": {"start_x": 20.0, "start_y": 20.0, "goal_x": 80.0, "goal_y": 80.0, "goal_radius": 11.0,
-                            "safety_radius": 11.0}}
+    return {
+        "structural": {"landscape": {"size": 100.0}, "layouts": list(layouts)},
+        "operational": {
+            "start_x": 20.0,
+            "start_y": 20.0,
+            "goal_x": 80.0,
+            "goal_y": 80.0,
+            "goal_radius": 11.0,
+            "safety_radius": 11.0,
+        },
+    }
 
 
 def straight(n=600):
@@ -47,8 +56,12 @@ def test_yaw_term_of_a_constant_turn():
 
 def test_visibility_term():
     bush = {"visible": True, "cast_shadow": True, "x": 50.0, "y": 50.0, "yaw": 0.0, "scale": 1.0}
-    s = scene([{"mesh_name": "juniper", "instances": [dict(bush), dict(bush, x=40.0)]},
-               {"mesh_name": "barberry", "instances": [dict(bush, x=21.0, y=21.0)]}])
+    s = scene(
+        [
+            {"mesh_name": "juniper", "instances": [dict(bush), dict(bush, x=40.0)]},
+            {"mesh_name": "barberry", "instances": [dict(bush, x=21.0, y=21.0)]},
+        ]
+    )
     assert proxy.visibility_term(s, [1.0, 0.5, -1.0]) == 2 * 0.75 - 1
     assert proxy.visibility_term(s, [0.0, 0.0, -1.0]) == -1.0
 

@@ -1,4 +1,5 @@
 """Sum tree and prioritized replay: sums, sampling frequencies, importance weights, persistence."""
+
 import numpy as np
 import pytest
 
@@ -89,7 +90,7 @@ def test_sum_tree_never_returns_an_empty_slot_near_node_boundaries():
         t = SumTree(cap)
         for i in range(count):
             t.set(i, float(rng.choice([rng.uniform(1e-3, 1.0), rng.uniform(1e-9, 1e-6), 10 ** rng.uniform(-3, 3)])))
-        prefix = np.cumsum(t.tree[t.size:t.size + count])
+        prefix = np.cumsum(t.tree[t.size : t.size + count])
         masses = [t.total, np.nextafter(t.total, 0)]
         for b in prefix:
             masses += [b, np.nextafter(b, 0), np.nextafter(b, np.inf)]

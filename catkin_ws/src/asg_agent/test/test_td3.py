@@ -1,4 +1,5 @@
 """The agent core: learns a small continuous-control task, save/load round trip, seeding, ASP."""
+
 import numpy as np
 import pytest
 import torch
@@ -20,13 +21,30 @@ class Reach:
     def step(self, a):
         self.x = np.clip(self.x + 0.5 * np.asarray(a), -1, 1)
         self.t += 1
-        return (np.concatenate([self.x, self.g]).astype(np.float32), -float(np.linalg.norm(self.x - self.g)),
-                self.t == 5)
+        return (
+            np.concatenate([self.x, self.g]).astype(np.float32),
+            -float(np.linalg.norm(self.x - self.g)),
+            self.t == 5,
+        )
 
 
 def small_config(**kw):
-    return TD3Config(**dict(dict(hidden=64, batch_size=64, start_steps=200, updates_per_step=1, per_beta_steps=2500,
-                                 exploration_noise=0.1, gamma=0.9, actor_lr=1e-3, critic_lr=1e-3), **kw))
+    return TD3Config(
+        **dict(
+            dict(
+                hidden=64,
+                batch_size=64,
+                start_steps=200,
+                updates_per_step=1,
+                per_beta_steps=2500,
+                exploration_noise=0.1,
+                gamma=0.9,
+                actor_lr=1e-3,
+                critic_lr=1e-3,
+            ),
+            **kw,
+        )
+    )
 
 
 def evaluate(agent, episodes=50, seed=99):
@@ -96,9 +114,11 @@ def test_same_seed_same_agent_and_bad_checkpoint_named(tmp_path):
 
 def test_saturation_penalty_pulls_pre_squash_outputs_in():
     """An actor driven towards saturation by the critic keeps |u| near u0 with ASP, not without."""
+
     def run(asp, bc=0.0):
-        agent = TD3Agent(2, 2, small_config(seed=0, start_steps=64, asp=asp, asp_lambda0=10.0, asp_tau=1e9,
-                                            bc_weight=bc))
+        agent = TD3Agent(
+            2, 2, small_config(seed=0, start_steps=64, asp=asp, asp_lambda0=10.0, asp_tau=1e9, bc_weight=bc)
+        )
         rng = np.random.default_rng(0)
         for _ in range(300):  # reward grows with the action: the optimum is the edge
             s = rng.uniform(-1, 1, 2).astype(np.float32)
@@ -106,6 +126,7 @@ def test_saturation_penalty_pulls_pre_squash_outputs_in():
             agent.observe(s, a, float(np.sum(a)), s, True)
             agent.update()
         return np.abs(agent.pre_squash(rng.uniform(-1, 1, (256, 2)))).mean()
+
     with_asp, without = run(True), run(False)
     # Measured 1.79 against 2.51 (seeded): the hinge holds |u| near u0 = 2, the critic alone
     # keeps pushing past it.

@@ -8,9 +8,12 @@ DATASET_TOOL = os.path.join(WS, "devel", "lib", "asg_sim", "asg_sim_dataset")
 
 
 def make_dataset(folder, count, seed, meshes="juniper,barberry"):
-    subprocess.run([DATASET_TOOL, "--out", str(folder), "--count", str(count), "--seed", str(seed),
-                    "--meshes", meshes], check=True, capture_output=True,
-                   env=dict(os.environ, LP_NUM_THREADS="1"))
+    subprocess.run(
+        [DATASET_TOOL, "--out", str(folder), "--count", str(count), "--seed", str(seed), "--meshes", meshes],
+        check=True,
+        capture_output=True,
+        env=dict(os.environ, LP_NUM_THREADS="1"),
+    )
     return str(folder)
 
 

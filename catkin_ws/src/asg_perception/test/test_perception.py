@@ -1,4 +1,5 @@
 """U-Net, training, checkpoints, inference backends and the shipped models' figures."""
+
 import os
 
 import numpy as np
@@ -10,7 +11,7 @@ from asg_perception.data import VOID, DatasetError, load_frames, to_tensor
 from asg_perception.metrics import Confusion
 from asg_perception.inference import BACKENDS, Segmenter
 from asg_perception.model import UNet, parameter_count
-from asg_perception.train import (TrainConfig, evaluate, load_model, predict, save_model, train)
+from asg_perception.train import TrainConfig, evaluate, load_model, predict, save_model, train
 
 MODELS = os.path.join(os.path.dirname(__file__), "..", "models")
 
@@ -24,14 +25,16 @@ def test_shapes_and_parameter_count():
 
 def dataset_loss(model, frames):
     with torch.no_grad():
-        return float(F.cross_entropy(model(to_tensor(frames.rgb)),
-                                     torch.from_numpy(frames.labels).long(), ignore_index=VOID))
+        return float(
+            F.cross_entropy(model(to_tensor(frames.rgb)), torch.from_numpy(frames.labels).long(), ignore_index=VOID)
+        )
 
 
 def test_one_epoch_lowers_the_loss(tiny_dataset, tmp_path):
     frames = load_frames(tiny_dataset)
-    cfg = TrainConfig(data=tiny_dataset, out=str(tmp_path), epochs=1, batch_size=4, lr=1e-3,
-                      crop=128, threads=2, seed=1)
+    cfg = TrainConfig(
+        data=tiny_dataset, out=str(tmp_path), epochs=1, batch_size=4, lr=1e-3, crop=128, threads=2, seed=1
+    )
     torch.manual_seed(cfg.seed)
     before = dataset_loss(UNet().eval(), frames)  # the same initial weights train() starts from
     out = train(cfg, progress=False)
@@ -86,6 +89,7 @@ def test_bad_dataset_is_named(tmp_path, tiny_dataset):
         load_frames(str(tmp_path))
     import shutil
     import cv2
+
     bad = tmp_path / "bad"
     shutil.copytree(tiny_dataset, bad)
     lab = bad / "images" / "000000_labels.png"
@@ -120,10 +124,16 @@ def test_bf16_is_deterministic_and_keeps_the_labels_and_the_flaw(test_dataset):
         assert np.array_equal(a, b), name
         assert np.array_equal(Segmenter(path, "bf16").batch(frames.rgb[:4]), a[:4])  # a new instance too
         assert (a == ref).mean() > 0.999, name
-    flawed = evaluate(load_model(os.path.join(MODELS, "flawed.pt")), frames,
-                      labeller=Segmenter(os.path.join(MODELS, "flawed.pt"), "bf16").batch)
-    full = evaluate(load_model(os.path.join(MODELS, "full.pt")), frames,
-                    labeller=Segmenter(os.path.join(MODELS, "full.pt"), "bf16").batch)
+    flawed = evaluate(
+        load_model(os.path.join(MODELS, "flawed.pt")),
+        frames,
+        labeller=Segmenter(os.path.join(MODELS, "flawed.pt"), "bf16").batch,
+    )
+    full = evaluate(
+        load_model(os.path.join(MODELS, "full.pt")),
+        frames,
+        labeller=Segmenter(os.path.join(MODELS, "full.pt"), "bf16").batch,
+    )
     assert flawed["shadow_false_obstacle_rate"] >= 3 * full["shadow_false_obstacle_rate"]
     assert flawed["iou"]["non_traversable"] < full["iou"]["non_traversable"] - 0.2
 

@@ -1,6 +1,7 @@
 """The shared corpus of scenario files (scenarios/corpus): this validator judges it as the C++
 one does (asg_sim's gtest Scene.SharedCorpus reads the same files). A bad file's first line says
 which field it breaks: `# expect: FIELD`; the validator must reject it naming that field."""
+
 import glob
 import os
 import time
@@ -11,8 +12,9 @@ from asg_scenario import ScenarioError, load_scenario
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 CORPUS = os.path.join(REPO, "scenarios", "corpus")
-GOOD = sorted(glob.glob(os.path.join(CORPUS, "good", "*.yaml"))) + \
-    sorted(glob.glob(os.path.join(REPO, "scenarios", "*.yaml")))
+GOOD = sorted(glob.glob(os.path.join(CORPUS, "good", "*.yaml"))) + sorted(
+    glob.glob(os.path.join(REPO, "scenarios", "*.yaml"))
+)
 BAD = sorted(glob.glob(os.path.join(CORPUS, "bad", "*.yaml")))
 
 
@@ -20,7 +22,7 @@ def expected_field(path):
     with open(path, encoding="utf-8") as f:
         first = f.readline()
     assert first.startswith("# expect: "), f"{path}: first line must be '# expect: FIELD'"
-    return first[len("# expect: "):].strip()
+    return first[len("# expect: ") :].strip()
 
 
 def test_corpus_size():

@@ -1,4 +1,5 @@
 """Scenario schema and validator: the shipped files load, every kind of bad input is named."""
+
 import copy
 import math
 import os
@@ -54,31 +55,46 @@ def test_disable_value_allowed():
     assert "operational.sim_timeout" in [p for p, _ in problems_of(raw).problems]
 
 
-@pytest.mark.parametrize("mutate,field,words", [
-    (lambda s: s["operational"].__setitem__("start_x", float("nan")), "operational.start_x", "nan"),
-    (lambda s: s["operational"].__setitem__("goal_y", math.inf), "operational.goal_y", "inf"),
-    (lambda s: s["operational"].__setitem__("start_x", 150.0), "operational.start_x",
-     "outside the landscape"),
-    (lambda s: s["structural"]["layouts"][0]["instances"][1].__setitem__("x", -3.0),
-     "structural.layouts[0].instances[1].x", "outside the landscape"),
-    (lambda s: s["structural"]["layouts"][1]["instances"][0].__setitem__("scale", -1.0),
-     "structural.layouts[1].instances[0].scale", "out of range"),
-    (lambda s: s["structural"]["layouts"][0].__setitem__("mesh_name", "oak"),
-     "structural.layouts[0].mesh_name", "unknown mesh"),
-    (lambda s: s["operational"].pop("goal_x"), "operational.goal_x", "missing required"),
-    (lambda s: s.pop("textural"), "textural", "missing section"),
-    (lambda s: s["operational"].__setitem__("speed", "fast"), "operational.speed", "wrong type"),
-    (lambda s: s["operational"].__setitem__("allow_collisions", 1), "operational.allow_collisions",
-     "wrong type"),
-    (lambda s: s["structural"]["landscape"].__setitem__("subdivisions", 2.5),
-     "structural.landscape.subdivisions", "an integer"),
-    (lambda s: s["textural"].__setitem__("sun_inclination_deg", 120.0),
-     "textural.sun_inclination_deg", "out of range"),
-    (lambda s: s["operational"].__setitem__("idle_timeout", -5.0), "operational.idle_timeout",
-     "-1 to disable"),
-    (lambda s: s["operational"].__setitem__("colour", "red"), "operational.colour", "unknown field"),
-    (lambda s: s["structural"].__setitem__("layouts", {"a": 1}), "structural.layouts", "list"),
-])
+@pytest.mark.parametrize(
+    "mutate,field,words",
+    [
+        (lambda s: s["operational"].__setitem__("start_x", float("nan")), "operational.start_x", "nan"),
+        (lambda s: s["operational"].__setitem__("goal_y", math.inf), "operational.goal_y", "inf"),
+        (lambda s: s["operational"].__setitem__("start_x", 150.0), "operational.start_x", "outside the landscape"),
+        (
+            lambda s: s["structural"]["layouts"][0]["instances"][1].__setitem__("x", -3.0),
+            "structural.layouts[0].instances[1].x",
+            "outside the landscape",
+        ),
+        (
+            lambda s: s["structural"]["layouts"][1]["instances"][0].__setitem__("scale", -1.0),
+            "structural.layouts[1].instances[0].scale",
+            "out of range",
+        ),
+        (
+            lambda s: s["structural"]["layouts"][0].__setitem__("mesh_name", "oak"),
+            "structural.layouts[0].mesh_name",
+            "unknown mesh",
+        ),
+        (lambda s: s["operational"].pop("goal_x"), "operational.goal_x", "missing required"),
+        (lambda s: s.pop("textural"), "textural", "missing section"),
+        (lambda s: s["operational"].__setitem__("speed", "fast"), "operational.speed", "wrong type"),
+        (lambda s: s["operational"].__setitem__("allow_collisions", 1), "operational.allow_collisions", "wrong type"),
+        (
+            lambda s: s["structural"]["landscape"].__setitem__("subdivisions", 2.5),
+            "structural.landscape.subdivisions",
+            "an integer",
+        ),
+        (
+            lambda s: s["textural"].__setitem__("sun_inclination_deg", 120.0),
+            "textural.sun_inclination_deg",
+            "out of range",
+        ),
+        (lambda s: s["operational"].__setitem__("idle_timeout", -5.0), "operational.idle_timeout", "-1 to disable"),
+        (lambda s: s["operational"].__setitem__("colour", "red"), "operational.colour", "unknown field"),
+        (lambda s: s["structural"].__setitem__("layouts", {"a": 1}), "structural.layouts", "list"),
+    ],
+)
 def test_bad_input_names_field_value_and_rule(mutate, field, words):
     raw = copy.deepcopy(exp1())
     mutate(raw)
@@ -135,6 +151,7 @@ def test_file_errors_are_clear(tmp_path):
 
 def test_docs_list_every_field():
     from asg_scenario.schema import SECTIONS
+
     doc = open(os.path.join(REPO, "docs", "scenario-format.md")).read()
     for path, fields in SECTIONS:
         for f in fields:

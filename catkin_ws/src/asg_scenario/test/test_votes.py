@@ -1,4 +1,5 @@
 """Judging where votes fell: phantom votes and votes in cast shadows."""
+
 import os
 
 from asg_scenario import load_scenario
@@ -12,9 +13,9 @@ def test_cast_shadow_geometry():
     # Juniper at (48, 47), 4.5 m: a shadow about 13.8 m long towards yaw 190 deg.
     assert in_cast_shadow(s, 48.0 - 5.0, 47.0 - 0.9)
     assert in_cast_shadow(s, 48.0 - 10.0, 47.0 - 1.7)
-    assert not in_cast_shadow(s, 48.0 - 16.0, 47.0 - 2.8)   # past the tip
-    assert not in_cast_shadow(s, 48.0 + 5.0, 47.0 + 0.9)    # on the sunny side
-    assert not in_cast_shadow(s, 48.0 - 5.0, 47.0 + 3.0)    # beside it
+    assert not in_cast_shadow(s, 48.0 - 16.0, 47.0 - 2.8)  # past the tip
+    assert not in_cast_shadow(s, 48.0 + 5.0, 47.0 + 0.9)  # on the sunny side
+    assert not in_cast_shadow(s, 48.0 - 5.0, 47.0 + 3.0)  # beside it
     s["structural"]["layouts"][0]["instances"][0]["cast_shadow"] = False
     assert not in_cast_shadow(s, 48.0 - 5.0, 47.0 - 0.9)
     # A high sun shortens the shadow: 4.5 m / tan(60 deg) = 2.6 m.
@@ -25,9 +26,11 @@ def test_cast_shadow_geometry():
 
 def test_phantom_and_shadow_votes():
     s = load_scenario(SHADOWS)
-    votes = [{"x": 48.0, "y": 47.0},              # on the juniper: explained
-             {"x": 48.0 - 8.0, "y": 47.0 - 1.4},  # in its shadow, 8 m from it
-             {"x": 20.0, "y": 20.0}]              # open ground in the sun
+    votes = [
+        {"x": 48.0, "y": 47.0},  # on the juniper: explained
+        {"x": 48.0 - 8.0, "y": 47.0 - 1.4},  # in its shadow, 8 m from it
+        {"x": 20.0, "y": 20.0},
+    ]  # open ground in the sun
     # The second vertex is 6.1 m from the bush at (44, 41) (radius 0.96): with 1 m cells it is
     # unexplained and in the shadow.
     assert phantom_votes(s, votes, 1.0) == 2

@@ -1,4 +1,5 @@
 """The C++ mesh catalogue (asg_sim_catalogue) and the Python one (asg_scenario) agree."""
+
 import os
 import subprocess
 

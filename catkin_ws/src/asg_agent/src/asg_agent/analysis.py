@@ -15,6 +15,7 @@ run against the in-process stand-in simulator (fake_pool: cheap, so several seed
 scenarios take a minute), reporting the fraction of action coordinates at the edge of their
 range (|a| >= 0.99, an obstacle within 0.5 % of the landscape's border) per 100 scenarios.
 """
+
 import argparse
 import io
 import json
@@ -40,7 +41,7 @@ def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
 
 def saturated_fraction(actions: np.ndarray, window: int = 100, edge: float = 0.99) -> List[float]:
     sat = (np.abs(actions) >= edge).mean(axis=1)
-    return [float(sat[k:k + window].mean()) for k in range(0, len(sat), window)]
+    return [float(sat[k : k + window].mean()) for k in range(0, len(sat), window)]
 
 
 def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
@@ -50,32 +51,58 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
     and draw every figure without the store; the store keeps the full requests and 60 Hz
     trajectories for exact replays."""
     import gzip
+
     c = store.campaign(campaign)
     if c is None:
         raise ValueError(f"no campaign {campaign!r} in {store.path}")
     n = 0
     # mtime 0 and no file name in the gzip header: the same campaign exports to the same bytes.
-    with open(out, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz, \
-            io.TextIOWrapper(gz, encoding="utf-8") as f:
+    with (
+        open(out, "wb") as raw,
+        gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz,
+        io.TextIOWrapper(gz, encoding="utf-8") as f,
+    ):
         f.write(json.dumps({"campaign": c}) + "\n")
         for r in store.rows(campaign):
             req = json.loads(r["request"])
             traj = unpack_trajectory(r["trajectory"])
             step = max(1, int(round(60.0 / hz)))
             keep = np.r_[traj[::step], traj[-1:]]
-            f.write(json.dumps({
-                "job": r["job"], "episode": r["episode"], "step": r["step"], "worker": r["worker"],
-                "scenario_id": r["scenario_id"], "termination": r["termination"], "error": r["error"],
-                "proxy": r["proxy"], "vis": r["vis"], "yaw_term": r["yaw_term"], "plr": r["plr"],
-                "path_length": r["path_length"], "optimal_length": r["optimal_length"], "sim_time": r["sim_time"],
-                "positions": [[round(i["x"], 3), round(i["y"], 3)] for l in req["structural"]["layouts"]
-                              for i in l["instances"]],
-                "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
-                "visibility": json.loads(r["visibility"]), "wall_time": round(r["wall_time"], 3),
-                "removed": json.loads(r["removed"]), "finished": round(r["finished"], 2),
-                "attempts": r["attempts"], "reward": r["reward"],
-                "reference": json.loads(r["reference"]) if r["reference"] else None,
-                "trajectory_xy": np.round(keep[:, 1:3], 2).tolist()}) + "\n")
+            f.write(
+                json.dumps(
+                    {
+                        "job": r["job"],
+                        "episode": r["episode"],
+                        "step": r["step"],
+                        "worker": r["worker"],
+                        "scenario_id": r["scenario_id"],
+                        "termination": r["termination"],
+                        "error": r["error"],
+                        "proxy": r["proxy"],
+                        "vis": r["vis"],
+                        "yaw_term": r["yaw_term"],
+                        "plr": r["plr"],
+                        "path_length": r["path_length"],
+                        "optimal_length": r["optimal_length"],
+                        "sim_time": r["sim_time"],
+                        "positions": [
+                            [round(i["x"], 3), round(i["y"], 3)]
+                            for l in req["structural"]["layouts"]
+                            for i in l["instances"]
+                        ],
+                        "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
+                        "visibility": json.loads(r["visibility"]),
+                        "wall_time": round(r["wall_time"], 3),
+                        "removed": json.loads(r["removed"]),
+                        "finished": round(r["finished"], 2),
+                        "attempts": r["attempts"],
+                        "reward": r["reward"],
+                        "reference": json.loads(r["reference"]) if r["reference"] else None,
+                        "trajectory_xy": np.round(keep[:, 1:3], 2).tolist(),
+                    }
+                )
+                + "\n"
+            )
             n += 1
     return n
 
@@ -86,6 +113,7 @@ def top_down(store: Store, campaign: str, job: int, out: str):
     proxy and its terms in the title."""
     from asg_scenario.report import plot_run
     from .proxy import optimal_path, placed_mask
+
     row = next((r for r in store.rows(campaign, job - 1) if r["job"] == job), None)
     if row is None:
         raise ValueError(f"campaign {campaign!r} has no job {job}")
@@ -94,14 +122,17 @@ def top_down(store: Store, campaign: str, job: int, out: str):
     removed = {(l, i) for l, i, _ in removed_list}
     opt = optimal_path(req, placed_mask(req, removed_list))
     traj = unpack_trajectory(row["trajectory"])
-    title = (f"{campaign} job {job} (store id {row['id']})\nproxy {row['proxy']:.2f} = 0.1 x vis {row['vis']:+.2f} "
-             f"+ yaw term {row['yaw_term']:.2f} + PLR {row['plr']:.3f}^2\n{row['termination']} after "
-             f"{row['sim_time']:.1f} s, driven {row['path_length']:.1f} m, optimal {row['optimal_length']:.1f} m")
+    title = (
+        f"{campaign} job {job} (store id {row['id']})\nproxy {row['proxy']:.2f} = 0.1 x vis {row['vis']:+.2f} "
+        f"+ yaw term {row['yaw_term']:.2f} + PLR {row['plr']:.3f}^2\n{row['termination']} after "
+        f"{row['sim_time']:.1f} s, driven {row['path_length']:.1f} m, optimal {row['optimal_length']:.1f} m"
+    )
     plot_run(out, req, traj[:, 1:3].tolist(), title=title, removed=removed, optimal=opt.points)
 
 
 def read_export(path: str):
     import gzip
+
     with gzip.open(path, "rt", encoding="utf-8") as f:
         head = json.loads(f.readline())
         rows = [json.loads(line) for line in f]
@@ -114,19 +145,32 @@ def counts(rows) -> dict:
     differential ones (proxy - reference >= 1), and the collisions that are the perception's
     (the reference drove through) or the stack's (both collided), as the store's summary counts them."""
     p = [r["proxy"] for r in rows if r["proxy"] is not None]
-    out = {"scenarios": len(rows), "proxy_ge_3": sum(v >= 3 for v in p), "proxy_ge_4": sum(v >= 4 for v in p),
-           "max_proxy": max(p) if p else None,
-           "terminations": {t: sum(r["termination"] == t for r in rows) for t in sorted({r["termination"] for r in rows})}}
-    pairs = [(r["proxy"], r["reference"]["proxy"]) for r in rows if r["proxy"] is not None
-             and r.get("reference") and r["reference"].get("proxy") is not None]
+    out = {
+        "scenarios": len(rows),
+        "proxy_ge_3": sum(v >= 3 for v in p),
+        "proxy_ge_4": sum(v >= 4 for v in p),
+        "max_proxy": max(p) if p else None,
+        "terminations": {t: sum(r["termination"] == t for r in rows) for t in sorted({r["termination"] for r in rows})},
+    }
+    pairs = [
+        (r["proxy"], r["reference"]["proxy"])
+        for r in rows
+        if r["proxy"] is not None and r.get("reference") and r["reference"].get("proxy") is not None
+    ]
     if pairs:
         kinds = [attribute(t, ref) for t, ref in pairs]
-        out.update(attributed=len(pairs), perception_ge3=sum(k[1] for k in kinds), stack_ge3=sum(k[2] for k in kinds),
-                   differential_ge1=sum(t - ref >= 1 for t, ref in pairs))
+        out.update(
+            attributed=len(pairs),
+            perception_ge3=sum(k[1] for k in kinds),
+            stack_ge3=sum(k[2] for k in kinds),
+            differential_ge1=sum(t - ref >= 1 for t, ref in pairs),
+        )
     refs = [(r["termination"], r["reference"].get("termination")) for r in rows if r.get("reference")]
     if refs:
-        out.update(perception_collisions=sum(t == "COLLISION" and ref == "SUCCESS" for t, ref in refs),
-                   stack_collisions=sum(t == "COLLISION" and ref == "COLLISION" for t, ref in refs))
+        out.update(
+            perception_collisions=sum(t == "COLLISION" and ref == "SUCCESS" for t, ref in refs),
+            stack_collisions=sum(t == "COLLISION" and ref == "COLLISION" for t, ref in refs),
+        )
     return out
 
 
@@ -135,6 +179,7 @@ def asp_effect(scenarios: int, seeds: int, experiment: str):
     from .experiment import load_experiment
     from .fake_pool import FakePool
     from .search import make_method
+
     exp = load_experiment(experiment)
     folder = tempfile.mkdtemp()
     store = Store(os.path.join(folder, "asp.sqlite"))
@@ -142,13 +187,25 @@ def asp_effect(scenarios: int, seeds: int, experiment: str):
     for method in ("td3-per-asp", "td3-per"):
         for seed in range(seeds):
             name = f"{method}-s{seed}"
-            c = Campaign(name, exp, make_method(method, exp, seed, budget=scenarios), store, FakePool(2, seed=seed),
-                         scenarios, seed, os.path.join(folder, name + ".ckpt"), slots=4, checkpoint_every=10 ** 9)
+            c = Campaign(
+                name,
+                exp,
+                make_method(method, exp, seed, budget=scenarios),
+                store,
+                FakePool(2, seed=seed),
+                scenarios,
+                seed,
+                os.path.join(folder, name + ".ckpt"),
+                slots=4,
+                checkpoint_every=10**9,
+            )
             c.start()
             c.run(poll_timeout=0.0)
             curves[name] = saturated_fraction(actions_of(store, name, exp.size))
-            print(f"{name}: saturated fraction per 100 scenarios "
-                  + " ".join(f"{v:.2f}" for v in curves[name]), file=sys.stderr)
+            print(
+                f"{name}: saturated fraction per 100 scenarios " + " ".join(f"{v:.2f}" for v in curves[name]),
+                file=sys.stderr,
+            )
     return curves
 
 
@@ -158,8 +215,10 @@ def main(argv=None):
     a = sub.add_parser("asp-effect", help="saturated-action fraction with and without ASP (stand-in simulator)")
     a.add_argument("--scenarios", type=int, default=1000)
     a.add_argument("--seeds", type=int, default=3)
-    a.add_argument("--experiment", default=os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..",
-                                                         "experiments", "exp1.yaml"))
+    a.add_argument(
+        "--experiment",
+        default=os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "experiments", "exp1.yaml"),
+    )
     a.add_argument("--json", default="")
     a.add_argument("--out", default="", help="PNG of the curves")
     e = sub.add_parser("export", help="compact gzip JSON-lines export of a campaign")
@@ -177,8 +236,11 @@ def main(argv=None):
     pk.add_argument("store")
     pk.add_argument("campaign")
     pk.add_argument("out")
-    pk.add_argument("--unfinished-only", action="store_true",
-                    help="do nothing (exit 0) for a campaign the store lacks or that has finished")
+    pk.add_argument(
+        "--unfinished-only",
+        action="store_true",
+        help="do nothing (exit 0) for a campaign the store lacks or that has finished",
+    )
     cp = sub.add_parser("complete", help="exit 0 when an export is of a finished campaign of >= SCENARIOS")
     cp.add_argument("export")
     cp.add_argument("scenarios", type=int)
@@ -198,8 +260,14 @@ def main(argv=None):
                 print(f"{args.out}: campaign {args.campaign}, {n} scenarios and its checkpoint")
             else:
                 n = unpark(Store(args.store), args.parked)
-                print(f"{args.parked}: " + ("the store already holds this campaign; left alone" if n is None
-                                            else f"{n} scenarios and the checkpoint restored into {args.store}"))
+                print(
+                    f"{args.parked}: "
+                    + (
+                        "the store already holds this campaign; left alone"
+                        if n is None
+                        else f"{n} scenarios and the checkpoint restored into {args.store}"
+                    )
+                )
         except StoreError as e:
             print(f"error: {e}", file=sys.stderr)
             return 2
@@ -233,8 +301,10 @@ def main(argv=None):
             json.dump(curves, f, indent=1)
     if args.out:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+
         fig, ax = plt.subplots(figsize=(6, 3.2))
         for method, colour in (("td3-per-asp", "tab:blue"), ("td3-per", "tab:red")):
             runs = np.array([v for k, v in curves.items() if k.startswith(method + "-s")])
@@ -248,8 +318,10 @@ def main(argv=None):
         ax.set_title("Action saturation with and without ASP (stand-in simulator)", fontsize=9)
         fig.tight_layout()
         fig.savefig(args.out, dpi=120)
-    summary = {m: float(np.mean([v[-1] for k, v in curves.items() if k.startswith(m + "-s")]))
-               for m in ("td3-per-asp", "td3-per")}
+    summary = {
+        m: float(np.mean([v[-1] for k, v in curves.items() if k.startswith(m + "-s")]))
+        for m in ("td3-per-asp", "td3-per")
+    }
     print(json.dumps({"final_saturated_fraction": summary}))
     return 0
 

@@ -1,6 +1,7 @@
 """Adds what a replay bag needs for rviz beyond the worker's own topics (rospy messages, no node):
 the obstacles by type, start and goal circles, the optimal path, the driven trajectory and the
 planner's earlier plans fading, all in the map frame under `<ns>/replay/...`."""
+
 import math
 
 from geometry_msgs.msg import Point, PoseStamped
@@ -53,14 +54,18 @@ def scene_messages(request, removed, optimal_points, trajectory_xy, stamp):
             m.scale.x = m.scale.y = 2 * mesh.collision_radius * inst["scale"]
             m.scale.z = h
             gone = (li, ii) in removed
-            m.color = ColorRGBA(*((0.6, 0.6, 0.6) if gone else COLOURS.get(layout["mesh_name"], (0.3, 0.3, 0.3))),
-                                0.35 if gone else 0.9)
+            m.color = ColorRGBA(
+                *((0.6, 0.6, 0.6) if gone else COLOURS.get(layout["mesh_name"], (0.3, 0.3, 0.3))), 0.35 if gone else 0.9
+            )
             arr.markers.append(m)
     op = request["operational"]
     arr.markers.append(_circle(0, "start", op["start_x"], op["start_y"], op["safety_radius"], (0.1, 0.4, 1.0), stamp))
     arr.markers.append(_circle(0, "goal", op["goal_x"], op["goal_y"], op["goal_radius"], (1.0, 0.6, 0.0), stamp))
-    return [("replay/scene", arr), ("replay/optimal_path", _path(optimal_points, stamp, 0.2)),
-            ("replay/trajectory", _path(trajectory_xy, stamp, 0.25))]
+    return [
+        ("replay/scene", arr),
+        ("replay/optimal_path", _path(optimal_points, stamp, 0.2)),
+        ("replay/trajectory", _path(trajectory_xy, stamp, 0.25)),
+    ]
 
 
 def plans_fading(plans, max_kept=8):
@@ -68,7 +73,7 @@ def plans_fading(plans, max_kept=8):
     out = []
     for n, (stamp, _) in enumerate(plans):
         arr = MarkerArray()
-        earlier = plans[max(0, n - max_kept):n]
+        earlier = plans[max(0, n - max_kept) : n]
         for j, (_, pts) in enumerate(earlier):
             m = Marker(ns="earlier_plans", id=j, type=Marker.LINE_STRIP, action=Marker.ADD)
             m.header.frame_id, m.header.stamp = "map", stamp

@@ -18,11 +18,11 @@ same layouts without ROS, through asg_planner's `asg_closed_loop` (the same core
 order; its proxies equal the ROS stack's), for a planner or follower variant: it writes
 results/baseline/<exp>/offline/<label>.jsonl and compares it with the stored ground-truth rows.
 """
+
 import argparse
 import json
 import os
 import sys
-import time
 from typing import Dict, List
 
 import numpy as np
@@ -65,8 +65,13 @@ def row_of(k: int, req: dict, o) -> dict:
     if o.termination != "ERROR" and len(o.trajectory):
         tr = np.asarray(o.trajectory, np.float64).reshape(-1, 5)
         terms = compute(req, tr[:, 0], tr[:, 1:3], tr[:, 4], o.visibility, o.termination, placed_mask(req, o.removed))
-    r = {"layout": k, "termination": o.termination, "error": o.error, "collision_with": o.collision_with,
-         "sim_time": round(float(o.sim_time), 4)}
+    r = {
+        "layout": k,
+        "termination": o.termination,
+        "error": o.error,
+        "collision_with": o.collision_with,
+        "sim_time": round(float(o.sim_time), 4),
+    }
     for key in ("proxy", "vis", "yaw_term", "plr", "path_length", "optimal_length"):
         r[key] = None if terms is None else round(float(getattr(terms, key)), 6)
     return r
@@ -97,26 +102,33 @@ def run(a) -> int:
     from .cli import worker_names
     from .pool_ros import WorkerPool
     from tqdm import tqdm
+
     exp = load_experiment(a.experiment)
     reqs = layouts(exp, a.layouts)
     path = out_path(exp.name, a.stack, a.root)
     os.makedirs(os.path.dirname(path), exist_ok=True)
     done = read_rows(path)
     todo = [k for k in range(a.layouts) if k not in done]
-    print(f"{exp.name}/{a.stack}: {len(done)} of {a.layouts} layouts stored in {path}, {len(todo)} to run",
-          file=sys.stderr)
+    print(
+        f"{exp.name}/{a.stack}: {len(done)} of {a.layouts} layouts stored in {path}, {len(todo)} to run",
+        file=sys.stderr,
+    )
     if not todo:
         return 0
     rospy.init_node("baseline", anonymous=True, disable_signals=True)
     pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
     bar = tqdm(total=len(todo), desc=f"{exp.name}/{a.stack}", unit="run", dynamic_ncols=True)
     with open(path, "a") as f:
+
         def on_row(k, o):
             r = dict(row_of(k, reqs[k], o), stack=a.stack)
             f.write(json.dumps(r, sort_keys=True) + "\n")
             f.flush()
             bar.update(1)
-            bar.set_postfix_str(f"{r['termination']} proxy {r['proxy'] if r['proxy'] is None else round(r['proxy'], 2)}")
+            bar.set_postfix_str(
+                f"{r['termination']} proxy {r['proxy'] if r['proxy'] is None else round(r['proxy'], 2)}"
+            )
+
         run_requests(pool, reqs, todo, on_row)
     bar.close()
     return 0
@@ -124,24 +136,27 @@ def run(a) -> int:
 
 def closed_loop_tool() -> str:
     """The built asg_closed_loop of this workspace (or $ASG_CLOSED_LOOP)."""
-    tool = os.environ.get("ASG_CLOSED_LOOP") or os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner",
-                                                             "asg_closed_loop")
+    tool = os.environ.get("ASG_CLOSED_LOOP") or os.path.join(
+        REPO, "catkin_ws", "devel", "lib", "asg_planner", "asg_closed_loop"
+    )
     if not os.access(tool, os.X_OK):
-        raise SystemExit(f"baseline offline: no asg_closed_loop at {tool}: build the workspace first "
-                         "(bash scripts/setup.sh) or set ASG_CLOSED_LOOP")
+        raise SystemExit(
+            f"baseline offline: no asg_closed_loop at {tool}: build the workspace first "
+            "(bash scripts/setup.sh) or set ASG_CLOSED_LOOP"
+        )
     return tool
 
 
-def offline_rows(reqs: List[dict], todo: List[int], planner: str, sets: List[str], jobs: int, tmp: str,
-                 on_row) -> None:
+def offline_rows(reqs: List[dict], todo: List[int], planner: str, sets: List[str], jobs: int, tmp: str, on_row) -> None:
     """Runs reqs[k] for k in todo through asg_closed_loop, in `jobs` processes (one llvmpipe
     thread each); on_row(k, row) as each process's batch ends."""
     import subprocess
     from concurrent.futures import ThreadPoolExecutor
     from types import SimpleNamespace
     from asg_scenario.schema import dump_scenario
+
     tool = closed_loop_tool()
-    args = ([ "--planner", planner] if planner else []) + sum((["--set", kv] for kv in sets), [])
+    args = (["--planner", planner] if planner else []) + sum((["--set", kv] for kv in sets), [])
     files = {}
     for k in todo:
         files[k] = os.path.join(tmp, f"layout-{k}.yaml")
@@ -151,17 +166,24 @@ def offline_rows(reqs: List[dict], todo: List[int], planner: str, sets: List[str
 
     def batch(ks):
         for i in range(0, len(ks), 25):  # small batches: rows come back as they finish
-            chunk = ks[i:i + 25]
-            res = subprocess.run([tool, *args, "--out", tmp, *[files[k] for k in chunk]], capture_output=True,
-                                 text=True, env=env)
+            chunk = ks[i : i + 25]
+            res = subprocess.run(
+                [tool, *args, "--out", tmp, *[files[k] for k in chunk]], capture_output=True, text=True, env=env
+            )
             if res.returncode:
                 raise SystemExit(f"baseline offline: asg_closed_loop failed: {res.stderr.strip()[-2000:]}")
             for k, line in zip(chunk, res.stdout.splitlines()):
                 j = json.loads(line)
                 tr = np.loadtxt(os.path.join(tmp, f"{j['name']}.csv"), delimiter=",", skiprows=1, ndmin=2)
-                o = SimpleNamespace(termination=j["termination"], error=j.get("error", ""),
-                                    collision_with=j.get("collision_with", ""), sim_time=j["sim_time"],
-                                    visibility=j["visibility"], removed=j["removed"], trajectory=tr.ravel())
+                o = SimpleNamespace(
+                    termination=j["termination"],
+                    error=j.get("error", ""),
+                    collision_with=j.get("collision_with", ""),
+                    sim_time=j["sim_time"],
+                    visibility=j["visibility"],
+                    removed=j["removed"],
+                    trajectory=tr.ravel(),
+                )
                 on_row(k, o)
 
     with ThreadPoolExecutor(jobs) as ex:
@@ -172,17 +194,21 @@ def offline(a) -> int:
     import tempfile
     import threading
     from tqdm import tqdm
+
     exp = load_experiment(a.experiment)
     reqs = layouts(exp, a.layouts)
     path = os.path.join(os.path.dirname(out_path(exp.name, "ground_truth", a.root)), "offline", f"{a.label}.jsonl")
     os.makedirs(os.path.dirname(path), exist_ok=True)
     done = read_rows(path)
     todo = [k for k in range(a.layouts) if k not in done]
-    print(f"{exp.name}/offline/{a.label}: {len(done)} of {a.layouts} layouts stored in {path}, {len(todo)} to run",
-          file=sys.stderr)
+    print(
+        f"{exp.name}/offline/{a.label}: {len(done)} of {a.layouts} layouts stored in {path}, {len(todo)} to run",
+        file=sys.stderr,
+    )
     lock = threading.Lock()
     bar = tqdm(total=len(todo), desc=f"{exp.name}/{a.label}", unit="run", dynamic_ncols=True, disable=not todo)
     with open(path, "a") as f, tempfile.TemporaryDirectory(prefix="asg_offline_") as tmp:
+
         def on_row(k, o):
             r = dict(row_of(k, reqs[k], o), stack=f"ground_truth/{a.label}", planner=a.planner, set=a.set)
             with lock:
@@ -190,6 +216,7 @@ def offline(a) -> int:
                 f.flush()
                 done[k] = r
                 bar.update(1)
+
         if todo:
             offline_rows(reqs, todo, a.planner, a.set, a.jobs, tmp, on_row)
     bar.close()
@@ -198,9 +225,11 @@ def offline(a) -> int:
     ref = read_rows(out_path(exp.name, "ground_truth", a.root))
     both = [k for k in range(a.layouts) if k in ref and ref[k]["proxy"] is not None and done[k]["proxy"] is not None]
     d = np.array([done[k]["proxy"] - ref[k]["proxy"] for k in both])
-    print(f"| {a.label} | {100 * g['share_ge3']:.1f} % | {g['median_yaw_term']:.3f} / {g['p90_yaw_term']:.3f} | "
-          f"{g['median_plr']:.3f} / {g['p90_plr']:.3f} | {g['collisions']} | "
-          + (f"{100 * (abs(d) > 0.1).mean():.1f} % ({abs(d).max():.2f}) of {len(both)} |" if len(both) else "- |"))
+    print(
+        f"| {a.label} | {100 * g['share_ge3']:.1f} % | {g['median_yaw_term']:.3f} / {g['p90_yaw_term']:.3f} | "
+        f"{g['median_plr']:.3f} / {g['p90_plr']:.3f} | {g['collisions']} | "
+        + (f"{100 * (abs(d) > 0.1).mean():.1f} % ({abs(d).max():.2f}) of {len(both)} |" if len(both) else "- |")
+    )
     return 0
 
 
@@ -213,10 +242,15 @@ def compare(a_path: str, b_path: str, threshold: float = 0.1) -> dict:
     if not both:
         raise SystemExit(f"baseline compare: no layout with a proxy in both {a_path} and {b_path}")
     d = np.array([b[k]["proxy"] - a[k]["proxy"] for k in both])
-    return {"layouts": len(both), "moved_share": float((np.abs(d) > threshold).mean()), "threshold": threshold,
-            "largest_move": float(np.abs(d).max()), "mean_change": float(d.mean()),
-            "endings_differ": [k for k in both if a[k]["termination"] != b[k]["termination"]],
-            "collisions": [int(sum(r[k]["termination"] == "COLLISION" for k in both)) for r in (a, b)]}
+    return {
+        "layouts": len(both),
+        "moved_share": float((np.abs(d) > threshold).mean()),
+        "threshold": threshold,
+        "largest_move": float(np.abs(d).max()),
+        "mean_change": float(d.mean()),
+        "endings_differ": [k for k in both if a[k]["termination"] != b[k]["termination"]],
+        "collisions": [int(sum(r[k]["termination"] == "COLLISION" for k in both)) for r in (a, b)],
+    }
 
 
 def stack_summary(rows: List[dict]) -> dict:
@@ -225,16 +259,20 @@ def stack_summary(rows: List[dict]) -> dict:
     y = np.array([r["yaw_term"] for r in ok])
     plr = np.array([r["plr"] for r in ok])
     coll = sum(r["termination"] == "COLLISION" for r in rows)
-    return {"runs": len(rows), "errors": len(rows) - len(ok),
-            "share_ge3": float((p >= 3).mean()) if len(p) else None,
-            "median_proxy": float(np.median(p)) if len(p) else None,
-            "median_yaw_term": float(np.median(y)) if len(y) else None,
-            "p90_yaw_term": float(np.percentile(y, 90)) if len(y) else None,
-            "median_plr": float(np.median(plr)) if len(plr) else None,
-            "p90_plr": float(np.percentile(plr, 90)) if len(plr) else None,
-            "collisions": int(coll), "collision_share": coll / len(rows) if rows else None,
-            "success": int(sum(r["termination"] == "SUCCESS" for r in rows)),
-            "plr_below_0999": int((plr < 0.999).sum())}
+    return {
+        "runs": len(rows),
+        "errors": len(rows) - len(ok),
+        "share_ge3": float((p >= 3).mean()) if len(p) else None,
+        "median_proxy": float(np.median(p)) if len(p) else None,
+        "median_yaw_term": float(np.median(y)) if len(y) else None,
+        "p90_yaw_term": float(np.percentile(y, 90)) if len(y) else None,
+        "median_plr": float(np.median(plr)) if len(plr) else None,
+        "p90_plr": float(np.percentile(plr, 90)) if len(plr) else None,
+        "collisions": int(coll),
+        "collision_share": coll / len(rows) if rows else None,
+        "success": int(sum(r["termination"] == "SUCCESS" for r in rows)),
+        "plr_below_0999": int((plr < 0.999).sum()),
+    }
 
 
 def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dict:
@@ -242,10 +280,18 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
     and what each U-Net stack changes against ground truth on the layouts both ran. The
     ground-truth rows come from `ground_truth_root` where given (they do not depend on the
     U-Net's backend, so a backend's folder shares the default one's)."""
-    rows = {s: read_rows(out_path(exp_name, s, ground_truth_root if s == "ground_truth" and ground_truth_root else root))
-            for s in STACKS}
-    out = {"experiment": exp_name, "layouts": "uniform random search, seed 0: job k is layout k",
-           "bounds_ground_truth": BOUNDS, "stacks": {}, "against_ground_truth": {}, "per_layout": []}
+    rows = {
+        s: read_rows(out_path(exp_name, s, ground_truth_root if s == "ground_truth" and ground_truth_root else root))
+        for s in STACKS
+    }
+    out = {
+        "experiment": exp_name,
+        "layouts": "uniform random search, seed 0: job k is layout k",
+        "bounds_ground_truth": BOUNDS,
+        "stacks": {},
+        "against_ground_truth": {},
+        "per_layout": [],
+    }
     for s in STACKS:
         if rows[s]:
             out["stacks"][s] = stack_summary(list(rows[s].values()))
@@ -259,27 +305,42 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
             continue
         d = np.array([rows[s][k]["proxy"] - gt[k]["proxy"] for k in both])
         out["against_ground_truth"][s] = {
-            "layouts": len(both), "raises_by_0.5": float((d >= 0.5).mean()), "raises_by_1": float((d >= 1).mean()),
-            "median_change": float(np.median(d)), "ge3_here_lt2_ground_truth": int(sum(
-                attribute(rows[s][k]["proxy"], gt[k]["proxy"])[1] for k in both))}
+            "layouts": len(both),
+            "raises_by_0.5": float((d >= 0.5).mean()),
+            "raises_by_1": float((d >= 1).mean()),
+            "median_change": float(np.median(d)),
+            "ge3_here_lt2_ground_truth": int(sum(attribute(rows[s][k]["proxy"], gt[k]["proxy"])[1] for k in both)),
+        }
     for k in sorted(set().union(*[set(r) for r in rows.values()])):
-        out["per_layout"].append({"layout": k, **{s: (rows[s][k]["proxy"] if k in rows[s] else None) for s in STACKS},
-                                  **{f"{s}_termination": rows[s][k]["termination"] for s in STACKS if k in rows[s]}})
+        out["per_layout"].append(
+            {
+                "layout": k,
+                **{s: (rows[s][k]["proxy"] if k in rows[s] else None) for s in STACKS},
+                **{f"{s}_termination": rows[s][k]["termination"] for s in STACKS if k in rows[s]},
+            }
+        )
     return out
 
 
 def table(summary: dict) -> str:
     """The Markdown table of docs/baseline.md for one experiment."""
-    lines = [f"| {summary['experiment']} stack | runs | proxy >= 3 | median / p90 yaw term | median / p90 PLR "
-             "| collisions | PLR < 0.999 |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        f"| {summary['experiment']} stack | runs | proxy >= 3 | median / p90 yaw term | median / p90 PLR "
+        "| collisions | PLR < 0.999 |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for s, g in summary["stacks"].items():
-        lines.append(f"| {s} | {g['runs']} | {100 * g['share_ge3']:.1f} % | {g['median_yaw_term']:.3f} / "
-                     f"{g['p90_yaw_term']:.3f} | {g['median_plr']:.3f} / {g['p90_plr']:.3f} | {g['collisions']} "
-                     f"({100 * g['collision_share']:.1f} %) | {g['plr_below_0999']} |")
+        lines.append(
+            f"| {s} | {g['runs']} | {100 * g['share_ge3']:.1f} % | {g['median_yaw_term']:.3f} / "
+            f"{g['p90_yaw_term']:.3f} | {g['median_plr']:.3f} / {g['p90_plr']:.3f} | {g['collisions']} "
+            f"({100 * g['collision_share']:.1f} %) | {g['plr_below_0999']} |"
+        )
     for s, d in summary["against_ground_truth"].items():
-        lines.append(f"\n{s} against ground truth on the same {d['layouts']} layouts: the proxy rises by >= 0.5 on "
-                     f"{100 * d['raises_by_0.5']:.1f} % and by >= 1 on {100 * d['raises_by_1']:.1f} % of them; "
-                     f"{d['ge3_here_lt2_ground_truth']} reach 3 where ground truth stays below 2.")
+        lines.append(
+            f"\n{s} against ground truth on the same {d['layouts']} layouts: the proxy rises by >= 0.5 on "
+            f"{100 * d['raises_by_0.5']:.1f} % and by >= 1 on {100 * d['raises_by_1']:.1f} % of them; "
+            f"{d['ge3_here_lt2_ground_truth']} reach 3 where ground truth stays below 2."
+        )
     return "\n".join(lines)
 
 
@@ -327,10 +388,12 @@ def main(argv=None):
             if not os.path.isfile(f):
                 p.error(f"{f}: no such file")
         r = compare(a.a, a.b, a.threshold)
-        print(f"{r['layouts']} layouts: the proxy moves by > {r['threshold']:g} on {100 * r['moved_share']:.1f} % "
-              f"(largest {r['largest_move']:.2f}, mean change {r['mean_change']:+.3f}); collisions "
-              f"{r['collisions'][0]} -> {r['collisions'][1]}; endings differ on {len(r['endings_differ'])}: "
-              f"{r['endings_differ'][:20]}")
+        print(
+            f"{r['layouts']} layouts: the proxy moves by > {r['threshold']:g} on {100 * r['moved_share']:.1f} % "
+            f"(largest {r['largest_move']:.2f}, mean change {r['mean_change']:+.3f}); collisions "
+            f"{r['collisions'][0]} -> {r['collisions'][1]}; endings differ on {len(r['endings_differ'])}: "
+            f"{r['endings_differ'][:20]}"
+        )
         return 0
     if getattr(a, "layouts", 1) < 1:
         p.error("--layouts must be >= 1")

@@ -7,6 +7,7 @@ U-Net alone sets; `table` renders one or several breakdowns as Markdown.
 
     python3 -m asg_agent.bench table results/bench/*.json
 """
+
 import argparse
 import json
 import os
@@ -33,9 +34,12 @@ def machine() -> dict:
 
 
 def _delta(first: dict, last: dict) -> dict:
-    return {"runs": last["runs"] - first["runs"], "cpu": last["cpu_seconds"] - first["cpu_seconds"],
-            "seconds": {s: last["seconds"][s] - first["seconds"].get(s, 0.0) for s in last["seconds"]},
-            "calls": {s: last["calls"][s] - first["calls"].get(s, 0) for s in last["calls"]}}
+    return {
+        "runs": last["runs"] - first["runs"],
+        "cpu": last["cpu_seconds"] - first["cpu_seconds"],
+        "seconds": {s: last["seconds"][s] - first["seconds"].get(s, 0.0) for s in last["seconds"]},
+        "calls": {s: last["calls"][s] - first["calls"].get(s, 0) for s in last["calls"]},
+    }
 
 
 # The stack's work on the lockstep critical path: the worker's wait for a command covers it. The
@@ -50,8 +54,15 @@ def transport(per: dict) -> float:
     return per.get("scene_worker.wait", 0.0) - sum(per.get(k, 0.0) for k in CRITICAL)
 
 
-def breakdown(first: Dict[Tuple[str, str], dict], last: Dict[Tuple[str, str], dict], agent: dict,
-              scenarios: int, wall: float, sim_seconds: float, workers: int) -> dict:
+def breakdown(
+    first: Dict[Tuple[str, str], dict],
+    last: Dict[Tuple[str, str], dict],
+    agent: dict,
+    scenarios: int,
+    wall: float,
+    sim_seconds: float,
+    workers: int,
+) -> dict:
     """Per-scenario figures from stage readings. `agent`: {"seconds", "calls", "cpu"} of the
     campaign process over the same interval."""
     if scenarios < 1 or wall <= 0:
@@ -68,18 +79,28 @@ def breakdown(first: Dict[Tuple[str, str], dict], last: Dict[Tuple[str, str], di
     nodes["agent"] = {"cpu": agent["cpu"], "seconds": dict(agent["seconds"]), "calls": dict(agent["calls"])}
     per = {f"{k}.{s}": x / scenarios for k, n in nodes.items() for s, x in n["seconds"].items()}
     cpu = {k: n["cpu"] / scenarios for k, n in nodes.items()}
-    out = {"workers": workers, "scenarios": scenarios, "wall_s": wall, "rate_per_hour": scenarios / wall * 3600,
-           "sim_s_per_wall_s_per_worker": sim_seconds / wall / workers,
-           "sim_s_per_scenario": sim_seconds / scenarios, "per_scenario_s": per, "cpu_per_scenario_s": cpu,
-           "machine": machine()}
+    out = {
+        "workers": workers,
+        "scenarios": scenarios,
+        "wall_s": wall,
+        "rate_per_hour": scenarios / wall * 3600,
+        "sim_s_per_wall_s_per_worker": sim_seconds / wall / workers,
+        "sim_s_per_scenario": sim_seconds / scenarios,
+        "per_scenario_s": per,
+        "cpu_per_scenario_s": cpu,
+        "machine": machine(),
+    }
     seg = nodes.get("segmenter")
     if seg and seg["calls"].get("inference"):
         calls = seg["calls"]["inference"]
         t_inf = seg["seconds"]["inference"] / calls
         frames = calls / scenarios
         cores = min(workers, os.cpu_count() or 1)
-        out.update(frames_per_scenario=frames, inference_ms_per_frame=t_inf * 1000,
-                   inference_bound_per_hour=cores * 3600 / (frames * t_inf))
+        out.update(
+            frames_per_scenario=frames,
+            inference_ms_per_frame=t_inf * 1000,
+            inference_bound_per_hour=cores * 3600 / (frames * t_inf),
+        )
         out["fraction_of_bound"] = out["rate_per_hour"] / out["inference_bound_per_hour"]
     if "scene_worker" in nodes:
         out["transport_and_waiting_s"] = transport(per)
@@ -88,15 +109,25 @@ def breakdown(first: Dict[Tuple[str, str], dict], last: Dict[Tuple[str, str], di
 
 
 ROWS = [  # (label, key in per_scenario_s)
-    ("scene build + announce", "scene_worker.build"), ("stack acknowledgements", "scene_worker.acks"),
-    ("render (camera + labels pass)", "scene_worker.render"), ("publish (worker)", "scene_worker.publish"),
-    ("physics", "scene_worker.physics"), ("result assembly", "scene_worker.result"),
-    ("segmenter: decode", "segmenter.decode"), ("segmenter: U-Net inference", "segmenter.inference"),
-    ("segmenter: publish", "segmenter.publish"), ("planner: reset", "planner.reset"),
-    ("planner: vote insertion", "planner.votes"), ("planner: planning + PD", "planner.plan"),
-    ("planner: publish", "planner.publish"), ("agent: proposal", "agent.propose"),
-    ("agent: TD3 update", "agent.update"), ("agent: proxy", "agent.proxy"), ("agent: store write", "agent.store"),
-    ("agent: checkpoint", "agent.checkpoint"), ("agent: dispatch", "agent.dispatch"),
+    ("scene build + announce", "scene_worker.build"),
+    ("stack acknowledgements", "scene_worker.acks"),
+    ("render (camera + labels pass)", "scene_worker.render"),
+    ("publish (worker)", "scene_worker.publish"),
+    ("physics", "scene_worker.physics"),
+    ("result assembly", "scene_worker.result"),
+    ("segmenter: decode", "segmenter.decode"),
+    ("segmenter: U-Net inference", "segmenter.inference"),
+    ("segmenter: publish", "segmenter.publish"),
+    ("planner: reset", "planner.reset"),
+    ("planner: vote insertion", "planner.votes"),
+    ("planner: planning + PD", "planner.plan"),
+    ("planner: publish", "planner.publish"),
+    ("agent: proposal", "agent.propose"),
+    ("agent: TD3 update", "agent.update"),
+    ("agent: proxy", "agent.proxy"),
+    ("agent: store write", "agent.store"),
+    ("agent: checkpoint", "agent.checkpoint"),
+    ("agent: dispatch", "agent.dispatch"),
 ]
 
 
@@ -106,19 +137,33 @@ def table(runs: List[dict], labels: List[str]) -> str:
     for label, key in ROWS:
         if any(key in r["per_scenario_s"] for r in runs):
             lines.append(f"| {label} | " + " | ".join(f"{r['per_scenario_s'].get(key, 0.0):.3f}" for r in runs) + " |")
-    lines.append("| worker waiting for the stack (lockstep) | "
-                 + " | ".join(f"{r['per_scenario_s'].get('scene_worker.wait', 0.0):.3f}" for r in runs) + " |")
-    lines.append("| of which transport and scheduling (wait - stack work on the critical path) | "
-                 + " | ".join(f"{transport(r['per_scenario_s']):.3f}" for r in runs) + " |")
+    lines.append(
+        "| worker waiting for the stack (lockstep) | "
+        + " | ".join(f"{r['per_scenario_s'].get('scene_worker.wait', 0.0):.3f}" for r in runs)
+        + " |"
+    )
+    lines.append(
+        "| of which transport and scheduling (wait - stack work on the critical path) | "
+        + " | ".join(f"{transport(r['per_scenario_s']):.3f}" for r in runs)
+        + " |"
+    )
     for kind in ("scene_worker", "segmenter", "planner", "agent"):
-        lines.append(f"| CPU: {kind} process | "
-                     + " | ".join(f"{r['cpu_per_scenario_s'].get(kind, 0.0):.3f}" for r in runs) + " |")
-    summary = [("scenarios", "{scenarios}"), ("wall (s)", "{wall_s:.0f}"), ("**scenarios an hour**", "**{rate_per_hour:.0f}**"),
-               ("simulated s per wall s per worker", "{sim_s_per_wall_s_per_worker:.2f}"),
-               ("camera frames per scenario", "{frames_per_scenario:.0f}"),
-               ("U-Net ms per frame (in the campaign)", "{inference_ms_per_frame:.1f}"),
-               ("inference-only bound (an hour)", "{inference_bound_per_hour:.0f}"),
-               ("rate / bound", "{fraction_of_bound:.0%}"), ("rate / paper's 625 an hour", "{paper_ratio:.2f}x")]
+        lines.append(
+            f"| CPU: {kind} process | "
+            + " | ".join(f"{r['cpu_per_scenario_s'].get(kind, 0.0):.3f}" for r in runs)
+            + " |"
+        )
+    summary = [
+        ("scenarios", "{scenarios}"),
+        ("wall (s)", "{wall_s:.0f}"),
+        ("**scenarios an hour**", "**{rate_per_hour:.0f}**"),
+        ("simulated s per wall s per worker", "{sim_s_per_wall_s_per_worker:.2f}"),
+        ("camera frames per scenario", "{frames_per_scenario:.0f}"),
+        ("U-Net ms per frame (in the campaign)", "{inference_ms_per_frame:.1f}"),
+        ("inference-only bound (an hour)", "{inference_bound_per_hour:.0f}"),
+        ("rate / bound", "{fraction_of_bound:.0%}"),
+        ("rate / paper's 625 an hour", "{paper_ratio:.2f}x"),
+    ]
     for label, fmt in summary:
         cells = []
         for r in runs:

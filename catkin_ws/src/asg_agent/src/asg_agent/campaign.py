@@ -13,6 +13,7 @@ loads it and applies, in job order, the results already in the store after it (t
 computation the interrupted run did), then submits what is missing. No scenario is run for
 nothing twice and none is stored twice (the store's (campaign, job) key).
 """
+
 import json
 import math
 import sys
@@ -22,7 +23,6 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from asg_scenario.schema import dump_scenario
 
 from .experiment import Experiment
 from .proxy import ProxyConfig, compute, placed_mask
@@ -96,12 +96,27 @@ class Job:
 
 
 class Campaign:
-    def __init__(self, name: str, experiment: Experiment, method: SearchMethod, store: Store, pool: Pool,
-                 total: int, seed: int, checkpoint: str, slots: int = 4, max_attempts: int = 3,
-                 checkpoint_every: int = 10, proxy_config: ProxyConfig = ProxyConfig(),
-                 progress: Optional[Callable[[dict], None]] = None, settings: Optional[dict] = None,
-                 early_dispatch: bool = True, reference: Optional[Pool] = None, reward: str = "proxy",
-                 scalars: Optional[Callable[[int, dict, dict], None]] = None):
+    def __init__(
+        self,
+        name: str,
+        experiment: Experiment,
+        method: SearchMethod,
+        store: Store,
+        pool: Pool,
+        total: int,
+        seed: int,
+        checkpoint: str,
+        slots: int = 4,
+        max_attempts: int = 3,
+        checkpoint_every: int = 10,
+        proxy_config: ProxyConfig = ProxyConfig(),
+        progress: Optional[Callable[[dict], None]] = None,
+        settings: Optional[dict] = None,
+        early_dispatch: bool = True,
+        reference: Optional[Pool] = None,
+        reward: str = "proxy",
+        scalars: Optional[Callable[[int, dict, dict], None]] = None,
+    ):
         if total < 1 or slots < 1:
             raise ValueError("total and slots must be >= 1")
         self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
@@ -136,17 +151,31 @@ class Campaign:
         # best/ge3/ge4: the proxy of the stack under test; diff_best/diff_ge1: differential
         # campaigns' reward (proxy - reference proxy), its largest and how often it reached 1.
         # perception/stack: findings (proxy >= 3) with the reference below 2 / at least 3.
-        self.stats = {"best": -math.inf, "ge3": 0, "ge4": 0, "errors": 0, "retries": 0,
-                      "diff_best": -math.inf, "diff_ge1": 0, "perception": 0, "stack": 0}
+        self.stats = {
+            "best": -math.inf,
+            "ge3": 0,
+            "ge4": 0,
+            "errors": 0,
+            "retries": 0,
+            "diff_best": -math.inf,
+            "diff_ge1": 0,
+            "perception": 0,
+            "stack": 0,
+        }
         self.t0 = time.time()
         self.done_at_start = 0
         self.stages = Stages()
 
     # -- setup ----------------------------------------------------------------------------------
     def start(self):
-        self.store.create_campaign(self.name, self.method.name, self.exp.name, self.exp.text, self.seed,
-                                   dict(self.settings, total=self.total, slots=self.slots,
-                                        method_config=self.method.config()))
+        self.store.create_campaign(
+            self.name,
+            self.method.name,
+            self.exp.name,
+            self.exp.text,
+            self.seed,
+            dict(self.settings, total=self.total, slots=self.slots, method_config=self.method.config()),
+        )
         for s in range(self.slots):
             self._new_episode(s)
         for s in range(self.slots):
@@ -195,11 +224,15 @@ class Campaign:
                 self.ref_queue.remove(row["job"])
         self.done_at_start = self.store.count(self.name)
         summary = self.store.summary(self.name, top=0)
-        self.stats.update(best=summary["max_proxy"] if summary["max_proxy"] is not None else -math.inf,
-                          ge3=summary["proxy_ge_3"], ge4=summary["proxy_ge_4"],
-                          errors=summary["terminations"].get("ERROR", 0),
-                          perception=summary["perception_ge3"], stack=summary["stack_ge3"],
-                          diff_ge1=summary["differential_ge1"])
+        self.stats.update(
+            best=summary["max_proxy"] if summary["max_proxy"] is not None else -math.inf,
+            ge3=summary["proxy_ge_3"],
+            ge4=summary["proxy_ge_4"],
+            errors=summary["terminations"].get("ERROR", 0),
+            perception=summary["perception_ge3"],
+            stack=summary["stack_ge3"],
+            diff_ge1=summary["differential_ge1"],
+        )
         self._apply_ready()
 
     # -- episodes and proposals -----------------------------------------------------------------
@@ -303,8 +336,16 @@ class Campaign:
         traj = np.asarray(o.trajectory, np.float32).reshape(-1, 5)
         if o.termination == "ERROR" or not len(traj):
             return traj, None
-        return traj, compute(request, traj[:, 0], traj[:, 1:3], traj[:, 4], o.visibility, o.termination,
-                             placed_mask(request, o.removed), self.proxy_config)
+        return traj, compute(
+            request,
+            traj[:, 0],
+            traj[:, 1:3],
+            traj[:, 4],
+            o.visibility,
+            o.termination,
+            placed_mask(request, o.removed),
+            self.proxy_config,
+        )
 
     def _finish(self, job: Job, o: Outcome, ref: Optional[Outcome]):
         t0 = time.perf_counter()
@@ -312,26 +353,54 @@ class Campaign:
         reference, reward, diff = None, (terms.proxy if terms else None), None
         if ref is not None:
             _, rterms = self._terms(job.request, ref)
-            reference = json.dumps({"worker": ref.worker, "attempts": job.ref_attempts, "termination": ref.termination,
-                                    "error": ref.error, "proxy": rterms.proxy if rterms else None,
-                                    "vis": rterms.vis if rterms else None, "yaw_term": rterms.yaw_term if rterms else None,
-                                    "plr": rterms.plr if rterms else None, "sim_time": ref.sim_time,
-                                    "trajectory_xy": kept_xy(ref.trajectory)},
-                                   sort_keys=True)
+            reference = json.dumps(
+                {
+                    "worker": ref.worker,
+                    "attempts": job.ref_attempts,
+                    "termination": ref.termination,
+                    "error": ref.error,
+                    "proxy": rterms.proxy if rterms else None,
+                    "vis": rterms.vis if rterms else None,
+                    "yaw_term": rterms.yaw_term if rterms else None,
+                    "plr": rterms.plr if rterms else None,
+                    "sim_time": ref.sim_time,
+                    "trajectory_xy": kept_xy(ref.trajectory),
+                },
+                sort_keys=True,
+            )
             diff = terms.proxy - rterms.proxy if terms and rterms else None
             if self.reward == "differential":
                 reward = diff
-        row = {"campaign": self.name, "job": o.job, "method": self.method.name, "episode": job.episode,
-               "step": job.step, "worker": o.worker, "attempts": job.attempts, "scenario_id": job.request["scenario_id"],
-               "request": json.dumps(job.request, sort_keys=True), "termination": o.termination, "error": o.error,
-               "proxy": terms.proxy if terms else None, "vis": terms.vis if terms else None,
-               "yaw_term": terms.yaw_term if terms else None, "plr": terms.plr if terms else None,
-               "path_length": terms.path_length if terms else None,
-               "optimal_length": terms.optimal_length if terms else None, "sim_time": o.sim_time,
-               "num_control_msgs": o.num_control_msgs, "visibility": json.dumps([float(v) for v in o.visibility]),
-               "removed": json.dumps(o.removed), "collision_with": o.collision_with,
-               "trajectory": pack_trajectory(traj), "samples": len(traj), "wall_time": o.wall_time,
-               "finished": time.time(), "reference": reference, "reward": reward}
+        row = {
+            "campaign": self.name,
+            "job": o.job,
+            "method": self.method.name,
+            "episode": job.episode,
+            "step": job.step,
+            "worker": o.worker,
+            "attempts": job.attempts,
+            "scenario_id": job.request["scenario_id"],
+            "request": json.dumps(job.request, sort_keys=True),
+            "termination": o.termination,
+            "error": o.error,
+            "proxy": terms.proxy if terms else None,
+            "vis": terms.vis if terms else None,
+            "yaw_term": terms.yaw_term if terms else None,
+            "plr": terms.plr if terms else None,
+            "path_length": terms.path_length if terms else None,
+            "optimal_length": terms.optimal_length if terms else None,
+            "sim_time": o.sim_time,
+            "num_control_msgs": o.num_control_msgs,
+            "visibility": json.dumps([float(v) for v in o.visibility]),
+            "removed": json.dumps(o.removed),
+            "collision_with": o.collision_with,
+            "trajectory": pack_trajectory(traj),
+            "samples": len(traj),
+            "wall_time": o.wall_time,
+            "finished": time.time(),
+            "reference": reference,
+            "reward": reward,
+        }
         self.stages.add("proxy", t0)
         t0 = time.perf_counter()
         self.store.add(row)
@@ -368,8 +437,9 @@ class Campaign:
                 t0 = time.perf_counter()
                 traj = unpack_trajectory(row["trajectory"])
                 next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
-                learnt = self.method.observe(job.job, job.episode, job.step, job.state, job.action, float(reward),
-                                             next_state, done)
+                learnt = self.method.observe(
+                    job.job, job.episode, job.step, job.state, job.action, float(reward), next_state, done
+                )
                 self.stages.add("update", t0)
                 if not done:
                     slot.update(step=job.step + 1, state=next_state)
@@ -390,20 +460,48 @@ class Campaign:
         self.stages.add("checkpoint", t0)
 
     def _write_checkpoint(self):
-        pending = [dict(job=j.job, slot=j.slot, episode=j.episode, step=j.step, state=j.state, action=j.action,
-                        request=j.request, attempts=0, avoid="") for j in self.pending.values()]
-        save_atomic({"method": self.method.state_dict(), "next_job": self.next_job, "next_apply": self.next_apply,
-                     "next_episode": self.next_episode, "episodes_done": self.episodes_done,
-                     "stats": self.stats, "slot_state": self.slot_state, "pending": pending},
-                    self.checkpoint_path)
+        pending = [
+            dict(
+                job=j.job,
+                slot=j.slot,
+                episode=j.episode,
+                step=j.step,
+                state=j.state,
+                action=j.action,
+                request=j.request,
+                attempts=0,
+                avoid="",
+            )
+            for j in self.pending.values()
+        ]
+        save_atomic(
+            {
+                "method": self.method.state_dict(),
+                "next_job": self.next_job,
+                "next_apply": self.next_apply,
+                "next_episode": self.next_episode,
+                "episodes_done": self.episodes_done,
+                "stats": self.stats,
+                "slot_state": self.slot_state,
+                "pending": pending,
+            },
+            self.checkpoint_path,
+        )
 
     def status(self) -> dict:
         stored = self.store.count(self.name)
         elapsed = max(1e-6, time.time() - self.t0)
-        return {"done": stored, "total": self.total, "rate_per_hour": (stored - self.done_at_start) / elapsed * 3600,
-                "best": self.stats["best"], "ge3": self.stats["ge3"], "ge4": self.stats["ge4"],
-                "errors": self.stats["errors"], "retries": self.stats["retries"],
-                "diff_best": self.stats["diff_best"] if self.reference is not None else None,
-                "diff_ge1": self.stats["diff_ge1"] if self.reference is not None else None,
-                "perception": self.stats["perception"] if self.reference is not None else None,
-                "stack": self.stats["stack"] if self.reference is not None else None}
+        return {
+            "done": stored,
+            "total": self.total,
+            "rate_per_hour": (stored - self.done_at_start) / elapsed * 3600,
+            "best": self.stats["best"],
+            "ge3": self.stats["ge3"],
+            "ge4": self.stats["ge4"],
+            "errors": self.stats["errors"],
+            "retries": self.stats["retries"],
+            "diff_best": self.stats["diff_best"] if self.reference is not None else None,
+            "diff_ge1": self.stats["diff_ge1"] if self.reference is not None else None,
+            "perception": self.stats["perception"] if self.reference is not None else None,
+            "stack": self.stats["stack"] if self.reference is not None else None,
+        }

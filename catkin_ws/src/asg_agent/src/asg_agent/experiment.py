@@ -14,25 +14,34 @@ search varies it. The action is the x, y of every obstacle instance, each scaled
     episode_steps: 5
     sim_timeout: 60.0                  # [s] overrides the scenario's
 """
+
 import math
 import os
 from dataclasses import dataclass, field
-from typing import Optional
 
 import numpy as np
 import yaml
 
 from asg_scenario import ScenarioError, load_scenario
 from asg_scenario.schema import strict_yaml_load
-from asg_scenario.layout import instance_count, positions, with_positions
+from asg_scenario.layout import instance_count, with_positions
 
 
 class ExperimentError(ValueError):
     pass
 
 
-KEYS = {"name", "scenario", "perception", "model", "unet_backend", "planner_config", "episode_steps",
-        "sim_timeout", "description"}
+KEYS = {
+    "name",
+    "scenario",
+    "perception",
+    "model",
+    "unet_backend",
+    "planner_config",
+    "episode_steps",
+    "sim_timeout",
+    "description",
+}
 #: asg_perception.inference.BACKENDS (a test keeps the two equal; asg_agent does not import torch models)
 UNET_BACKENDS = ("eager", "channels_last", "frozen", "bf16")
 #: asg_perception.inference.DEFAULT_BACKEND: what a file without `unet_backend` means
@@ -104,8 +113,12 @@ def load_experiment(path: str) -> Experiment:
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 100:
         problems.append(f"episode_steps: {steps!r}, must be an integer in [1, 100]")
     timeout = data.get("sim_timeout")
-    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
-                                or not math.isfinite(timeout) or not 0.1 <= timeout <= 3600):
+    if timeout is not None and (
+        isinstance(timeout, bool)
+        or not isinstance(timeout, (int, float))
+        or not math.isfinite(timeout)
+        or not 0.1 <= timeout <= 3600
+    ):
         problems.append(f"sim_timeout: {timeout!r}, must be a number in [0.1, 3600] s")
     for key in ("model", "planner_config", "description"):
         if key in data and not isinstance(data[key], str):
@@ -123,7 +136,14 @@ def load_experiment(path: str) -> Experiment:
         scenario["operational"]["sim_timeout"] = float(timeout)
     if instance_count(scenario) == 0:
         raise ExperimentError(f"{path}: the scenario has no obstacle to place")
-    return Experiment(name=data["name"], scenario=scenario, perception=data.get("perception", "unet"),
-                      model=data.get("model", "flawed"), planner_config=data.get("planner_config", "planner.yaml"),
-                      episode_steps=steps, source=os.path.abspath(path), text=text,
-                      unet_backend=data.get("unet_backend", DEFAULT_UNET_BACKEND))
+    return Experiment(
+        name=data["name"],
+        scenario=scenario,
+        perception=data.get("perception", "unet"),
+        model=data.get("model", "flawed"),
+        planner_config=data.get("planner_config", "planner.yaml"),
+        episode_steps=steps,
+        source=os.path.abspath(path),
+        text=text,
+        unet_backend=data.get("unet_backend", DEFAULT_UNET_BACKEND),
+    )

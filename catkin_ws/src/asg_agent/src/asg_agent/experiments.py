@@ -19,9 +19,9 @@ Writes OUT/tables.md (the tables, quoted in docs/experiments.md), OUT/attributed
 OUT/search_comparison.png,
 OUT/top_EXP.png, OUT/differential_{top,curve}.png and OUT/summary.json (every count, read back by the tests).
 """
+
 import argparse
 import json
-import math
 import os
 import sys
 from typing import Dict, List, Optional
@@ -57,6 +57,7 @@ def layout_distance(a, b, meshes) -> float:
     """[m] mean displacement between two layouts with obstacles matched one to one within each
     type (mesh) so that the total displacement is least (Hungarian assignment)."""
     from scipy.optimize import linear_sum_assignment
+
     a, b = np.asarray(a, float), np.asarray(b, float)
     total = 0.0
     for m in sorted(set(meshes)):
@@ -72,6 +73,7 @@ def layout_distances(a, others, meshes) -> np.ndarray:
     by trying every matching within a type where a type has at most 6 obstacles, by the
     Hungarian assignment per layout otherwise."""
     import itertools
+
     a, others = np.asarray(a, float), np.asarray(others, float).reshape(-1, len(meshes), 2)
     total = np.zeros(len(others))
     for m in sorted(set(meshes)):
@@ -82,6 +84,7 @@ def layout_distances(a, others, meshes) -> np.ndarray:
             total += d[:, np.arange(len(idx))[None, :], perms].sum(axis=2).min(axis=1)
         else:
             from scipy.optimize import linear_sum_assignment
+
             for k in range(len(others)):
                 r, c = linear_sum_assignment(d[k])
                 total[k] += d[k][r, c].sum()
@@ -103,8 +106,9 @@ def _is_new(rows, threshold: float) -> List[bool]:
 def distinct(rows, top: Optional[int], threshold: float, min_proxy: float = -np.inf) -> int:
     """Distinct layouts among the `top` highest-proxy rows (all of them when `top` is None) with
     proxy >= `min_proxy`, taken in rank order (_is_new)."""
-    ranked = sorted((r for r in rows if r["proxy"] is not None and r["proxy"] >= min_proxy),
-                    key=lambda r: -r["proxy"])[:top]
+    ranked = sorted((r for r in rows if r["proxy"] is not None and r["proxy"] >= min_proxy), key=lambda r: -r["proxy"])[
+        :top
+    ]
     return sum(_is_new(ranked, threshold))
 
 
@@ -139,7 +143,8 @@ def _perception_collision(r) -> bool:
 ATTRIBUTED_SCORES = (
     ("perception", f"perception findings (proxy >= {FINDING:g}, reference < {REFERENCE_CLEAR:g})", _perception_finding),
     ("differential", "differential findings (proxy - reference >= 1)", _differential),
-    ("collisions", "perception collisions (the reference drove through)", _perception_collision))
+    ("collisions", "perception collisions (the reference drove through)", _perception_collision),
+)
 
 
 def elapsed_hours(rows, budget: int) -> np.ndarray:
@@ -166,39 +171,74 @@ def attributed_comparison(load, section: dict, out: str):
         for rel in rels:
             camp, rows = load(rel)
             rows = sorted(rows, key=lambda r: r["job"])[:budget]
-            r = {"seed": camp["seed"], "name": camp["name"], "scenarios": len(rows), "export": rel,
-                 "hours": elapsed_hours(rows, budget), "max_proxy": max((x["proxy"] for x in rows if x["proxy"] is not None), default=None),
-                 "max_difference": max((x["proxy"] - _ref(x)["proxy"] for x in rows
-                                        if x["proxy"] is not None and _ref(x).get("proxy") is not None), default=None),
-                 "attributed": sum(bool(_ref(x)) for x in rows)}
+            r = {
+                "seed": camp["seed"],
+                "name": camp["name"],
+                "scenarios": len(rows),
+                "export": rel,
+                "hours": elapsed_hours(rows, budget),
+                "max_proxy": max((x["proxy"] for x in rows if x["proxy"] is not None), default=None),
+                "max_difference": max(
+                    (
+                        x["proxy"] - _ref(x)["proxy"]
+                        for x in rows
+                        if x["proxy"] is not None and _ref(x).get("proxy") is not None
+                    ),
+                    default=None,
+                ),
+                "attributed": sum(bool(_ref(x)) for x in rows),
+            }
             for key, _, pred in ATTRIBUTED_SCORES:
                 r[key] = np.cumsum([pred(x) for x in rows]).astype(int)
                 r[key + "_distinct"] = distinct_curve(rows, budget, thr, pred=pred)
             runs[arm].append(r)
     full = lambda rs: [r for r in rs if r["scenarios"] >= budget]  # noqa: E731
-    md = ["", f"### Search comparison on the fixed stack (round 3: Exp. 1, flawed U-Net, bf16, every scenario "
-          f"attributed; budget {budget} scenarios per run; distinct at {thr:g} m)", "",
-          "| method | seed | scenarios | " + " | ".join(f"{lab}: count / distinct" for _, lab, _ in ATTRIBUTED_SCORES)
-          + " | largest proxy | largest difference | wall time | scenarios per hour |",
-          "|---|---|---|" + "---|" * len(ATTRIBUTED_SCORES) + "---|---|---|---|"]
+    md = [
+        "",
+        f"### Search comparison on the fixed stack (round 3: Exp. 1, flawed U-Net, bf16, every scenario "
+        f"attributed; budget {budget} scenarios per run; distinct at {thr:g} m)",
+        "",
+        "| method | seed | scenarios | "
+        + " | ".join(f"{lab}: count / distinct" for _, lab, _ in ATTRIBUTED_SCORES)
+        + " | largest proxy | largest difference | wall time | scenarios per hour |",
+        "|---|---|---|" + "---|" * len(ATTRIBUTED_SCORES) + "---|---|---|---|",
+    ]
     for arm, rs in runs.items():
         summary[arm] = []
         for r in rs:
             h = float(r["hours"][-1]) if r["hours"] is not None else None
-            summary[arm].append({"seed": r["seed"], "name": r["name"], "export": r["export"], "scenarios": r["scenarios"],
-                                 "attributed": r["attributed"], "hours": h, "max_proxy": r["max_proxy"],
-                                 "max_difference": r["max_difference"],
-                                 **{k: int(r[k][-1]) for k, _, _ in ATTRIBUTED_SCORES},
-                                 **{k + "_distinct": int(r[k + "_distinct"][-1]) for k, _, _ in ATTRIBUTED_SCORES}})
-            md.append(f"| {arm} | {r['seed']} | {r['scenarios']}" + ("" if r["scenarios"] >= budget else " (running)") + " | "
-                      + " | ".join(f"{int(r[k][-1])} / {int(r[k + '_distinct'][-1])}" for k, _, _ in ATTRIBUTED_SCORES)
-                      + f" | {fmt(r['max_proxy'])} | {fmt(r['max_difference'], '+.2f')} | "
-                      + (f"{h * 60:.0f} min | {r['scenarios'] / h:,.0f}" if h else "- | -") + " |")
+            summary[arm].append(
+                {
+                    "seed": r["seed"],
+                    "name": r["name"],
+                    "export": r["export"],
+                    "scenarios": r["scenarios"],
+                    "attributed": r["attributed"],
+                    "hours": h,
+                    "max_proxy": r["max_proxy"],
+                    "max_difference": r["max_difference"],
+                    **{k: int(r[k][-1]) for k, _, _ in ATTRIBUTED_SCORES},
+                    **{k + "_distinct": int(r[k + "_distinct"][-1]) for k, _, _ in ATTRIBUTED_SCORES},
+                }
+            )
+            md.append(
+                f"| {arm} | {r['seed']} | {r['scenarios']}"
+                + ("" if r["scenarios"] >= budget else " (running)")
+                + " | "
+                + " | ".join(f"{int(r[k][-1])} / {int(r[k + '_distinct'][-1])}" for k, _, _ in ATTRIBUTED_SCORES)
+                + f" | {fmt(r['max_proxy'])} | {fmt(r['max_difference'], '+.2f')} | "
+                + (f"{h * 60:.0f} min | {r['scenarios'] / h:,.0f}" if h else "- | -")
+                + " |"
+            )
     rnd = full(runs.get("random", []))
     if len(runs) > 1 and rnd:
-        md += ["", "Mean over the seeds that reached the budget (min-max), and the ratio to random search's mean:", "",
-               "| method | seeds | " + " | ".join(f"{lab}, distinct" for _, lab, _ in ATTRIBUTED_SCORES) + " |",
-               "|---|---|" + "---|" * len(ATTRIBUTED_SCORES)]
+        md += [
+            "",
+            "Mean over the seeds that reached the budget (min-max), and the ratio to random search's mean:",
+            "",
+            "| method | seeds | " + " | ".join(f"{lab}, distinct" for _, lab, _ in ATTRIBUTED_SCORES) + " |",
+            "|---|---|" + "---|" * len(ATTRIBUTED_SCORES),
+        ]
         for arm, rs in runs.items():
             rs = full(rs)
             if not rs:
@@ -207,7 +247,9 @@ def attributed_comparison(load, section: dict, out: str):
             for k, _, _ in ATTRIBUTED_SCORES:
                 v = [int(r[k + "_distinct"][-1]) for r in rs]
                 base = np.mean([int(r[k + "_distinct"][-1]) for r in rnd])
-                cells.append(f"{np.mean(v):.1f} ({min(v)}-{max(v)})" + (f", {np.mean(v) / base:.2f}x" if base > 0 else ""))
+                cells.append(
+                    f"{np.mean(v):.1f} ({min(v)}-{max(v)})" + (f", {np.mean(v) / base:.2f}x" if base > 0 else "")
+                )
             md.append(f"| {arm} | {len(rs)} | " + " | ".join(cells) + " |")
     for measure, xlabel in (("scenarios", "scenarios spent"), ("hours", "wall time [h]")):
         attributed_figure(runs, budget, thr, measure, xlabel, os.path.join(out, f"attributed_{measure}.png"))
@@ -218,8 +260,10 @@ def attributed_figure(runs, budget, thr, measure, xlabel, out):
     """One panel per score, distinct finds against `measure` (scenarios or hours); an arm of
     several seeds as its mean over the budget with the min-max shaded (against hours: each seed)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, len(ATTRIBUTED_SCORES), figsize=(5.0 * len(ATTRIBUTED_SCORES), 4.0))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, (key, label, _) in zip(axes, ATTRIBUTED_SCORES):
@@ -236,8 +280,14 @@ def attributed_figure(runs, budget, thr, measure, xlabel, out):
                 x = np.arange(1, r["scenarios"] + 1) if measure == "scenarios" else r["hours"]
                 if x is None:
                     continue
-                ax.plot(x, r[key + "_distinct"], color=c, lw=1.2, ls=("-", "--", ":")[j % 3],
-                        label=f"{arm} (seed {r['seed']})")
+                ax.plot(
+                    x,
+                    r[key + "_distinct"],
+                    color=c,
+                    lw=1.2,
+                    ls=("-", "--", ":")[j % 3],
+                    label=f"{arm} (seed {r['seed']})",
+                )
         ax.set_xlabel(xlabel)
         ax.set_ylabel(f"distinct ({thr:g} m)")
         ax.set_title(label, fontsize=9)
@@ -247,8 +297,11 @@ def attributed_figure(runs, budget, thr, measure, xlabel, out):
         if measure == "scenarios":
             ax.set_xlim(0, budget)
     axes[0].legend(fontsize=7)
-    fig.suptitle(f"Exp. 1, flawed U-Net (bf16), every scenario attributed: distinct perception-attributable finds "
-                 f"against {xlabel}", fontsize=10)
+    fig.suptitle(
+        f"Exp. 1, flawed U-Net (bf16), every scenario attributed: distinct perception-attributable finds "
+        f"against {xlabel}",
+        fontsize=10,
+    )
     fig.tight_layout()
     fig.savefig(out, dpi=100)
     plt.close(fig)
@@ -267,13 +320,20 @@ def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]
     a, b = np.array([op["start_x"], op["start_y"]]), np.array([op["goal_x"], op["goal_y"]])
     out = []
     for i in range(0, len(rows), window):
-        chunk = rows[i:i + window]
+        chunk = rows[i : i + window]
         p = np.concatenate([np.asarray(r["positions"], float).reshape(-1, 2) for r in chunk])
         t = np.clip((p - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
         dist = np.linalg.norm(p - (a + t[:, None] * (b - a)), axis=1)
         edge = np.minimum(p, size - p).min(axis=1) < 2.0
-        out.append({"from": i + 1, "to": i + len(chunk), "ge3": int(sum((r["proxy"] or 0) >= 3 for r in chunk)),
-                    "at_edge": float(edge.mean()), "median_to_route_m": float(np.median(dist))})
+        out.append(
+            {
+                "from": i + 1,
+                "to": i + len(chunk),
+                "ge3": int(sum((r["proxy"] or 0) >= 3 for r in chunk)),
+                "at_edge": float(edge.mean()),
+                "median_to_route_m": float(np.median(dist)),
+            }
+        )
     return out
 
 
@@ -281,6 +341,7 @@ def scenario_of(campaign: dict, row: dict) -> dict:
     """The request of an exported row: the experiment's fixed attributes with its positions."""
     from asg_scenario.layout import with_positions
     from .experiment import load_experiment
+
     exp = load_experiment(os.path.join(REPO, "experiments", campaign["experiment"] + ".yaml"))
     return with_positions(exp.scenario, row["positions"])
 
@@ -288,15 +349,19 @@ def scenario_of(campaign: dict, row: dict) -> dict:
 def top_figure(campaign: dict, rows, out: str) -> dict:
     from asg_scenario.report import plot_run
     from .proxy import optimal_path, placed_mask
+
     r = max((x for x in rows if x["proxy"] is not None), key=lambda x: x["proxy"])
     req = scenario_of(campaign, r)
     removed_list = r.get("removed") or []
     opt = optimal_path(req, placed_mask(req, removed_list))
-    title = (f"{campaign['name']}, rank 1 of {len(rows)} (job {r['job']})\nproxy {r['proxy']:.2f} = 0.1 x vis "
-             f"{r['vis']:+.2f} + yaw term {r['yaw_term']:.2f} + PLR {r['plr']:.3f}^2\n{r['termination']} after "
-             f"{r['sim_time']:.1f} s, driven {r['path_length']:.1f} m, optimal {r['optimal_length']:.1f} m")
-    plot_run(out, req, r["trajectory_xy"], title=title, removed={(l, i) for l, i, *_ in removed_list},
-             optimal=opt.points)
+    title = (
+        f"{campaign['name']}, rank 1 of {len(rows)} (job {r['job']})\nproxy {r['proxy']:.2f} = 0.1 x vis "
+        f"{r['vis']:+.2f} + yaw term {r['yaw_term']:.2f} + PLR {r['plr']:.3f}^2\n{r['termination']} after "
+        f"{r['sim_time']:.1f} s, driven {r['path_length']:.1f} m, optimal {r['optimal_length']:.1f} m"
+    )
+    plot_run(
+        out, req, r["trajectory_xy"], title=title, removed={(l, i) for l, i, *_ in removed_list}, optimal=opt.points
+    )
     return {"job": r["job"], "proxy": r["proxy"], "figure": os.path.basename(out)}
 
 
@@ -315,30 +380,53 @@ def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_
     rw = np.array([r["reward"] for r in both])
     pt = np.array([r["proxy"] for r in both])
     pr = np.array([r["reference"]["proxy"] for r in both])
-    out = {"scenarios": len(rows), "both_runs": len(both), "under_test": test, "reference": ref,
-           "same": int((np.abs(rw) < 0.01).sum()),
-           "regressions": {f"{m:g}": int((rw >= m).sum()) for m in DIFF_MARGINS},
-           "reverse": {f"{m:g}": int((rw <= -m).sum()) for m in DIFF_MARGINS},
-           "max_reward": float(rw.max()) if len(rw) else None, "min_reward": float(rw.min()) if len(rw) else None,
-           "mean_reward": float(rw.mean()) if len(rw) else None,
-           "cross": {"test_ge3_ref_lt3": int(((pt >= 3) & (pr < 3)).sum()),
-                     "test_lt3_ref_ge3": int(((pt < 3) & (pr >= 3)).sum()),
-                     "both_ge3": int(((pt >= 3) & (pr >= 3)).sum()), "neither": int(((pt < 3) & (pr < 3)).sum())},
-           "terminations": {}, "windows": [], "top": []}
+    out = {
+        "scenarios": len(rows),
+        "both_runs": len(both),
+        "under_test": test,
+        "reference": ref,
+        "same": int((np.abs(rw) < 0.01).sum()),
+        "regressions": {f"{m:g}": int((rw >= m).sum()) for m in DIFF_MARGINS},
+        "reverse": {f"{m:g}": int((rw <= -m).sum()) for m in DIFF_MARGINS},
+        "max_reward": float(rw.max()) if len(rw) else None,
+        "min_reward": float(rw.min()) if len(rw) else None,
+        "mean_reward": float(rw.mean()) if len(rw) else None,
+        "cross": {
+            "test_ge3_ref_lt3": int(((pt >= 3) & (pr < 3)).sum()),
+            "test_lt3_ref_ge3": int(((pt < 3) & (pr >= 3)).sum()),
+            "both_ge3": int(((pt >= 3) & (pr >= 3)).sum()),
+            "neither": int(((pt < 3) & (pr < 3)).sum()),
+        },
+        "terminations": {},
+        "windows": [],
+        "top": [],
+    }
     for r in both:
         if r["reward"] >= DIFF_MARGINS[0]:
             key = f"{r['termination']} / {r['reference']['termination']}"
             out["terminations"][key] = out["terminations"].get(key, 0) + 1
     for i in range(0, len(both), window):
-        w = rw[i:i + window]
-        out["windows"].append({"from": i + 1, "to": i + len(w), "mean_reward": float(w.mean()),
-                               "regressions_1": int((w >= 1).sum()), "reverse_1": int((w <= -1).sum()),
-                               "same": int((np.abs(w) < 0.01).sum())})
+        w = rw[i : i + window]
+        out["windows"].append(
+            {
+                "from": i + 1,
+                "to": i + len(w),
+                "mean_reward": float(w.mean()),
+                "regressions_1": int((w >= 1).sum()),
+                "reverse_1": int((w <= -1).sum()),
+                "same": int((np.abs(w) < 0.01).sum()),
+            }
+        )
     for r in sorted(both, key=lambda r: -r["reward"])[:10]:
         f = r["reference"]
-        out["top"].append({"job": r["job"], "reward": r["reward"],
-                           "test": {k: r[k] for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")},
-                           "ref": {k: f.get(k) for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")}})
+        out["top"].append(
+            {
+                "job": r["job"],
+                "reward": r["reward"],
+                "test": {k: r[k] for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")},
+                "ref": {k: f.get(k) for k in ("proxy", "vis", "yaw_term", "plr", "termination", "sim_time")},
+            }
+        )
     out["divergence"] = divergence(campaign, both)
     if both:
         r = max(both, key=lambda r: r["reward"])
@@ -346,17 +434,29 @@ def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_
         req = scenario_of(campaign, r)
         from asg_scenario.report import plot_run
         from .proxy import optimal_path, placed_mask
+
         opt = optimal_path(req, placed_mask(req, r.get("removed") or []))
-        title = (f"{campaign['name']}, rank 1 by proxy difference (job {r['job']})\n{test}: proxy {r['proxy']:.2f} "
-                 f"(yaw {r['yaw_term']:.2f}, PLR {r['plr']:.3f}), {r['termination']}\n{ref}: proxy {f['proxy']:.2f} "
-                 f"(yaw {f['yaw_term']:.2f}, PLR {f['plr']:.3f}), {f['termination']}")
-        plot_run(top_png, req, r["trajectory_xy"], title=title, optimal=opt.points, label=f"{test} U-Net",
-                 removed={(l, i) for l, i, *_ in (r.get("removed") or [])},
-                 others=[(f"{ref} U-Net (reference)", f["trajectory_xy"], "tab:green")])
+        title = (
+            f"{campaign['name']}, rank 1 by proxy difference (job {r['job']})\n{test}: proxy {r['proxy']:.2f} "
+            f"(yaw {r['yaw_term']:.2f}, PLR {r['plr']:.3f}), {r['termination']}\n{ref}: proxy {f['proxy']:.2f} "
+            f"(yaw {f['yaw_term']:.2f}, PLR {f['plr']:.3f}), {f['termination']}"
+        )
+        plot_run(
+            top_png,
+            req,
+            r["trajectory_xy"],
+            title=title,
+            optimal=opt.points,
+            label=f"{test} U-Net",
+            removed={(l, i) for l, i, *_ in (r.get("removed") or [])},
+            others=[(f"{ref} U-Net (reference)", f["trajectory_xy"], "tab:green")],
+        )
         out["top_figure"] = os.path.basename(top_png)
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+
         fig, ax = plt.subplots(figsize=(6.4, 3.6))
         x = np.arange(1, len(rw) + 1)
         for m in DIFF_MARGINS:
@@ -377,14 +477,18 @@ def shadow_ahead(req: dict, xy: np.ndarray, i: int, reach: float = 20.0, half_wi
     """Whether an obstacle's cast shadow lies in the corridor `reach` m ahead of trajectory point i
     (heading from the point 1 s later), `half_width` m to either side: ground the camera sees."""
     from asg_scenario.votes import in_cast_shadow
+
     j = min(len(xy) - 1, i + 10)
     h = xy[j] - xy[i] if j > i else xy[i] - xy[max(0, i - 10)]
     if np.linalg.norm(h) < 1e-6:
         return False
     h = h / np.linalg.norm(h)
     n = np.array([-h[1], h[0]])
-    return any(in_cast_shadow(req, *(xy[i] + a * h + b * n)) for a in np.arange(1.0, reach + 0.5, 1.0)
-               for b in np.arange(-half_width, half_width + 0.5, 1.0))
+    return any(
+        in_cast_shadow(req, *(xy[i] + a * h + b * n))
+        for a in np.arange(1.0, reach + 0.5, 1.0)
+        for b in np.arange(-half_width, half_width + 0.5, 1.0)
+    )
 
 
 def divergence(campaign: dict, rows, gap: float = 0.5, lead: int = 20, seed: int = 0) -> dict:
@@ -410,13 +514,16 @@ def divergence(campaign: dict, rows, gap: float = 0.5, lead: int = 20, seed: int
                 out["control"]["shadow_ahead"] += shadow_ahead(req, a, int(rng.integers(0, n - 1)))
             continue
         out["parted"] += 1
-        sign = "test worse by >= 1" if r["reward"] >= 1 else ("reference worse by >= 1" if r["reward"] <= -1
-                                                               else "within 1")
+        sign = (
+            "test worse by >= 1"
+            if r["reward"] >= 1
+            else ("reference worse by >= 1" if r["reward"] <= -1 else "within 1")
+        )
         e = out["by_sign"].setdefault(sign, {"pairs": 0, "shadow_ahead": 0, "parted_at_m": []})
         e["pairs"] += 1
         i = max(0, int(far[0]) - lead)
         e["shadow_ahead"] += shadow_ahead(req, a, i)
-        e["parted_at_m"].append(float(np.linalg.norm(np.diff(a[:far[0] + 1], axis=0), axis=1).sum()))
+        e["parted_at_m"].append(float(np.linalg.norm(np.diff(a[: far[0] + 1], axis=0), axis=1).sum()))
     for e in out["by_sign"].values():
         e["median_parted_at_m"] = float(np.median(e.pop("parted_at_m")))
     return out
@@ -424,37 +531,62 @@ def divergence(campaign: dict, rows, gap: float = 0.5, lead: int = 20, seed: int
 
 def differential_tables(campaign: dict, d: dict) -> List[str]:
     t, f = d["under_test"], d["reference"]
-    md = ["", f"### Differential campaign ({campaign['name']}: {t} U-Net under test, {f} U-Net as reference, "
-              f"reward = proxy({t}) - proxy({f}))", "",
-          f"| scenarios (both runs) | same proxy (within 0.01) | {t} worse by >= 1 / 2 / 3 | {f} worse by >= 1 / 2 / 3 "
-          f"| largest difference | mean | {t} >= 3, {f} < 3 | {f} >= 3, {t} < 3 | both >= 3 |", "|" + "---|" * 9,
-          f"| {d['both_runs']} (of {d['scenarios']}) | {d['same']} | "
-          + " / ".join(str(v) for v in d["regressions"].values()) + " | "
-          + " / ".join(str(v) for v in d["reverse"].values()) + f" | {fmt(d['max_reward'])} | {fmt(d['mean_reward'], '+.3f')} | "
-          f"{d['cross']['test_ge3_ref_lt3']} | {d['cross']['test_lt3_ref_ge3']} | {d['cross']['both_ge3']} |",
-          "", f"Terminations ({t} / {f}) of the scenarios where {t} is worse by >= 1: "
-          + (", ".join(f"{k} {v}" for k, v in sorted(d["terminations"].items(), key=lambda kv: -kv[1])) or "none") + ".",
-          "", f"Where the two runs part (first point more than 0.5 m apart): {d['divergence']['parted']} pairs part, "
-          f"{d['divergence']['never']} drive the same path. An obstacle's cast shadow lay within 20 m ahead (10 m "
-          "wide corridor) 2 s before they part in:", "",
-          "| pairs that part | pairs | shadow ahead 2 s before parting | median distance driven when they part |",
-          "|---|---|---|---|"]
+    md = [
+        "",
+        f"### Differential campaign ({campaign['name']}: {t} U-Net under test, {f} U-Net as reference, "
+        f"reward = proxy({t}) - proxy({f}))",
+        "",
+        f"| scenarios (both runs) | same proxy (within 0.01) | {t} worse by >= 1 / 2 / 3 | {f} worse by >= 1 / 2 / 3 "
+        f"| largest difference | mean | {t} >= 3, {f} < 3 | {f} >= 3, {t} < 3 | both >= 3 |",
+        "|" + "---|" * 9,
+        f"| {d['both_runs']} (of {d['scenarios']}) | {d['same']} | "
+        + " / ".join(str(v) for v in d["regressions"].values())
+        + " | "
+        + " / ".join(str(v) for v in d["reverse"].values())
+        + f" | {fmt(d['max_reward'])} | {fmt(d['mean_reward'], '+.3f')} | "
+        f"{d['cross']['test_ge3_ref_lt3']} | {d['cross']['test_lt3_ref_ge3']} | {d['cross']['both_ge3']} |",
+        "",
+        f"Terminations ({t} / {f}) of the scenarios where {t} is worse by >= 1: "
+        + (", ".join(f"{k} {v}" for k, v in sorted(d["terminations"].items(), key=lambda kv: -kv[1])) or "none")
+        + ".",
+        "",
+        f"Where the two runs part (first point more than 0.5 m apart): {d['divergence']['parted']} pairs part, "
+        f"{d['divergence']['never']} drive the same path. An obstacle's cast shadow lay within 20 m ahead (10 m "
+        "wide corridor) 2 s before they part in:",
+        "",
+        "| pairs that part | pairs | shadow ahead 2 s before parting | median distance driven when they part |",
+        "|---|---|---|---|",
+    ]
     for sign, e in sorted(d["divergence"]["by_sign"].items()):
-        md.append(f"| {sign.replace('test', t).replace('reference', f)} | {e['pairs']} | {e['shadow_ahead']} "
-                  f"({100 * e['shadow_ahead'] / e['pairs']:.0f}%) | {e['median_parted_at_m']:.1f} m |")
+        md.append(
+            f"| {sign.replace('test', t).replace('reference', f)} | {e['pairs']} | {e['shadow_ahead']} "
+            f"({100 * e['shadow_ahead'] / e['pairs']:.0f}%) | {e['median_parted_at_m']:.1f} m |"
+        )
     c = d["divergence"]["control"]
-    md += [f"| control: a random point of the pairs that never part | {c['samples']} | {c['shadow_ahead']} "
-           + (f"({100 * c['shadow_ahead'] / c['samples']:.0f}%)" if c["samples"] else "") + " | - |",
-           "", f"| scenarios | mean difference | {t} worse by >= 1 | {f} worse by >= 1 | same proxy |", "|---|---|---|---|---|"]
+    md += [
+        f"| control: a random point of the pairs that never part | {c['samples']} | {c['shadow_ahead']} "
+        + (f"({100 * c['shadow_ahead'] / c['samples']:.0f}%)" if c["samples"] else "")
+        + " | - |",
+        "",
+        f"| scenarios | mean difference | {t} worse by >= 1 | {f} worse by >= 1 | same proxy |",
+        "|---|---|---|---|---|",
+    ]
     for w in d["windows"]:
-        md.append(f"| {w['from']}-{w['to']} | {w['mean_reward']:+.3f} | {w['regressions_1']} | {w['reverse_1']} | {w['same']} |")
-    md += ["", f"| job | difference | {t}: proxy (vis, yaw term, PLR), end | {f}: proxy (vis, yaw term, PLR), end |",
-           "|---|---|---|---|"]
+        md.append(
+            f"| {w['from']}-{w['to']} | {w['mean_reward']:+.3f} | {w['regressions_1']} | {w['reverse_1']} | {w['same']} |"
+        )
+    md += [
+        "",
+        f"| job | difference | {t}: proxy (vis, yaw term, PLR), end | {f}: proxy (vis, yaw term, PLR), end |",
+        "|---|---|---|---|",
+    ]
     for r in d["top"]:
         cells = []
         for s in (r["test"], r["ref"]):
-            cells.append(f"{fmt(s['proxy'])} ({fmt(s['vis'], '+.2f')}, {fmt(s['yaw_term'])}, {fmt(s['plr'], '.3f')}), "
-                         f"{s['termination']} at {fmt(s['sim_time'], '.1f')} s")
+            cells.append(
+                f"{fmt(s['proxy'])} ({fmt(s['vis'], '+.2f')}, {fmt(s['yaw_term'])}, {fmt(s['plr'], '.3f')}), "
+                f"{s['termination']} at {fmt(s['sim_time'], '.1f')} s"
+            )
         md.append(f"| {r['job']} | {r['reward']:+.2f} | {cells[0]} | {cells[1]} |")
     return md
 
@@ -482,9 +614,13 @@ def run(manifest_path: str, out: str) -> dict:
         md += lines[1:] + ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
     # -- Table 2 ---------------------------------------------------------------------------------
     if man.get("table2"):
-        md += ["### Table 2", "", "| experiment | scenarios | proxy >= 3 | >= 4 | largest | per 1,000: >= 3 / >= 4 "
-               "| paper (of 5,000): >= 3 / >= 4 / largest | paper per 1,000 | wall time | workers |",
-               "|" + "---|" * 10]
+        md += [
+            "### Table 2",
+            "",
+            "| experiment | scenarios | proxy >= 3 | >= 4 | largest | per 1,000: >= 3 / >= 4 "
+            "| paper (of 5,000): >= 3 / >= 4 / largest | paper per 1,000 | wall time | workers |",
+            "|" + "---|" * 10,
+        ]
     for exp, rel in (man.get("table2") or {}).items():
         camp, rows = load(rel)
         c = counts(rows)
@@ -493,11 +629,17 @@ def run(manifest_path: str, out: str) -> dict:
         p = PAPER.get(exp)
         summary["table2"][exp] = dict(c, export=rel, hours=hours)
         n = c["scenarios"]
-        md.append(f"| {exp} | {n} | {c['proxy_ge_3']} | {c['proxy_ge_4']} | {fmt(c['max_proxy'])} | "
-                  f"{1000 * c['proxy_ge_3'] / n:.0f} / {1000 * c['proxy_ge_4'] / n:.0f} | "
-                  + (f"{p[0]} / {p[1]} / {p[2]:.2f} | {1000 * p[0] / PAPER_SCENARIOS:.0f} / "
-                     f"{1000 * p[1] / PAPER_SCENARIOS:.0f}" if p else "- | -")
-                  + f" | {fmt(hours * 60 if hours else None, '.0f')} min | {workers or '-'} |")
+        md.append(
+            f"| {exp} | {n} | {c['proxy_ge_3']} | {c['proxy_ge_4']} | {fmt(c['max_proxy'])} | "
+            f"{1000 * c['proxy_ge_3'] / n:.0f} / {1000 * c['proxy_ge_4'] / n:.0f} | "
+            + (
+                f"{p[0]} / {p[1]} / {p[2]:.2f} | {1000 * p[0] / PAPER_SCENARIOS:.0f} / "
+                f"{1000 * p[1] / PAPER_SCENARIOS:.0f}"
+                if p
+                else "- | -"
+            )
+            + f" | {fmt(hours * 60 if hours else None, '.0f')} min | {workers or '-'} |"
+        )
         summary["table2"][exp]["top"] = top_figure(camp, rows, os.path.join(out, f"top_{exp}.png"))
     # -- search comparison -----------------------------------------------------------------------
     comp = man.get("comparison") or {}
@@ -505,39 +647,67 @@ def run(manifest_path: str, out: str) -> dict:
     thr = float((man.get("diversity") or {}).get("threshold_m", 5.0))
     curves = {}
     if comp.get("arms"):
-        md += ["", f"### Search comparison (Exp. 1, flawed U-Net, budget {budget} scenarios per run)", "",
-               "| method | runs (seeds) | proxy >= 3 at the budget: each run | mean | min-max | vs random (mean) "
-               f"| of which in scenarios {budget // 2 + 1}-{budget}: each run "
-               f"| distinct layouts among them ({thr:g} m, in the order found): each run | mean |",
-               "|---|---|---|---|---|---|---|---|---|"]
+        md += [
+            "",
+            f"### Search comparison (Exp. 1, flawed U-Net, budget {budget} scenarios per run)",
+            "",
+            "| method | runs (seeds) | proxy >= 3 at the budget: each run | mean | min-max | vs random (mean) "
+            f"| of which in scenarios {budget // 2 + 1}-{budget}: each run "
+            f"| distinct layouts among them ({thr:g} m, in the order found): each run | mean |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
         for arm, rels in comp["arms"].items():
             curves[arm] = []
             for rel in rels:
                 camp, rows = load(rel)
                 cv = ge3_curve(rows, budget)
-                curves[arm].append({"seed": camp["seed"], "scenarios": len(cv), "curve": cv,
-                                    "distinct": distinct_curve(rows, budget, thr)})
+                curves[arm].append(
+                    {
+                        "seed": camp["seed"],
+                        "scenarios": len(cv),
+                        "curve": cv,
+                        "distinct": distinct_curve(rows, budget, thr),
+                    }
+                )
         rnd = [c["curve"][-1] for c in curves.get("random", []) if c["scenarios"] >= budget]
         rnd_mean = float(np.mean(rnd)) if rnd else None
         for arm, runs in curves.items():
             full = [int(r["curve"][-1]) for r in runs if r["scenarios"] >= budget]
-            short = [f"{int(r['curve'][-1])} (s{r['seed']}, only {r['scenarios']})" for r in runs if r["scenarios"] < budget]
+            short = [
+                f"{int(r['curve'][-1])} (s{r['seed']}, only {r['scenarios']})" for r in runs if r["scenarios"] < budget
+            ]
             mean = float(np.mean(full)) if full else None
-            summary["comparison"][arm] = {"runs": [{"seed": r["seed"], "scenarios": r["scenarios"],
-                                                   "ge3": int(r["curve"][-1]),
-                                                   "distinct_ge3": int(r["distinct"][-1]),
-                                                   "ge3_second_half": (int(r["curve"][-1] - r["curve"][budget // 2 - 1])
-                                                                       if r["scenarios"] >= budget else None)}
-                                                  for r in runs], "mean_at_budget": mean}
-            md.append(f"| {arm} | {len(full)} ({', '.join(str(r['seed']) for r in runs)}) | "
-                      f"{', '.join(str(v) for v in full + short)} | {fmt(mean, '.1f')} | "
-                      + (f"{min(full)}-{max(full)}" if full else "-") + " | "
-                      + (f"{mean / rnd_mean:.2f}x" if mean is not None and rnd_mean else "-") + " | "
-                      + ", ".join(str(int(r["curve"][-1] - r["curve"][budget // 2 - 1])) for r in runs
-                                  if r["scenarios"] >= budget) + " | "
-                      + ", ".join(str(int(r["distinct"][-1])) for r in runs) + " | "
-                      + fmt(np.mean([r["distinct"][-1] for r in runs if r["scenarios"] >= budget])
-                            if full else None, ".1f") + " |")
+            summary["comparison"][arm] = {
+                "runs": [
+                    {
+                        "seed": r["seed"],
+                        "scenarios": r["scenarios"],
+                        "ge3": int(r["curve"][-1]),
+                        "distinct_ge3": int(r["distinct"][-1]),
+                        "ge3_second_half": (
+                            int(r["curve"][-1] - r["curve"][budget // 2 - 1]) if r["scenarios"] >= budget else None
+                        ),
+                    }
+                    for r in runs
+                ],
+                "mean_at_budget": mean,
+            }
+            md.append(
+                f"| {arm} | {len(full)} ({', '.join(str(r['seed']) for r in runs)}) | "
+                f"{', '.join(str(v) for v in full + short)} | {fmt(mean, '.1f')} | "
+                + (f"{min(full)}-{max(full)}" if full else "-")
+                + " | "
+                + (f"{mean / rnd_mean:.2f}x" if mean is not None and rnd_mean else "-")
+                + " | "
+                + ", ".join(
+                    str(int(r["curve"][-1] - r["curve"][budget // 2 - 1])) for r in runs if r["scenarios"] >= budget
+                )
+                + " | "
+                + ", ".join(str(int(r["distinct"][-1])) for r in runs)
+                + " | "
+                + fmt(np.mean([r["distinct"][-1] for r in runs if r["scenarios"] >= budget]) if full else None, ".1f")
+                + " |"
+            )
         comparison_figure(curves, budget, thr, os.path.join(out, "search_comparison.png"))
         # Where every run placed its obstacles as it went (the summary keeps each arm's first).
         dyn = {}
@@ -547,28 +717,39 @@ def run(manifest_path: str, out: str) -> dict:
                 dyn[(arm, k)] = (camp["name"], dynamics(camp, rows, budget))
         summary["dynamics"] = {arm: d for (arm, k), (_, d) in dyn.items() if k == 0}
         names = list(dyn)
-        md += ["", "### Search dynamics (every run, per 100 scenarios: proxy >= 3 / obstacles "
-               "within 2 m of the edge / median distance of obstacles from the start-goal line)", "",
-               "| scenarios | " + " | ".join(f"{dyn[a][0]}" for a in names) + " |",
-               "|---|" + "---|" * len(names)]
+        md += [
+            "",
+            "### Search dynamics (every run, per 100 scenarios: proxy >= 3 / obstacles "
+            "within 2 m of the edge / median distance of obstacles from the start-goal line)",
+            "",
+            "| scenarios | " + " | ".join(f"{dyn[a][0]}" for a in names) + " |",
+            "|---|" + "---|" * len(names),
+        ]
         for k in range(max(len(d) for _, d in dyn.values())):
             cells = []
             for a in names:
                 d = dyn[a][1]
-                cells.append(f"{d[k]['ge3']} / {100 * d[k]['at_edge']:.0f}% / {d[k]['median_to_route_m']:.1f} m"
-                             + ("" if d[k]["to"] - d[k]["from"] == 99 else f" (of {d[k]['to'] - d[k]['from'] + 1})")
-                             if k < len(d) else "-")
+                cells.append(
+                    f"{d[k]['ge3']} / {100 * d[k]['at_edge']:.0f}% / {d[k]['median_to_route_m']:.1f} m"
+                    + ("" if d[k]["to"] - d[k]["from"] == 99 else f" (of {d[k]['to'] - d[k]['from'] + 1})")
+                    if k < len(d)
+                    else "-"
+                )
             md.append(f"| {k * 100 + 1}-{(k + 1) * 100} | " + " | ".join(cells) + " |")
     # -- diversity -------------------------------------------------------------------------------
     div = man.get("diversity") or {}
     if div.get("arms") and curves:
         top, thr = int(div.get("top", 100)), float(div.get("threshold_m", 5.0))
         thrs = [float(t) for t in div.get("all_thresholds_m", [thr])]
-        md += ["", "### Diversity (a layout is distinct when its mean matched displacement from every higher-ranked "
-               "distinct one exceeds the threshold)", "",
-               "| method | run | distinct among the top %d at %g m | of which proxy >= 3 | proxy >= 3 in all "
-               "| distinct among all with proxy >= 3, at %s m |" % (top, thr, " / ".join(f"{t:g}" for t in thrs)),
-               "|---|---|---|---|---|---|"]
+        md += [
+            "",
+            "### Diversity (a layout is distinct when its mean matched displacement from every higher-ranked "
+            "distinct one exceeds the threshold)",
+            "",
+            "| method | run | distinct among the top %d at %g m | of which proxy >= 3 | proxy >= 3 in all "
+            "| distinct among all with proxy >= 3, at %s m |" % (top, thr, " / ".join(f"{t:g}" for t in thrs)),
+            "|---|---|---|---|---|---|",
+        ]
         for arm in div["arms"]:
             for rel in (comp["arms"].get(arm) or [])[:1]:
                 camp, rows = load(rel)
@@ -576,27 +757,47 @@ def run(manifest_path: str, out: str) -> dict:
                 n = distinct(rows, top, thr)
                 ge3 = sum((r["proxy"] or 0) >= 3 for r in rows)
                 n3 = {f"{t:g}": distinct(rows, None, t, min_proxy=3.0) for t in thrs}
-                summary["diversity"][arm] = {"export": rel, "distinct": n, "top": min(top, len(rows)),
-                                             "ge3": ge3, "distinct_ge3": n3}
-                md.append(f"| {arm} | {camp['name']} | {n} | {min(top, ge3)} | {ge3} | "
-                          + " / ".join(str(v) for v in n3.values()) + " |")
+                summary["diversity"][arm] = {
+                    "export": rel,
+                    "distinct": n,
+                    "top": min(top, len(rows)),
+                    "ge3": ge3,
+                    "distinct_ge3": n3,
+                }
+                md.append(
+                    f"| {arm} | {camp['name']} | {n} | {min(top, ge3)} | {ge3} | "
+                    + " / ".join(str(v) for v in n3.values())
+                    + " |"
+                )
     # -- flaw or layout, differential ------------------------------------------------------------
     if man.get("flaw_or_layout") and os.path.exists(os.path.join(base, man["flaw_or_layout"])):
         with open(os.path.join(base, man["flaw_or_layout"])) as f:
             fol = json.load(f)
         summary["flaw_or_layout"] = fol["summary"]
-        md += ["", "### Flaw or layout (the top scenarios of the Exp. 1 campaign, re-run)", "",
-               "| planner grid | stack | re-run | still >= 3 | dropped below 3 | median proxy (campaign's: flawed, paper grid) |",
-               "|---|---|---|---|---|---|"]
+        md += [
+            "",
+            "### Flaw or layout (the top scenarios of the Exp. 1 campaign, re-run)",
+            "",
+            "| planner grid | stack | re-run | still >= 3 | dropped below 3 | median proxy (campaign's: flawed, paper grid) |",
+            "|---|---|---|---|---|---|",
+        ]
         for s in fol["summary"]:
-            md.append(f"| {s['grid']} | {s['stack']} | {s['runs']} | {s['still_ge3']} | {s['dropped']} | "
-                      f"{fmt(s.get('median_proxy'))} ({fmt(s.get('campaign_median_proxy'))}) |")
+            md.append(
+                f"| {s['grid']} | {s['stack']} | {s['runs']} | {s['still_ge3']} | {s['dropped']} | "
+                f"{fmt(s.get('median_proxy'))} ({fmt(s.get('campaign_median_proxy'))}) |"
+            )
     diff = man.get("differential")
     if diff:
         diff = {"export": diff} if isinstance(diff, str) else dict(diff)
         camp, rows = load(diff["export"])
-        d = differential(camp, rows, diff.get("under_test", "under test"), diff.get("reference", "reference"),
-                         os.path.join(out, "differential_top.png"), os.path.join(out, "differential_curve.png"))
+        d = differential(
+            camp,
+            rows,
+            diff.get("under_test", "under test"),
+            diff.get("reference", "reference"),
+            os.path.join(out, "differential_top.png"),
+            os.path.join(out, "differential_curve.png"),
+        )
         d["export"] = diff["export"]
         summary["differential"] = d
         md += differential_tables(camp, d)
@@ -611,12 +812,16 @@ def comparison_figure(curves, budget: int, threshold: float, out: str):
     """Two panels against scenarios spent: finds with proxy >= 3, and the distinct layouts
     among them (distinct_curve); an arm of several seeds as its mean with the min-max shaded."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2), sharey=True)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for ax, key, ylabel in ((axes[0], "curve", "scenarios with proxy >= 3"),
-                            (axes[1], "distinct", f"distinct layouts among them ({threshold:g} m)")):
+    for ax, key, ylabel in (
+        (axes[0], "curve", "scenarios with proxy >= 3"),
+        (axes[1], "distinct", f"distinct layouts among them ({threshold:g} m)"),
+    ):
         for k, (arm, runs) in enumerate(curves.items()):
             c = colours[k % len(colours)]
             full = [r[key] for r in runs if r["scenarios"] >= budget]
@@ -633,8 +838,11 @@ def comparison_figure(curves, budget: int, threshold: float, out: str):
         ax.grid(alpha=0.3)
         ax.tick_params(labelleft=True)
     axes[0].legend(fontsize=7)
-    fig.suptitle("Exp. 1, flawed U-Net: difficult scenarios found against scenarios spent (left), "
-                 "and how many of them are distinct layouts (right)", fontsize=9)
+    fig.suptitle(
+        "Exp. 1, flawed U-Net: difficult scenarios found against scenarios spent (left), "
+        "and how many of them are distinct layouts (right)",
+        fontsize=9,
+    )
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)
@@ -663,11 +871,14 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="asg_agent.experiments", description=__doc__.split("\n\n")[0])
     p.add_argument("--manifest", default=os.path.join(REPO, "results", "experiments.yaml"))
     p.add_argument("--out", default=os.path.join(REPO, "docs", "experiments"))
-    p.add_argument("--docs", default=os.path.join(REPO, "docs", "experiments.md"),
-                   help="rewrite the block between the tables markers of this file ('' to leave it)")
+    p.add_argument(
+        "--docs",
+        default=os.path.join(REPO, "docs", "experiments.md"),
+        help="rewrite the block between the tables markers of this file ('' to leave it)",
+    )
     a = p.parse_args(argv)
     try:
-        s = run(a.manifest, a.out)
+        run(a.manifest, a.out)
     except (OSError, ValueError, KeyError) as e:
         print(f"experiments: {e}", file=sys.stderr)
         return 2

@@ -5,6 +5,7 @@ with the layout, and returns results out of order after a seeded random number o
 real workers of uneven speed. Everything is a function of the request: the same request gives
 the same outcome, whichever fake worker runs it.
 """
+
 import math
 from typing import Dict, List
 
@@ -31,11 +32,21 @@ def fake_run(request: dict, gain: float = 0.8) -> Outcome:
     t = np.arange(n) / 60.0
     yaw = np.unwrap(np.arctan2(np.gradient(xy[:, 1]), np.gradient(xy[:, 0])))
     traj = np.stack([t, xy[:, 0], xy[:, 1], yaw, np.gradient(yaw, t) if n > 1 else 0 * t], axis=1)
-    vis = [1.0 if math.hypot(i["x"] - 50, i["y"] - 50) < 40 else 0.3
-           for l in request["structural"]["layouts"] for i in l["instances"]]
+    vis = [
+        1.0 if math.hypot(i["x"] - 50, i["y"] - 50) < 40 else 0.3
+        for l in request["structural"]["layouts"]
+        for i in l["instances"]
+    ]
     term = "SUCCESS" if math.isfinite(path.length) else "STUCK_TIMEOUT"
-    return Outcome(job=-1, worker="", termination=term, sim_time=float(t[-1]), num_control_msgs=int(t[-1] * 20),
-                   trajectory=traj.astype(np.float32), visibility=vis)
+    return Outcome(
+        job=-1,
+        worker="",
+        termination=term,
+        sim_time=float(t[-1]),
+        num_control_msgs=int(t[-1] * 20),
+        trajectory=traj.astype(np.float32),
+        visibility=vis,
+    )
 
 
 class FakePool(Pool):

@@ -22,12 +22,12 @@ discs and arcs along their rims, so a *tangent visibility graph* holds it exactl
 Dijkstra on this graph gives the exact length (to floating point). The tests check it against
 analytic detours and a fine grid search, with discs clear of the goal circle and reaching into it.
 """
+
 import heapq
 import math
 from dataclasses import dataclass
 from typing import List, Optional, Sequence, Tuple
 
-import numpy as np
 
 EPS = 1e-9
 
@@ -87,15 +87,23 @@ def _bitangents(a, b):
         off = math.acos((a.r - b.r) / d)
         for s in (1, -1):
             ang = base + s * off
-            out.append(((a.x + a.r * math.cos(ang), a.y + a.r * math.sin(ang)),
-                        (b.x + b.r * math.cos(ang), b.y + b.r * math.sin(ang))))
+            out.append(
+                (
+                    (a.x + a.r * math.cos(ang), a.y + a.r * math.sin(ang)),
+                    (b.x + b.r * math.cos(ang), b.y + b.r * math.sin(ang)),
+                )
+            )
     # Inner tangents: only for disjoint discs.
     if d > a.r + b.r:
         off = math.acos((a.r + b.r) / d)
         for s in (1, -1):
             ang = base + s * off
-            out.append(((a.x + a.r * math.cos(ang), a.y + a.r * math.sin(ang)),
-                        (b.x - b.r * math.cos(ang), b.y - b.r * math.sin(ang))))
+            out.append(
+                (
+                    (a.x + a.r * math.cos(ang), a.y + a.r * math.sin(ang)),
+                    (b.x - b.r * math.cos(ang), b.y - b.r * math.sin(ang)),
+                )
+            )
     return out
 
 
@@ -125,8 +133,9 @@ def _arc_free(d_index, a0, a1, discs, r):
     return True
 
 
-def shortest_path(start: Sequence[float], goal: Sequence[float], goal_radius: float,
-                  discs: Sequence[Disc]) -> OptimalPath:
+def shortest_path(
+    start: Sequence[float], goal: Sequence[float], goal_radius: float, discs: Sequence[Disc]
+) -> OptimalPath:
     """Exact shortest path from `start` to the circle of `goal_radius` around `goal`.
 
     A disc that holds the start or the goal centre is shrunk to just exclude it (the worker's
@@ -244,8 +253,10 @@ def shortest_path(start: Sequence[float], goal: Sequence[float], goal_radius: fl
             # The way the graph went round: the span whose arc length is the edge's weight.
             span = ccw if abs(d.r * ccw - (dist[b] - dist[a])) < 1e-6 else ccw - 2 * math.pi
             n = max(1, int(abs(span) * d.r / 0.5))
-            pts += [(d.x + d.r * math.cos(a0 + span * i / n), d.y + d.r * math.sin(a0 + span * i / n))
-                    for i in range(1, n + 1)]
+            pts += [
+                (d.x + d.r * math.cos(a0 + span * i / n), d.y + d.r * math.sin(a0 + span * i / n))
+                for i in range(1, n + 1)
+            ]
         else:
             pts.append(nodes[b])
     return OptimalPath(dist[1], pts)
@@ -257,6 +268,7 @@ def obstacle_discs(scenario: dict, clearance: float, placed_mask: Optional[Seque
     placed_mask: per flattened instance, False for obstacles the worker did not place (removed
     by a safety radius); by default the safety radii are applied here as the worker does."""
     from asg_scenario.catalogue import MESHES, TRAVERSABLE_HEIGHT
+
     op = scenario["operational"]
     out = []
     k = 0

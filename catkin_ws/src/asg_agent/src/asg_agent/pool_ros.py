@@ -7,6 +7,7 @@ job comes back to the campaign as an ERROR (which re-queues it on another worker
 answer of that goal is ignored, so no scenario is counted twice. A worker whose action server
 is gone is left out until it comes back.
 """
+
 import math
 import queue
 import threading
@@ -24,10 +25,18 @@ from asg_scenario.convert import to_goal_msg
 
 from .campaign import Outcome, Pool
 
-STATUS = {GoalStatus.PENDING: "PENDING", GoalStatus.ACTIVE: "ACTIVE", GoalStatus.PREEMPTED: "PREEMPTED",
-          GoalStatus.SUCCEEDED: "SUCCEEDED", GoalStatus.ABORTED: "ABORTED", GoalStatus.REJECTED: "REJECTED",
-          GoalStatus.PREEMPTING: "PREEMPTING", GoalStatus.RECALLING: "RECALLING", GoalStatus.RECALLED: "RECALLED",
-          GoalStatus.LOST: "LOST"}
+STATUS = {
+    GoalStatus.PENDING: "PENDING",
+    GoalStatus.ACTIVE: "ACTIVE",
+    GoalStatus.PREEMPTED: "PREEMPTED",
+    GoalStatus.SUCCEEDED: "SUCCEEDED",
+    GoalStatus.ABORTED: "ABORTED",
+    GoalStatus.REJECTED: "REJECTED",
+    GoalStatus.PREEMPTING: "PREEMPTING",
+    GoalStatus.RECALLING: "RECALLING",
+    GoalStatus.RECALLED: "RECALLED",
+    GoalStatus.LOST: "LOST",
+}
 
 
 def result_to_outcome(job: int, worker: str, result, wall: float) -> Outcome:
@@ -37,16 +46,29 @@ def result_to_outcome(job: int, worker: str, result, wall: float) -> Outcome:
         q = s.pose.orientation
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         traj[k] = (s.t, s.pose.position.x, s.pose.position.y, yaw, s.twist.angular.z)
-    return Outcome(job=job, worker=worker, termination=result.termination_name or "ERROR", error=result.error,
-                   sim_time=result.sim_time, num_control_msgs=result.num_control_msgs, trajectory=traj,
-                   visibility=[float(v) for v in result.obstacle_visibility],
-                   removed=[[r.layout_index, r.instance_index, r.reason] for r in result.removed_obstacles],
-                   collision_with=result.collision_with, wall_time=wall)
+    return Outcome(
+        job=job,
+        worker=worker,
+        termination=result.termination_name or "ERROR",
+        error=result.error,
+        sim_time=result.sim_time,
+        num_control_msgs=result.num_control_msgs,
+        trajectory=traj,
+        visibility=[float(v) for v in result.obstacle_visibility],
+        removed=[[r.layout_index, r.instance_index, r.reason] for r in result.removed_obstacles],
+        collision_with=result.collision_with,
+        wall_time=wall,
+    )
 
 
 class WorkerPool(Pool):
-    def __init__(self, namespaces: List[str], answer_timeout: float = 300.0, connect_timeout: float = 120.0,
-                 ack_timeout: float = 20.0):
+    def __init__(
+        self,
+        namespaces: List[str],
+        answer_timeout: float = 300.0,
+        connect_timeout: float = 120.0,
+        ack_timeout: float = 20.0,
+    ):
         self.answer_timeout = answer_timeout
         # A goal the worker's action server has not acknowledged this long after it went out was
         # dropped (sent to a scene worker that had just respawned): re-queued without waiting for
@@ -69,8 +91,10 @@ class WorkerPool(Pool):
         for ns, c in self.clients.items():
             left = max(0.1, deadline - time.time())
             if not c.wait_for_server(rospy.Duration(left)):
-                raise RuntimeError(f"no scene worker answers at {ns}/run_scenario after {connect_timeout:.0f} s "
-                                   f"(is `roslaunch launch/worker.launch ns:={ns.strip('/')}` running?)")
+                raise RuntimeError(
+                    f"no scene worker answers at {ns}/run_scenario after {connect_timeout:.0f} s "
+                    f"(is `roslaunch launch/worker.launch ns:={ns.strip('/')}` running?)"
+                )
         rospy.loginfo("pool: %d worker(s): %s", len(self.clients), ", ".join(self.clients))
 
     @property
@@ -117,8 +141,15 @@ class WorkerPool(Pool):
             if result is None or status not in (GoalStatus.SUCCEEDED, GoalStatus.ABORTED):
                 with self.lock:  # the server went away (LOST): let it come back before the next goal
                     self.down[worker] = time.time()
-                self.results.put(Outcome(job=job, worker=worker, termination="ERROR", wall_time=wall,
-                                         error=f"{worker}: goal ended {STATUS.get(status, status)} without a result"))
+                self.results.put(
+                    Outcome(
+                        job=job,
+                        worker=worker,
+                        termination="ERROR",
+                        wall_time=wall,
+                        error=f"{worker}: goal ended {STATUS.get(status, status)} without a result",
+                    )
+                )
             else:
                 self.results.put(result_to_outcome(job, worker, result, wall))
 
@@ -137,6 +168,7 @@ class WorkerPool(Pool):
         """The master's record of the worker's scene_worker node ("" if it has none)."""
         try:
             import rosgraph
+
             return rosgraph.Master(rospy.get_name()).lookupNode(worker.rstrip("/") + "/scene_worker")
         except Exception:  # noqa: BLE001 - unregistered (dead) or the master unreachable
             return ""
@@ -162,8 +194,11 @@ class WorkerPool(Pool):
         now = time.time()
         dead = set(self._dead_workers(now))
         with self.lock:
-            waiting = [(ns, state) for ns, (job, state, t0) in self.busy.items()
-                       if now - t0 > self.ack_timeout and state["handle"] is not None]
+            waiting = [
+                (ns, state)
+                for ns, (job, state, t0) in self.busy.items()
+                if now - t0 > self.ack_timeout and state["handle"] is not None
+            ]
         # Outside self.lock (see transition): goals the server never acknowledged.
         unacked = {ns for ns, state in waiting if state["handle"].get_comm_state() == CommState.WAITING_FOR_GOAL_ACK}
         with self.lock:
@@ -181,8 +216,7 @@ class WorkerPool(Pool):
                 self.down[ns] = now
                 stale.append(state["handle"])
                 rospy.logerr("pool: %s, job %d: %s: re-queued", ns, job, why)
-                out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0,
-                                   error=f"{ns}: {why}"))
+                out.append(Outcome(job=job, worker=ns, termination="ERROR", wall_time=now - t0, error=f"{ns}: {why}"))
         for gh in stale:  # outside self.lock (see transition)
             if gh is not None:
                 gh.cancel()

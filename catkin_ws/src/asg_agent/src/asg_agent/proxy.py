@@ -19,6 +19,7 @@ drive), so a run that stopped early is never rewarded for stopping, and the term
 in the store so that an analysis can tell collisions and timeouts apart. ERROR is not a scenario
 outcome (the stack or the infrastructure failed): it gets no proxy and is not a transition.
 """
+
 import math
 from dataclasses import asdict, dataclass
 from typing import Optional, Sequence
@@ -29,8 +30,16 @@ from asg_scenario.catalogue import MESHES, TRAVERSABLE_HEIGHT, VEHICLE_HALF_WIDT
 
 from .optimal_path import obstacle_discs, shortest_path
 
-TERMINATIONS = ("SUCCESS", "COLLISION", "FLIPPED", "SIM_TIMEOUT", "IDLING_TIMEOUT", "STUCK_TIMEOUT",
-                "OUT_OF_BOUNDS", "ERROR")
+TERMINATIONS = (
+    "SUCCESS",
+    "COLLISION",
+    "FLIPPED",
+    "SIM_TIMEOUT",
+    "IDLING_TIMEOUT",
+    "STUCK_TIMEOUT",
+    "OUT_OF_BOUNDS",
+    "ERROR",
+)
 
 
 @dataclass(frozen=True)
@@ -104,8 +113,11 @@ def placed_mask(scenario: dict, removed) -> list:
     """Per flattened instance, False for those the worker removed; `removed` holds
     (layout, instance[, reason]) entries as results and the store give them."""
     gone = {(int(r[0]), int(r[1])) for r in removed}
-    return [(li, ii) not in gone for li, l in enumerate(scenario["structural"]["layouts"])
-            for ii in range(len(l["instances"]))]
+    return [
+        (li, ii) not in gone
+        for li, l in enumerate(scenario["structural"]["layouts"])
+        for ii in range(len(l["instances"]))
+    ]
 
 
 def optimal_path(scenario: dict, placed: Optional[Sequence[bool]] = None, config: ProxyConfig = ProxyConfig()):
@@ -115,13 +127,22 @@ def optimal_path(scenario: dict, placed: Optional[Sequence[bool]] = None, config
     return shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"], discs)
 
 
-def optimal_length(scenario: dict, placed: Optional[Sequence[bool]] = None,
-                   config: ProxyConfig = ProxyConfig()) -> float:
+def optimal_length(
+    scenario: dict, placed: Optional[Sequence[bool]] = None, config: ProxyConfig = ProxyConfig()
+) -> float:
     return optimal_path(scenario, placed, config).length
 
 
-def compute(scenario: dict, t, xy, yaw_rate, visibility, termination: str,
-            placed: Optional[Sequence[bool]] = None, config: ProxyConfig = ProxyConfig()) -> Optional[ProxyTerms]:
+def compute(
+    scenario: dict,
+    t,
+    xy,
+    yaw_rate,
+    visibility,
+    termination: str,
+    placed: Optional[Sequence[bool]] = None,
+    config: ProxyConfig = ProxyConfig(),
+) -> Optional[ProxyTerms]:
     """Every term of eq. 3 for one run; None for termination ERROR."""
     if termination not in TERMINATIONS:
         raise ValueError(f"termination {termination!r}: one of {', '.join(TERMINATIONS)}")

@@ -8,6 +8,7 @@ annealed from beta0 to 1 over `beta_steps` sampled batches (TD3Search sets it to
 batches, so the correction is complete by its end). New transitions get the largest priority
 stored at the time, so each is replayed soon.
 """
+
 from typing import Dict
 
 import numpy as np
@@ -47,11 +48,11 @@ class SumTree:
         if len(values) != self.capacity or not np.all(np.isfinite(values)) or np.any(values < 0):
             raise ValueError("set_all: one finite priority >= 0 per leaf")
         self.tree[:] = 0.0
-        self.tree[self.size:self.size + self.capacity] = values
+        self.tree[self.size : self.size + self.capacity] = values
         n = self.size
         while n > 1:
             lo = n // 2
-            self.tree[lo:n] = self.tree[n:2 * n:2] + self.tree[n + 1:2 * n:2]
+            self.tree[lo:n] = self.tree[n : 2 * n : 2] + self.tree[n + 1 : 2 * n : 2]
             n = lo
 
     def get(self, index: int) -> float:
@@ -77,8 +78,16 @@ class SumTree:
 class PrioritizedReplay:
     """Ring buffer of (state, action, reward, next_state, not_done) with proportional priorities."""
 
-    def __init__(self, capacity: int, state_dim: int, action_dim: int, alpha: float = 0.6,
-                 beta0: float = 0.4, beta_steps: int = 10000, eps: float = 1e-3):
+    def __init__(
+        self,
+        capacity: int,
+        state_dim: int,
+        action_dim: int,
+        alpha: float = 0.6,
+        beta0: float = 0.4,
+        beta_steps: int = 10000,
+        eps: float = 1e-3,
+    ):
         self.capacity, self.alpha, self.beta0, self.beta_steps, self.eps = capacity, alpha, beta0, beta_steps, eps
         self.tree = SumTree(capacity)
         self.state = np.zeros((capacity, state_dim), np.float32)
@@ -102,7 +111,7 @@ class PrioritizedReplay:
         self.state[i], self.action[i], self.reward[i] = s, a, r
         self.next_state[i], self.not_done[i] = s2, 0.0 if done else 1.0
         # The largest priority stored now (before this slot is overwritten), 1 in an empty buffer.
-        stored = self.tree.tree[self.tree.size:self.tree.size + self.count]
+        stored = self.tree.tree[self.tree.size : self.tree.size + self.count]
         self.tree.set(i, float(stored.max()) if self.count else 1.0)
         self.ptr = (self.ptr + 1) % self.capacity
         self.count = min(self.count + 1, self.capacity)
@@ -112,42 +121,55 @@ class PrioritizedReplay:
             raise ValueError("sampling from an empty replay buffer")
         total = self.tree.total
         bounds = np.linspace(0.0, total, batch + 1)
-        idx = np.array([self.tree.find(min(rng.uniform(bounds[k], bounds[k + 1]), np.nextafter(total, 0)))
-                        for k in range(batch)])
+        idx = np.array(
+            [self.tree.find(min(rng.uniform(bounds[k], bounds[k + 1]), np.nextafter(total, 0))) for k in range(batch)]
+        )
         p = np.array([self.tree.get(i) for i in idx]) / total
         beta = self.beta()
         # Normalised by the largest weight any stored transition could get (the smallest priority).
-        leaves = self.tree.tree[self.tree.size:self.tree.size + self.count]
+        leaves = self.tree.tree[self.tree.size : self.tree.size + self.count]
         p_min = leaves[leaves > 0].min() / total
         w = (self.count * p) ** (-beta) / (self.count * p_min) ** (-beta)
         self.samples += 1
-        return {"index": idx, "weight": w.astype(np.float32)[:, None], "state": self.state[idx],
-                "action": self.action[idx], "reward": self.reward[idx], "next_state": self.next_state[idx],
-                "not_done": self.not_done[idx]}
+        return {
+            "index": idx,
+            "weight": w.astype(np.float32)[:, None],
+            "state": self.state[idx],
+            "action": self.action[idx],
+            "reward": self.reward[idx],
+            "next_state": self.next_state[idx],
+            "not_done": self.not_done[idx],
+        }
 
     def update_priorities(self, idx, td_errors):
         for i, e in zip(idx, np.abs(np.asarray(td_errors, dtype=np.float64)).ravel()):
             p = float(e) + self.eps
             self.max_priority = max(self.max_priority, p)
-            self.tree.set(int(i), p ** self.alpha)
+            self.tree.set(int(i), p**self.alpha)
 
     def state_dict(self) -> dict:
         n = self.count
-        return {"capacity": self.capacity, "ptr": self.ptr, "count": n, "samples": self.samples,
-                "beta_steps": self.beta_steps,
-                "max_priority": self.max_priority, "priorities": self.tree.tree[self.tree.size:self.tree.size + self.capacity].copy(),
-                "state": self.state[:n].copy() if n < self.capacity else self.state.copy(),
-                "action": self.action[:n].copy() if n < self.capacity else self.action.copy(),
-                "reward": self.reward[:n].copy() if n < self.capacity else self.reward.copy(),
-                "next_state": self.next_state[:n].copy() if n < self.capacity else self.next_state.copy(),
-                "not_done": self.not_done[:n].copy() if n < self.capacity else self.not_done.copy()}
+        return {
+            "capacity": self.capacity,
+            "ptr": self.ptr,
+            "count": n,
+            "samples": self.samples,
+            "beta_steps": self.beta_steps,
+            "max_priority": self.max_priority,
+            "priorities": self.tree.tree[self.tree.size : self.tree.size + self.capacity].copy(),
+            "state": self.state[:n].copy() if n < self.capacity else self.state.copy(),
+            "action": self.action[:n].copy() if n < self.capacity else self.action.copy(),
+            "reward": self.reward[:n].copy() if n < self.capacity else self.reward.copy(),
+            "next_state": self.next_state[:n].copy() if n < self.capacity else self.next_state.copy(),
+            "not_done": self.not_done[:n].copy() if n < self.capacity else self.not_done.copy(),
+        }
 
     def load_state_dict(self, d: dict):
         if d["capacity"] != self.capacity:
             raise ValueError(f"replay buffer capacity {d['capacity']} in the checkpoint, {self.capacity} configured")
         n = d["count"]
         for key in ("state", "action", "reward", "next_state", "not_done"):
-            getattr(self, key)[:len(d[key])] = d[key]
+            getattr(self, key)[: len(d[key])] = d[key]
         self.ptr, self.count, self.samples, self.max_priority = d["ptr"], n, d["samples"], d["max_priority"]
         # A resumed campaign keeps the schedule it began with, whatever budget it resumes with.
         self.beta_steps = d.get("beta_steps", self.beta_steps)

@@ -14,6 +14,7 @@ by default) and shuts it down afterwards; with --worker it uses a running one, c
 can read from the parameter server and refuses a mismatch. --bag records the worker's topics
 during the run with rosbag.
 """
+
 import argparse
 import json
 import os
@@ -31,9 +32,23 @@ from .experiment import LEGACY_UNET_BACKEND
 from .proxy import compute, placed_mask
 from .store import Store, unpack_trajectory
 
-BAG_TOPICS = ["camera/image", "camera/labels_gt", "labels", "camera/depth", "camera/camera_info", "odom", "tf",
-              "tick", "cmd", "planner/state", "planner/path", "planner/votes", "planner/lookahead",
-              "planner/vehicle_grid", "scenario"]
+BAG_TOPICS = [
+    "camera/image",
+    "camera/labels_gt",
+    "labels",
+    "camera/depth",
+    "camera/camera_info",
+    "odom",
+    "tf",
+    "tick",
+    "cmd",
+    "planner/state",
+    "planner/path",
+    "planner/votes",
+    "planner/lookahead",
+    "planner/vehicle_grid",
+    "scenario",
+]
 
 
 def compare(stored: np.ndarray, replayed: np.ndarray) -> float:
@@ -45,6 +60,7 @@ def compare(stored: np.ndarray, replayed: np.ndarray) -> float:
 
 def stack_mismatch(worker: str, settings: dict) -> list:
     import rospy
+
     out = []
     want = settings.get("perception")
     has_seg = rospy.has_param(f"{worker}/segmenter/model")
@@ -53,12 +69,17 @@ def stack_mismatch(worker: str, settings: dict) -> list:
             out.append(f"the campaign ran the U-Net, {worker} has no segmenter")
         else:
             model = rospy.get_param(f"{worker}/segmenter/model")
-            if os.path.splitext(os.path.basename(str(model)))[0] != os.path.splitext(os.path.basename(settings.get("model", "")))[0]:
+            if (
+                os.path.splitext(os.path.basename(str(model)))[0]
+                != os.path.splitext(os.path.basename(settings.get("model", "")))[0]
+            ):
                 out.append(f"the campaign ran model {settings.get('model')!r}, {worker} runs {model!r}")
             # Campaigns from before the backend was recorded ran the then default, channels_last;
             # a segmenter without the parameter predates bf16 too.
-            backend, ran = rospy.get_param(f"{worker}/segmenter/backend", LEGACY_UNET_BACKEND), settings.get(
-                "unet_backend", LEGACY_UNET_BACKEND)
+            backend, ran = (
+                rospy.get_param(f"{worker}/segmenter/backend", LEGACY_UNET_BACKEND),
+                settings.get("unet_backend", LEGACY_UNET_BACKEND),
+            )
             if backend != ran:
                 out.append(f"the campaign's stack runs the {ran!r} inference backend, {worker} runs {backend!r}")
     elif want == "ground_truth" and has_seg:
@@ -72,6 +93,7 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
     import rospy
     from .bag_scene import plans_fading, scene_messages
     from .proxy import optimal_path, placed_mask
+
     removed = {(l, i) for l, i, _ in o.removed}
     opt = optimal_path(request, placed_mask(request, o.removed))
     with rosbag.Bag(path, "a") as bag:
@@ -84,16 +106,24 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
         for _, msg, t in bag.read_messages(topics=[f"{worker}/scenario"]):
             first_stamp = msg.base_stamp
         when = rospy.Time.from_sec(start)
-        for suffix, msg in scene_messages(request, removed, opt.points, o.trajectory[::6, 1:3].tolist(),
-                                          first_stamp or rospy.Time()):
+        for suffix, msg in scene_messages(
+            request, removed, opt.points, o.trajectory[::6, 1:3].tolist(), first_stamp or rospy.Time()
+        ):
             bag.write(f"{worker}/{suffix}", msg, when)
         # Labels in colour (ground tan, obstacle red, sky blue, void grey) for the image panel.
         palette = np.array([[170, 150, 110], [220, 40, 40], [110, 160, 230], [128, 128, 128]], np.uint8)
         coloured = []
         for _, msg, t in bag.read_messages(topics=[f"{worker}/labels", f"{worker}/camera/labels_gt"]):
             lab = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width)
-            img = type(msg)(header=msg.header, height=msg.height, width=msg.width, encoding="rgb8",
-                            is_bigendian=0, step=msg.width * 3, data=palette[np.minimum(lab, 3)].tobytes())
+            img = type(msg)(
+                header=msg.header,
+                height=msg.height,
+                width=msg.width,
+                encoding="rgb8",
+                is_bigendian=0,
+                step=msg.width * 3,
+                data=palette[np.minimum(lab, 3)].tobytes(),
+            )
             coloured.append((img, t))
         for img, t in coloured:
             bag.write(f"{worker}/replay/labels_rgb", img, t)
@@ -105,19 +135,35 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
 def check_reference_run(a, request, ref: dict, o: Outcome) -> int:
     """The replay of a row's reference run against what attribution stored of it: termination,
     proxy, and the positions it keeps (every 6th sample, to 1 cm)."""
-    terms = compute(request, o.trajectory[:, 0], o.trajectory[:, 1:3], o.trajectory[:, 4], o.visibility,
-                    o.termination, placed_mask(request, o.removed)) if o.termination != "ERROR" else None
+    terms = (
+        compute(
+            request,
+            o.trajectory[:, 0],
+            o.trajectory[:, 1:3],
+            o.trajectory[:, 4],
+            o.visibility,
+            o.termination,
+            placed_mask(request, o.removed),
+        )
+        if o.termination != "ERROR"
+        else None
+    )
     proxy = terms.proxy if terms else None
     kept = np.asarray(kept_xy(o.trajectory), float).reshape(-1, 2)
     stored = np.asarray(ref.get("trajectory_xy") or [], float).reshape(-1, 2)
     diff = float(np.abs(kept - stored).max()) if kept.shape == stored.shape and len(stored) else float("inf")
-    print(f"largest position difference to the stored reference run: {diff:.6f} m ({len(kept)} vs {len(stored)} kept samples)")
-    print(f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored reference "
-          f"{ref.get('proxy') if ref.get('proxy') is None else round(ref['proxy'], 6)}")
+    print(
+        f"largest position difference to the stored reference run: {diff:.6f} m ({len(kept)} vs {len(stored)} kept samples)"
+    )
+    print(
+        f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored reference "
+        f"{ref.get('proxy') if ref.get('proxy') is None else round(ref['proxy'], 6)}"
+    )
     if a.bag:
         print(f"bag: {os.path.abspath(a.bag)}")
     same_proxy = (proxy is None and ref.get("proxy") is None) or (
-        proxy is not None and ref.get("proxy") is not None and abs(proxy - ref["proxy"]) <= 1e-6)
+        proxy is not None and ref.get("proxy") is not None and abs(proxy - ref["proxy"]) <= 1e-6
+    )
     ok = diff <= 0.011 and same_proxy and o.termination == ref.get("termination")
     print("REPRODUCED (the reference run)" if ok else "NOT REPRODUCED (the reference run)")
     return 0 if ok else 1
@@ -130,8 +176,12 @@ def main(argv=None):
     p.add_argument("job", nargs="?", type=int)
     p.add_argument("--scenario", help="a scenario YAML file instead of a stored scenario")
     p.add_argument("--worker", default="", help="a running worker's namespace (default: bring one up)")
-    p.add_argument("--perception", default="", help="unet or ground_truth (with --scenario, default unet); for a stored "
-                   "scenario of an attributed campaign, ground_truth replays its reference run and checks it")
+    p.add_argument(
+        "--perception",
+        default="",
+        help="unet or ground_truth (with --scenario, default unet); for a stored "
+        "scenario of an attributed campaign, ground_truth replays its reference run and checks it",
+    )
     p.add_argument("--model", default="", help="with --scenario: the U-Net model (default flawed)")
     p.add_argument("--port", type=int, default=11390, help="ROS master port of the worker replay brings up")
     p.add_argument("--bag", default="", help="record the run's topics into this bag")
@@ -163,14 +213,20 @@ def main(argv=None):
             return 2
         request = json.loads(row["request"])
     # An attributed row replayed on the ground-truth stack is checked against its reference run.
-    a.against_reference = bool(row is not None and row["reference"] and a.perception == "ground_truth"
-                               and settings.get("perception") != "ground_truth")
+    a.against_reference = bool(
+        row is not None
+        and row["reference"]
+        and a.perception == "ground_truth"
+        and settings.get("perception") != "ground_truth"
+    )
     launched = None
     if not a.worker:
-        stack = {"perception": a.perception or settings.get("perception", "unet"),
-                 "model": a.model or settings.get("model", "flawed"),
-                 "unet_backend": settings.get("unet_backend", LEGACY_UNET_BACKEND),
-                 "planner_config": settings.get("planner_config", "planner.yaml")}
+        stack = {
+            "perception": a.perception or settings.get("perception", "unet"),
+            "model": a.model or settings.get("model", "flawed"),
+            "unet_backend": settings.get("unet_backend", LEGACY_UNET_BACKEND),
+            "planner_config": settings.get("planner_config", "planner.yaml"),
+        }
         launched = bring_up_worker(stack, a.port)
         settings = {}  # the worker is the stored stack by construction
         a.worker = "/replay_worker"
@@ -191,13 +247,22 @@ def bring_up_worker(stack: dict, port: int):
     planner = stack["planner_config"]
     if os.sep not in planner:
         import rospkg
+
         planner = os.path.join(rospkg.RosPack().get_path("asg_planner"), "config", planner)
     os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     os.environ.setdefault("ROS_HOSTNAME", "127.0.0.1")
-    cmd = ["roslaunch", "-p", str(port), os.path.join(repo, "launch", "worker.launch"), "ns:=replay_worker",
-           f"perception:={stack['perception']}", f"model:={stack['model']}", f"unet_backend:={stack.get('unet_backend', LEGACY_UNET_BACKEND)}",
-           f"planner_config:={planner}",
-           "odom_every_tick:=true"]  # a replay is for looking at: every tick's pose in the bag
+    cmd = [
+        "roslaunch",
+        "-p",
+        str(port),
+        os.path.join(repo, "launch", "worker.launch"),
+        "ns:=replay_worker",
+        f"perception:={stack['perception']}",
+        f"model:={stack['model']}",
+        f"unet_backend:={stack.get('unet_backend', LEGACY_UNET_BACKEND)}",
+        f"planner_config:={planner}",
+        "odom_every_tick:=true",
+    ]  # a replay is for looking at: every tick's pose in the bag
     print(f"replay: bringing up a worker: {' '.join(cmd[3:])}", file=sys.stderr)
     return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
 
@@ -208,13 +273,18 @@ def run_replay(a, request, row, settings) -> int:
     from asg_msgs.msg import RunScenarioAction
     from asg_scenario.convert import to_goal_msg
     from .pool_ros import result_to_outcome
+
     rospy.init_node("replay", anonymous=True, disable_signals=True)
     worker = "/" + a.worker.strip("/")
     if settings and not a.force:
         problems = stack_mismatch(worker, settings)
         if problems:
-            print("replay: the worker's stack is not the campaign's: " + "; ".join(problems)
-                  + " (launch worker.launch with the campaign's perception and model, or --force)", file=sys.stderr)
+            print(
+                "replay: the worker's stack is not the campaign's: "
+                + "; ".join(problems)
+                + " (launch worker.launch with the campaign's perception and model, or --force)",
+                file=sys.stderr,
+            )
             return 2
     client = actionlib.SimpleActionClient(worker + "/run_scenario", RunScenarioAction)
     if not client.wait_for_server(rospy.Duration(90)):
@@ -223,15 +293,22 @@ def run_replay(a, request, row, settings) -> int:
     bag = None
     if a.bag:
         topics = [f"{worker}/{t}" for t in BAG_TOPICS]
-        bag = subprocess.Popen(["rosbag", "record", "-O", a.bag, "--lz4"] + topics, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
+        bag = subprocess.Popen(
+            ["rosbag", "record", "-O", a.bag, "--lz4"] + topics,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            preexec_fn=os.setsid,
+        )
         # The run starts only once the recorder subscribes to the worker's topics.
         import rosgraph
+
         master, deadline = rosgraph.Master("/replay"), time.time() + 60
         while time.time() < deadline:
             subs = dict(master.getSystemState()[1])
-            if all(any(n.startswith("/record") for n in subs.get(f"{worker}/{t}", []))
-                   for t in ("odom", "camera/image", "planner/state")):
+            if all(
+                any(n.startswith("/record") for n in subs.get(f"{worker}/{t}", []))
+                for t in ("odom", "camera/image", "planner/state")
+            ):
                 break
             time.sleep(0.2)
         time.sleep(0.5)
@@ -246,8 +323,9 @@ def run_replay(a, request, row, settings) -> int:
         # The recorder (a child of the `rosbag` wrapper) may still be closing the file: wait for
         # it to leave FILE.active and write the index.
         deadline = time.time() + 60
-        while time.time() < deadline and (os.path.exists(a.bag + ".active") or not os.path.exists(a.bag)
-                                          or os.path.getsize(a.bag) == 0):
+        while time.time() < deadline and (
+            os.path.exists(a.bag + ".active") or not os.path.exists(a.bag) or os.path.getsize(a.bag) == 0
+        ):
             time.sleep(0.2)
         time.sleep(0.5)
     if result is None:
@@ -256,10 +334,13 @@ def run_replay(a, request, row, settings) -> int:
     o: Outcome = result_to_outcome(0, worker, result, time.time() - t0)
     if a.bag:
         add_scene_to_bag(a.bag, worker, request, o)
-    print(f"replayed {request.get('name', '')} on {worker}: {o.termination} after {o.sim_time:.2f} s "
-          f"({o.wall_time:.1f} s wall){': ' + o.error if o.error else ''}")
+    print(
+        f"replayed {request.get('name', '')} on {worker}: {o.termination} after {o.sim_time:.2f} s "
+        f"({o.wall_time:.1f} s wall){': ' + o.error if o.error else ''}"
+    )
     if a.figure:
         from asg_scenario.report import plot_run
+
         plot_run(a.figure, request, o.trajectory[:, 1:3].tolist(), title=f"replay of {request.get('name', '')}")
     if row is None:
         return 0 if o.termination != "ERROR" else 1
@@ -267,14 +348,28 @@ def run_replay(a, request, row, settings) -> int:
         return check_reference_run(a, request, json.loads(row["reference"]), o)
     stored = unpack_trajectory(row["trajectory"])
     diff = compare(stored, o.trajectory)
-    terms = compute(request, o.trajectory[:, 0], o.trajectory[:, 1:3], o.trajectory[:, 4], o.visibility,
-                    o.termination, placed_mask(request, o.removed)) if o.termination != "ERROR" else None
+    terms = (
+        compute(
+            request,
+            o.trajectory[:, 0],
+            o.trajectory[:, 1:3],
+            o.trajectory[:, 4],
+            o.visibility,
+            o.termination,
+            placed_mask(request, o.removed),
+        )
+        if o.termination != "ERROR"
+        else None
+    )
     proxy = terms.proxy if terms else None
     same_proxy = (proxy is None and row["proxy"] is None) or (
-        proxy is not None and row["proxy"] is not None and abs(proxy - row["proxy"]) <= 1e-6)
+        proxy is not None and row["proxy"] is not None and abs(proxy - row["proxy"]) <= 1e-6
+    )
     print(f"largest position difference to the stored run: {diff:.6f} m ({len(o.trajectory)} vs {len(stored)} samples)")
-    print(f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored "
-          f"{row['proxy'] if row['proxy'] is None else round(row['proxy'], 6)}")
+    print(
+        f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored "
+        f"{row['proxy'] if row['proxy'] is None else round(row['proxy'], 6)}"
+    )
     if a.bag:
         print(f"bag: {os.path.abspath(a.bag)}")
     ok = diff < 0.01 and same_proxy and o.termination == row["termination"]

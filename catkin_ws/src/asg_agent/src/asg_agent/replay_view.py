@@ -5,6 +5,7 @@
 Plays the bag into rviz with rviz/replay.rviz on a virtual display and grabs the screen when
 the given fraction of the bag has played (default: the end). Needs a ROS master (roscore).
 """
+
 import argparse
 import os
 import shutil
@@ -15,14 +16,16 @@ import time
 
 import numpy as np
 
-RVIZ_CONFIG = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "rviz",
-                                           "replay.rviz"))
+RVIZ_CONFIG = os.path.abspath(
+    os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "rviz", "replay.rviz")
+)
 
 
 def colour_counts(png: str) -> dict:
     """Pixels of the replay's colours: votes (yellow to red), current plan (green), driven
     trajectory (magenta), obstacles (dark green, dark red)."""
     from PIL import Image
+
     a = np.asarray(Image.open(png).convert("RGB")).astype(int)
     r, g, b = a[..., 0], a[..., 1], a[..., 2]
     return {
@@ -33,28 +36,41 @@ def colour_counts(png: str) -> dict:
     }
 
 
-def screenshot(bag: str, out: str, ns: str = "worker_0", at: float = 1.0, display: str = ":71",
-               size=(1280, 860)) -> dict:
+def screenshot(
+    bag: str, out: str, ns: str = "worker_0", at: float = 1.0, display: str = ":71", size=(1280, 860)
+) -> dict:
     import rosbag
     from PIL import ImageGrab
+
     with rosbag.Bag(bag) as b:
         duration = b.get_end_time() - b.get_start_time()
-    xvfb = subprocess.Popen(["Xvfb", display, "-screen", "0", f"{size[0]}x{size[1]}x24", "-nolisten", "tcp"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    xvfb = subprocess.Popen(
+        ["Xvfb", display, "-screen", "0", f"{size[0]}x{size[1]}x24", "-nolisten", "tcp"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     procs = [xvfb]
     try:
         time.sleep(1.5)
         env = dict(os.environ, DISPLAY=display, LIBGL_ALWAYS_SOFTWARE="1")
-        rviz = subprocess.Popen(["rosrun", "rviz", "rviz", "-d", RVIZ_CONFIG, f"/tf:=/{ns}/tf",
-                                 "__name:=replay_view_rviz"], env=env, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
+        rviz = subprocess.Popen(
+            ["rosrun", "rviz", "rviz", "-d", RVIZ_CONFIG, f"/tf:=/{ns}/tf", "__name:=replay_view_rviz"],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            preexec_fn=os.setsid,
+        )
         procs.append(rviz)
         time.sleep(8.0)  # rviz up and subscribed
         # -d: wait after advertising, so that rviz is connected before the first messages (the
         # scene and the driven trajectory are published once, at the bag's start).
         delay = 3.0
-        play = subprocess.Popen(["rosbag", "play", "-d", str(delay), bag], stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
+        play = subprocess.Popen(
+            ["rosbag", "play", "-d", str(delay), bag],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            preexec_fn=os.setsid,
+        )
         procs.append(play)
         if at >= 1.0:
             play.wait(timeout=duration * 3 + 60)

@@ -13,6 +13,7 @@ its replay command. `perception` replays a stored scenario on the campaign's sta
 ground-truth reference stack and draws both side by side, as the paper's Figures 9-10 (ROS is
 needed for the replays: asg_agent.replay_ros brings up the workers).
 """
+
 import argparse
 import html
 import json
@@ -34,6 +35,7 @@ def draw_snapshot(ax, bag_path: str, t: float, ns: str = "worker_0", legend: boo
     returns a one-line description (frames voted, voted vertices, plans)."""
     import rosbag
     from matplotlib.patches import Circle, Rectangle
+
     w = "/" + ns.strip("/")
     votes, plans, state, odom, scene = None, [], None, None, None
     with rosbag.Bag(bag_path) as bag:
@@ -41,10 +43,14 @@ def draw_snapshot(ax, bag_path: str, t: float, ns: str = "worker_0", legend: boo
         if base is None:
             raise ValueError(f"{bag_path}: no {w}/scenario message (not a replay bag of {w}?)")
         until = base + t
-        for topic, msg, _ in bag.read_messages(topics=[f"{w}/planner/votes", f"{w}/planner/path",
-                                                       f"{w}/planner/state", f"{w}/odom", f"{w}/replay/scene"]):
-            stamp = msg.header.stamp.to_sec() if hasattr(msg, "header") else (
-                msg.markers[0].header.stamp.to_sec() if msg.markers else 0.0)
+        for topic, msg, _ in bag.read_messages(
+            topics=[f"{w}/planner/votes", f"{w}/planner/path", f"{w}/planner/state", f"{w}/odom", f"{w}/replay/scene"]
+        ):
+            stamp = (
+                msg.header.stamp.to_sec()
+                if hasattr(msg, "header")
+                else (msg.markers[0].header.stamp.to_sec() if msg.markers else 0.0)
+            )
             if topic.endswith("replay/scene"):
                 scene = msg
             elif stamp > until + 1e-9:
@@ -61,16 +67,24 @@ def draw_snapshot(ax, bag_path: str, t: float, ns: str = "worker_0", legend: boo
         for m in votes.markers:
             side = m.scale.x
             for p, c in zip(m.points, m.colors):
-                ax.add_patch(Rectangle((p.x - side / 2, p.y - side / 2), side, side, color=(c.r, c.g, c.b),
-                                       alpha=max(0.2, c.a), lw=0))
+                ax.add_patch(
+                    Rectangle(
+                        (p.x - side / 2, p.y - side / 2), side, side, color=(c.r, c.g, c.b), alpha=max(0.2, c.a), lw=0
+                    )
+                )
     if scene:
         for m in scene.markers:
             if m.ns == "obstacles":
-                ax.add_patch(Circle((m.pose.position.x, m.pose.position.y), m.scale.x / 2,
-                                    color=(m.color.r, m.color.g, m.color.b), alpha=m.color.a))
+                ax.add_patch(
+                    Circle(
+                        (m.pose.position.x, m.pose.position.y),
+                        m.scale.x / 2,
+                        color=(m.color.r, m.color.g, m.color.b),
+                        alpha=m.color.a,
+                    )
+                )
             else:
-                ax.plot([p.x for p in m.points], [p.y for p in m.points], ":",
-                        color=(m.color.r, m.color.g, m.color.b))
+                ax.plot([p.x for p in m.points], [p.y for p in m.points], ":", color=(m.color.r, m.color.g, m.color.b))
     for k, pts in enumerate(plans[:-1][-6:]):
         ax.plot(*zip(*pts), "-", color="tab:cyan", alpha=0.25 + 0.1 * k, lw=1)
     if plans:
@@ -93,8 +107,10 @@ def draw_snapshot(ax, bag_path: str, t: float, ns: str = "worker_0", legend: boo
 
 def snapshot(bag_path: str, out: str, t: float, ns: str = "worker_0"):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
     what = draw_snapshot(ax, bag_path, t, ns)
     ax.set_title(f"planner at t = {t:.2f} s" + (f": {what}" if what else ""), fontsize=9)
@@ -106,6 +122,7 @@ def snapshot(bag_path: str, out: str, t: float, ns: str = "worker_0"):
 def bag_image(bag_path: str, topic: str, t: float, ns: str) -> "np.ndarray":
     """The last image of `ns`/`topic` stamped at or before simulated time `t` (H x W x 3)."""
     import rosbag
+
     w = "/" + ns.strip("/")
     img = None
     with rosbag.Bag(bag_path) as bag:
@@ -121,6 +138,7 @@ def bag_image(bag_path: str, topic: str, t: float, ns: str) -> "np.ndarray":
 def bag_end(bag_path: str, ns: str):
     """([s] simulated time of the last odometry of `ns` after the run's start, its (x, y) [m])."""
     import rosbag
+
     w = "/" + ns.strip("/")
     last = None
     with rosbag.Bag(bag_path) as bag:
@@ -137,8 +155,10 @@ def pair_figure(rows, times, out: str, title: str, ns: str = "replay_worker", ce
     each of `times` (votes, plans, look-ahead, vehicle), then the camera frame and the labels the
     planner voted from at the last time. Top-down panels show `half` metres around `centre`."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     n = len(times) + 2
     fig, axes = plt.subplots(len(rows), n, figsize=(3.3 * n, 3.8 * len(rows)), squeeze=False)
     for i, (label, bag) in enumerate(rows):
@@ -165,25 +185,46 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
     at 5, 2.5 and 0.5 s before the end of the run under test (its collision, for a collision)."""
     import subprocess
     import tempfile
+
     work = work or tempfile.mkdtemp(prefix="perception_replay_")
     os.makedirs(work, exist_ok=True)
     bags = {}
     for kind, extra in (("test", []), ("reference", ["--perception", "ground_truth"])):
         bags[kind] = os.path.join(work, f"{campaign}-{job}-{kind}.bag")
-        cmd = [sys.executable, "-m", "asg_agent.replay_ros", store, campaign, str(job), "--bag", bags[kind],
-               "--port", str(port)] + extra
+        cmd = [
+            sys.executable,
+            "-m",
+            "asg_agent.replay_ros",
+            store,
+            campaign,
+            str(job),
+            "--bag",
+            bags[kind],
+            "--port",
+            str(port),
+        ] + extra
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         if not os.path.isfile(bags[kind]):
-            raise ValueError(f"replay of {campaign} job {job} ({kind}) wrote no bag: {p.stdout[-800:]} {p.stderr[-800:]}")
+            raise ValueError(
+                f"replay of {campaign} job {job} ({kind}) wrote no bag: {p.stdout[-800:]} {p.stderr[-800:]}"
+            )
         print(p.stdout.strip(), file=sys.stderr)
     end, where = bag_end(bags["test"], "replay_worker")
     times = [max(0.5, end - d) for d in (5.0, 2.5, 0.5)]
     from .store import Store
+
     row = next(r for r in Store(store).rows(campaign, job - 1) if r["job"] == job)
     ref = json.loads(row["reference"]) if row["reference"] else {}
-    title = (f"{campaign} job {job}: under test {row['termination']} (proxy {row['proxy']:.2f}"
-             + (f", with {row['collision_with']}" if row["collision_with"] else "") + ")"
-             + (f"; ground-truth reference {ref.get('termination')} (proxy {ref['proxy']:.2f})" if ref.get("proxy") is not None else ""))
+    title = (
+        f"{campaign} job {job}: under test {row['termination']} (proxy {row['proxy']:.2f}"
+        + (f", with {row['collision_with']}" if row["collision_with"] else "")
+        + ")"
+        + (
+            f"; ground-truth reference {ref.get('termination')} (proxy {ref['proxy']:.2f})"
+            if ref.get("proxy") is not None
+            else ""
+        )
+    )
     pair_figure([("under test", bags["test"]), ("ground truth", bags["reference"])], times, out, title, centre=where)
     return {"bags": bags, "times": times, "out": out}
 
@@ -191,34 +232,44 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
 def _baseline_html(experiment: str) -> str:
     """The baseline of the campaign's experiment (results/baseline/<exp>.json), if measured."""
     from .baseline import REPO
+
     path = os.path.join(REPO, "results", "baseline", f"{experiment}.json")
     if not os.path.isfile(path):
-        return (f"<h2>Baseline</h2><p>No baseline of {html.escape(experiment)} yet: "
-                f"<code>bash scripts/baseline.sh {html.escape(experiment)}</code> measures it.</p>")
+        return (
+            f"<h2>Baseline</h2><p>No baseline of {html.escape(experiment)} yet: "
+            f"<code>bash scripts/baseline.sh {html.escape(experiment)}</code> measures it.</p>"
+        )
     with open(path) as f:
         b = json.load(f)
     rows = "".join(
         f"<tr><td>{html.escape(k)}</td><td>{g['runs']}</td><td>{100 * g['share_ge3']:.1f} %</td>"
         f"<td>{g['median_yaw_term']:.3f} / {g['p90_yaw_term']:.3f}</td><td>{g['median_plr']:.3f} / {g['p90_plr']:.3f}</td>"
-        f"<td>{g['collisions']}</td></tr>" for k, g in b["stacks"].items())
-    return (f"<h2>Baseline: the stacks on seeded random layouts of {html.escape(experiment)}</h2>"
-            "<table><tr><th>stack</th><th>runs</th><th>proxy &gt;= 3</th><th>yaw term median / p90</th>"
-            f"<th>PLR median / p90</th><th>collisions</th></tr>{rows}</table>")
+        f"<td>{g['collisions']}</td></tr>"
+        for k, g in b["stacks"].items()
+    )
+    return (
+        f"<h2>Baseline: the stacks on seeded random layouts of {html.escape(experiment)}</h2>"
+        "<table><tr><th>stack</th><th>runs</th><th>proxy &gt;= 3</th><th>yaw term median / p90</th>"
+        f"<th>PLR median / p90</th><th>collisions</th></tr>{rows}</table>"
+    )
 
 
 def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10) -> str:
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from .analysis import top_down
     from .store import Store
+
     store = Store(store_path)
     c = store.campaign(campaign)
     if c is None:
         raise ValueError(f"no campaign {campaign!r} in {store_path}")
     s = store.summary(campaign, top=top)
-    rows = list(store.db.execute("SELECT job, proxy, termination FROM scenarios WHERE campaign = ? ORDER BY job",
-                                 (campaign,)))
+    rows = list(
+        store.db.execute("SELECT job, proxy, termination FROM scenarios WHERE campaign = ? ORDER BY job", (campaign,))
+    )
     os.makedirs(out_dir, exist_ok=True)
     proxy = np.array([r[1] if r[1] is not None else np.nan for r in rows])
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.4))
@@ -226,8 +277,12 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
     axes[0].plot(np.fmax.accumulate(np.nan_to_num(proxy, nan=-np.inf)), "-", color="tab:red", label="best so far")
     window = 50
     if len(proxy) >= window:
-        axes[0].plot(np.arange(window - 1, len(proxy)), np.convolve(np.nan_to_num(proxy), np.ones(window) / window,
-                                                                     "valid"), color="tab:blue", label=f"mean of {window}")
+        axes[0].plot(
+            np.arange(window - 1, len(proxy)),
+            np.convolve(np.nan_to_num(proxy), np.ones(window) / window, "valid"),
+            color="tab:blue",
+            label=f"mean of {window}",
+        )
     axes[0].axhline(3, color="0.7", ls=":")
     axes[0].set_xlabel("scenario (job)")
     axes[0].set_ylabel("proxy")
@@ -246,23 +301,27 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
         png = f"job{r['job']}.png"
         top_down(store, campaign, r["job"], os.path.join(out_dir, png))
         cmd = f"rosrun asg_agent replay {store_path} {campaign} {r['job']}"
-        items.append(f"<tr><td>{r['job']}</td><td>{r['id']}</td><td>{r['episode']}.{r['step']}</td>"
-                     f"<td><b>{r['proxy']:.3f}</b></td><td>{r['vis']:+.2f}</td><td>{r['yaw_term']:.3f}</td>"
-                     f"<td>{r['plr']:.3f}</td><td>{html.escape(r['termination'])}</td>"
-                     f"<td><a href='{png}'><img src='{png}' width='220'></a></td><td><code>{html.escape(cmd)}</code></td></tr>")
+        items.append(
+            f"<tr><td>{r['job']}</td><td>{r['id']}</td><td>{r['episode']}.{r['step']}</td>"
+            f"<td><b>{r['proxy']:.3f}</b></td><td>{r['vis']:+.2f}</td><td>{r['yaw_term']:.3f}</td>"
+            f"<td>{r['plr']:.3f}</td><td>{html.escape(r['termination'])}</td>"
+            f"<td><a href='{png}'><img src='{png}' width='220'></a></td><td><code>{html.escape(cmd)}</code></td></tr>"
+        )
     terms = "".join(f"<tr><td>{html.escape(k)}</td><td>{v}</td></tr>" for k, v in sorted(s["terminations"].items()))
     settings = json.loads(c["settings"])
     best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
     attribution = ""
     if s["attributed"]:
-        attribution = (f"<h2>Attribution</h2><p>{s['attributed']} scenarios also ran on the reference stack "
-                       f"(ground-truth labels, the same planner and follower). Of the {s['proxy_ge_3']} with proxy "
-                       f"&gt;= 3, <b>{s['perception_ge3']}</b> are the perception's (reference proxy &lt; 2) and "
-                       f"<b>{s['stack_ge3']}</b> the stack's own (reference &gt;= 3); proxy &minus; reference "
-                       f"&gt;= 1 on {s['differential_ge1']}. Reward: {html.escape(str(settings.get('reward', 'proxy')))}. "
-                       f"Collisions (the paper's proxy does not score them): <b>{s['perception_collisions']}</b> "
-                       f"the perception's (the reference stack drove through the same scene), "
-                       f"<b>{s['stack_collisions']}</b> the stack's (the reference collided too).</p>")
+        attribution = (
+            f"<h2>Attribution</h2><p>{s['attributed']} scenarios also ran on the reference stack "
+            f"(ground-truth labels, the same planner and follower). Of the {s['proxy_ge_3']} with proxy "
+            f"&gt;= 3, <b>{s['perception_ge3']}</b> are the perception's (reference proxy &lt; 2) and "
+            f"<b>{s['stack_ge3']}</b> the stack's own (reference &gt;= 3); proxy &minus; reference "
+            f"&gt;= 1 on {s['differential_ge1']}. Reward: {html.escape(str(settings.get('reward', 'proxy')))}. "
+            f"Collisions (the paper's proxy does not score them): <b>{s['perception_collisions']}</b> "
+            f"the perception's (the reference stack drove through the same scene), "
+            f"<b>{s['stack_collisions']}</b> the stack's (the reference collided too).</p>"
+        )
     baseline = _baseline_html(c["experiment"])
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
 <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;

@@ -7,6 +7,7 @@ proxy term. `summary` turns such files into the flaw-or-layout table of docs/exp
     python3 -m asg_agent.rerun run EXPORT.jsonl.gz --top 50 --workers 2 --label full-paper --out OUT.jsonl
     python3 -m asg_agent.rerun summary --campaign EXPORT.jsonl.gz OUT1.jsonl ... --json results/flaw_or_layout.json
 """
+
 import argparse
 import json
 import os
@@ -21,6 +22,7 @@ from .proxy import compute, placed_mask
 
 def top_requests(export: str, top: int):
     from .experiments import scenario_of
+
     camp, rows = read_export(export)
     ranked = sorted((r for r in rows if r["proxy"] is not None), key=lambda r: -r["proxy"])[:top]
     out = []
@@ -35,6 +37,7 @@ def run(a) -> int:
     import rospy
     from .pool_ros import WorkerPool
     from .cli import worker_names
+
     camp, todo = top_requests(a.export, a.top)
     rospy.init_node("rerun", anonymous=True, disable_signals=True)
     pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
@@ -57,15 +60,28 @@ def run(a) -> int:
             terms = None
             if o.termination != "ERROR" and len(o.trajectory):
                 tr = o.trajectory
-                terms = compute(req, tr[:, 0], tr[:, 1:3], tr[:, 4], o.visibility, o.termination,
-                                placed_mask(req, o.removed))
-            results[o.job] = {"label": a.label, "campaign": camp["name"], "job": row["job"], "rank": o.job + 1,
-                              "campaign_proxy": row["proxy"], "termination": o.termination, "error": o.error,
-                              "proxy": terms.proxy if terms else None, "vis": terms.vis if terms else None,
-                              "yaw_term": terms.yaw_term if terms else None, "plr": terms.plr if terms else None,
-                              "sim_time": o.sim_time}
-            print(f"[{len(results)}/{len(todo)}] rank {o.job + 1}: campaign proxy {row['proxy']:.2f} -> "
-                  f"{a.label} {results[o.job]['proxy'] if terms else 'ERROR'}", file=sys.stderr)
+                terms = compute(
+                    req, tr[:, 0], tr[:, 1:3], tr[:, 4], o.visibility, o.termination, placed_mask(req, o.removed)
+                )
+            results[o.job] = {
+                "label": a.label,
+                "campaign": camp["name"],
+                "job": row["job"],
+                "rank": o.job + 1,
+                "campaign_proxy": row["proxy"],
+                "termination": o.termination,
+                "error": o.error,
+                "proxy": terms.proxy if terms else None,
+                "vis": terms.vis if terms else None,
+                "yaw_term": terms.yaw_term if terms else None,
+                "plr": terms.plr if terms else None,
+                "sim_time": o.sim_time,
+            }
+            print(
+                f"[{len(results)}/{len(todo)}] rank {o.job + 1}: campaign proxy {row['proxy']:.2f} -> "
+                f"{a.label} {results[o.job]['proxy'] if terms else 'ERROR'}",
+                file=sys.stderr,
+            )
     os.makedirs(os.path.dirname(os.path.abspath(a.out)) or ".", exist_ok=True)
     with open(a.out, "w") as f:
         for k in sorted(results):
@@ -83,10 +99,19 @@ def summary(a) -> int:
             continue
         grid, _, stack = rows[0]["label"].partition("/")
         p = [r["proxy"] for r in rows if r["proxy"] is not None]
-        out.append({"grid": grid, "stack": stack, "file": os.path.basename(path), "runs": len(rows),
-                    "still_ge3": sum(v >= 3 for v in p), "dropped": sum(v < 3 for v in p),
-                    "errors": len(rows) - len(p), "median_proxy": float(np.median(p)) if p else None,
-                    "campaign_median_proxy": float(np.median([r["campaign_proxy"] for r in rows]))})
+        out.append(
+            {
+                "grid": grid,
+                "stack": stack,
+                "file": os.path.basename(path),
+                "runs": len(rows),
+                "still_ge3": sum(v >= 3 for v in p),
+                "dropped": sum(v < 3 for v in p),
+                "errors": len(rows) - len(p),
+                "median_proxy": float(np.median(p)) if p else None,
+                "campaign_median_proxy": float(np.median([r["campaign_proxy"] for r in rows])),
+            }
+        )
     with open(a.json, "w") as f:
         json.dump({"summary": out}, f, indent=1)
     for s in out:

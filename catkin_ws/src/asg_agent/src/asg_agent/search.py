@@ -18,6 +18,7 @@ paper names), `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an
 reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `ribs` package's
 grid archive and iso+line emitter, over two behaviour descriptors).
 """
+
 import math
 from typing import Dict, Optional
 
@@ -49,8 +50,9 @@ class StateBuilder:
 
     def build(self, action, path_xy, step: int) -> np.ndarray:
         path = resample_path(path_xy, self.n_path) / self.exp.size * 2.0 - 1.0
-        return np.concatenate([np.asarray(action, np.float32).ravel(), path.ravel().astype(np.float32),
-                               [step / self.exp.episode_steps]]).astype(np.float32)
+        return np.concatenate(
+            [np.asarray(action, np.float32).ravel(), path.ravel().astype(np.float32), [step / self.exp.episode_steps]]
+        ).astype(np.float32)
 
 
 class SearchMethod:
@@ -82,6 +84,7 @@ class SearchMethod:
 
 class RandomSearch(SearchMethod):
     """Uniform random layouts, one per job, seeded by (seed, job)."""
+
     name = "random"
 
     def propose(self, job, episode, step, state):
@@ -93,10 +96,19 @@ class Annealing(SearchMethod):
     incumbent, Metropolis acceptance at a temperature falling geometrically from t0 to t1 over
     the campaign's budget; the step size falls from sigma0 to sigma1 likewise. Results are
     accepted in job order, so with W jobs in flight proposals use an incumbent W results old."""
+
     name = "annealing"
 
-    def __init__(self, experiment, seed, budget: int = 1000, t0: float = 0.5, t1: float = 0.01,
-                 sigma0: float = 0.3, sigma1: float = 0.03):
+    def __init__(
+        self,
+        experiment,
+        seed,
+        budget: int = 1000,
+        t0: float = 0.5,
+        t1: float = 0.01,
+        sigma0: float = 0.3,
+        sigma1: float = 0.03,
+    ):
         super().__init__(experiment, seed)
         self.budget, self.t0, self.t1, self.sigma0, self.sigma1 = budget, t0, t1, sigma0, sigma1
         self.current = _rng(seed, 3).uniform(-1.0, 1.0, experiment.action_dim).astype(np.float32)
@@ -135,10 +147,10 @@ class Annealing(SearchMethod):
 class TD3Search(SearchMethod):
     """TD3 with or without PER and the saturation penalty (td3.py)."""
 
-    def __init__(self, experiment, seed, per=True, asp=True, config: Optional[TD3Config] = None,
-                 budget: int = 1000):
+    def __init__(self, experiment, seed, per=True, asp=True, config: Optional[TD3Config] = None, budget: int = 1000):
         super().__init__(experiment, seed)
         from dataclasses import replace
+
         # The method's name says what it is: PER and the penalty on or off, and the scale-free
         # actor objective only with the penalty (it exists so that the penalty's weight means the
         # same at any reward scale); plain "td3" is TD3's own -Q objective (issue #25).
@@ -159,6 +171,7 @@ class TD3Search(SearchMethod):
 
     def config(self):
         from dataclasses import asdict
+
         return asdict(self.agent.config)
 
     def state_dict(self):
@@ -176,11 +189,13 @@ class CMAES(SearchMethod):
     a generation come from the distribution before the previous generation was told (a delay of
     one generation for them, which `cma` accepts); everything stays a function of the seed.
     Bounds [-1, 1] by `cma`'s boundary transform; an ERROR run is no candidate."""
+
     name = "cmaes"
 
     def __init__(self, experiment, seed, sigma0: float = 0.5, popsize: int = 0):
         super().__init__(experiment, seed)
         import cma
+
         self.sigma0 = sigma0
         x0 = _rng(seed, 6).uniform(-0.8, 0.8, experiment.action_dim)
         opts = {"seed": 1_000_003 + seed, "bounds": [-1.0, 1.0], "verbose": -9}
@@ -208,19 +223,29 @@ class CMAES(SearchMethod):
         self.es.tell(self.batch_x, self.batch_f)
         self.batch_x, self.batch_f = [], []
         self.generations += 1
-        return {"cma_sigma": float(self.es.sigma), "cma_generation": self.generations,
-                "cma_best": -float(self.es.result.fbest)}
+        return {
+            "cma_sigma": float(self.es.sigma),
+            "cma_generation": self.generations,
+            "cma_best": -float(self.es.result.fbest),
+        }
 
     def config(self):
         return {"sigma0": self.sigma0, "popsize": self.popsize}
 
     def state_dict(self):
         import pickle
-        return {"es": pickle.dumps(self.es), "asked": {int(k): v for k, v in self.asked.items()},
-                "batch_x": list(self.batch_x), "batch_f": list(self.batch_f), "generations": self.generations}
+
+        return {
+            "es": pickle.dumps(self.es),
+            "asked": {int(k): v for k, v in self.asked.items()},
+            "batch_x": list(self.batch_x),
+            "batch_f": list(self.batch_f),
+            "generations": self.generations,
+        }
 
     def load_state_dict(self, d):
         import pickle
+
         self.es = pickle.loads(d["es"])
         self.asked = {int(k): np.asarray(v) for k, v in d["asked"].items()}
         self.batch_x, self.batch_f, self.generations = list(d["batch_x"]), list(d["batch_f"]), d["generations"]
@@ -249,22 +274,42 @@ class MapElites(SearchMethod):
     One candidate per job (`ask` of a one-solution batch), added to the archive when its result
     is applied, in job order: the archive a proposal sees depends on the seed alone. An ERROR
     run is no candidate. The state is ignored (as random search and CMA-ES ignore it)."""
+
     name = "map-elites"
 
-    def __init__(self, experiment, seed, init_random: int = 100, iso_sigma: float = 0.05,
-                 line_sigma: float = 0.2, route_band: float = 10.0, max_deviation: float = 16.0,
-                 deviation_bins: int = 16):
+    def __init__(
+        self,
+        experiment,
+        seed,
+        init_random: int = 100,
+        iso_sigma: float = 0.05,
+        line_sigma: float = 0.2,
+        route_band: float = 10.0,
+        max_deviation: float = 16.0,
+        deviation_bins: int = 16,
+    ):
         super().__init__(experiment, seed)
         from ribs.archives import GridArchive
         from ribs.emitters import IsoLineEmitter
+
         self.init_random, self.iso_sigma, self.line_sigma = init_random, iso_sigma, line_sigma
         self.route_band, self.max_deviation, self.deviation_bins = route_band, max_deviation, deviation_bins
         n = experiment.action_dim // 2
-        self.archive = GridArchive(solution_dim=experiment.action_dim, dims=[n + 1, deviation_bins],
-                                   ranges=[(-0.5, n + 0.5), (0.0, max_deviation)], seed=2_000_003 + seed)
-        self.emitter = IsoLineEmitter(self.archive, iso_sigma=iso_sigma, line_sigma=line_sigma,
-                                      x0=np.zeros(experiment.action_dim), bounds=[(-1.0, 1.0)] * experiment.action_dim,
-                                      batch_size=1, seed=3_000_017 + seed)
+        self.archive = GridArchive(
+            solution_dim=experiment.action_dim,
+            dims=[n + 1, deviation_bins],
+            ranges=[(-0.5, n + 0.5), (0.0, max_deviation)],
+            seed=2_000_003 + seed,
+        )
+        self.emitter = IsoLineEmitter(
+            self.archive,
+            iso_sigma=iso_sigma,
+            line_sigma=line_sigma,
+            x0=np.zeros(experiment.action_dim),
+            bounds=[(-1.0, 1.0)] * experiment.action_dim,
+            batch_size=1,
+            seed=3_000_017 + seed,
+        )
         self.added = 0
 
     def descriptors(self, action, path_xy) -> np.ndarray:
@@ -283,29 +328,41 @@ class MapElites(SearchMethod):
         if reward is None or next_state is None:
             return {}
         n = self.exp.action_dim
-        path = (np.asarray(next_state[n:n + 2 * self.states.n_path], np.float64).reshape(-1, 2) + 1.0) * 0.5 * self.exp.size
+        path = (
+            (np.asarray(next_state[n : n + 2 * self.states.n_path], np.float64).reshape(-1, 2) + 1.0)
+            * 0.5
+            * self.exp.size
+        )
         self.archive.add_single(np.asarray(action, np.float64), float(reward), self.descriptors(action, path))
         self.added += 1
         st = self.archive.stats
         return {"qd_cells": int(st.num_elites), "qd_coverage": float(st.coverage), "qd_best": float(st.obj_max)}
 
     def config(self):
-        return {"init_random": self.init_random, "iso_sigma": self.iso_sigma, "line_sigma": self.line_sigma,
-                "route_band": self.route_band, "max_deviation": self.max_deviation,
-                "deviation_bins": self.deviation_bins}
+        return {
+            "init_random": self.init_random,
+            "iso_sigma": self.iso_sigma,
+            "line_sigma": self.line_sigma,
+            "route_band": self.route_band,
+            "max_deviation": self.max_deviation,
+            "deviation_bins": self.deviation_bins,
+        }
 
     def state_dict(self):
         import pickle
+
         return {"archive_emitter": pickle.dumps((self.archive, self.emitter)), "added": self.added}
 
     def load_state_dict(self, d):
         import pickle
+
         self.archive, self.emitter = pickle.loads(d["archive_emitter"])
         self.added = d["added"]
 
 
-def make_method(name: str, experiment: Experiment, seed: int, budget: int = 1000,
-                td3_config: Optional[TD3Config] = None) -> SearchMethod:
+def make_method(
+    name: str, experiment: Experiment, seed: int, budget: int = 1000, td3_config: Optional[TD3Config] = None
+) -> SearchMethod:
     if name == "random":
         return RandomSearch(experiment, seed)
     if name == "annealing":

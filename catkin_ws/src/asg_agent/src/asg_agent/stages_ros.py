@@ -1,5 +1,6 @@
 """ROS layer of `bench`: collects the asg_msgs/StageTimes readings that every scene worker,
 segmenter and planner publishes on `<worker>/stage_times` (docs/benchmarks.md)."""
+
 import threading
 import time
 
@@ -8,9 +9,13 @@ from asg_msgs.msg import StageTimes
 
 
 def reading(msg: StageTimes) -> dict:
-    return {"node": msg.node, "runs": int(msg.runs), "cpu_seconds": float(msg.cpu_seconds),
-            "seconds": {s: float(x) for s, x in zip(msg.stages, msg.seconds)},
-            "calls": {s: int(c) for s, c in zip(msg.stages, msg.calls)}}
+    return {
+        "node": msg.node,
+        "runs": int(msg.runs),
+        "cpu_seconds": float(msg.cpu_seconds),
+        "seconds": {s: float(x) for s, x in zip(msg.stages, msg.seconds)},
+        "calls": {s: int(c) for s, c in zip(msg.stages, msg.calls)},
+    }
 
 
 class StageCollector:
@@ -19,8 +24,10 @@ class StageCollector:
     def __init__(self, workers):
         self.lock = threading.Lock()
         self.first, self.last = {}, {}
-        self.subs = [rospy.Subscriber(f"{w.rstrip('/')}/stage_times", StageTimes, self._on, callback_args=w,
-                                      queue_size=16) for w in workers]
+        self.subs = [
+            rospy.Subscriber(f"{w.rstrip('/')}/stage_times", StageTimes, self._on, callback_args=w, queue_size=16)
+            for w in workers
+        ]
 
     def _on(self, msg, worker):
         key = (worker, msg.node)

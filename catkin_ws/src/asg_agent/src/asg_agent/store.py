@@ -7,6 +7,7 @@ Tables (docs/agent.md has every column):
   float32 columns t, x, y, yaw, yaw rate), the request as canonical JSON, so any row can be
   replayed exactly and every figure recomputed without simulating.
 """
+
 import json
 import os
 import shutil
@@ -57,18 +58,46 @@ CREATE TABLE IF NOT EXISTS scenarios (
 CREATE INDEX IF NOT EXISTS scenarios_proxy ON scenarios (campaign, proxy);
 """
 
-COLUMNS = ("campaign", "job", "method", "episode", "step", "worker", "attempts", "scenario_id", "request",
-           "termination", "error", "proxy", "vis", "yaw_term", "plr", "path_length", "optimal_length", "sim_time",
-           "num_control_msgs", "visibility", "removed", "collision_with", "trajectory", "samples", "wall_time",
-           "finished", "reference", "reward")
+COLUMNS = (
+    "campaign",
+    "job",
+    "method",
+    "episode",
+    "step",
+    "worker",
+    "attempts",
+    "scenario_id",
+    "request",
+    "termination",
+    "error",
+    "proxy",
+    "vis",
+    "yaw_term",
+    "plr",
+    "path_length",
+    "optimal_length",
+    "sim_time",
+    "num_control_msgs",
+    "visibility",
+    "removed",
+    "collision_with",
+    "trajectory",
+    "samples",
+    "wall_time",
+    "finished",
+    "reference",
+    "reward",
+)
 # Columns added after the first stores were written: (name, SQL type); added to an older store
 # when it is opened.
-ADDED = (("reference", "TEXT"),  # differential campaigns: JSON of the reference stack's run
-         ("reward", "REAL"))     # what the search learnt from: the proxy, or proxy - reference proxy
+ADDED = (
+    ("reference", "TEXT"),  # differential campaigns: JSON of the reference stack's run
+    ("reward", "REAL"),
+)  # what the search learnt from: the proxy, or proxy - reference proxy
 
 
 # Attribution, the one rule every count uses (summary, export, progress bar, TensorBoard, report):
-FINDING = 3.0          # [-] a run with proxy at or above this is a finding (the paper's count)
+FINDING = 3.0  # [-] a run with proxy at or above this is a finding (the paper's count)
 REFERENCE_CLEAR = 2.0  # [-] a finding whose reference run stays below this is the perception's
 
 
@@ -125,12 +154,14 @@ class Store:
 
     def create_campaign(self, name, method, experiment, experiment_text, seed, settings: dict):
         try:
-            self.db.execute("INSERT INTO campaigns VALUES (?, ?, ?, ?, ?, ?, ?, NULL)",
-                            (name, method, experiment, experiment_text, seed, json.dumps(settings, sort_keys=True),
-                             time.time()))
+            self.db.execute(
+                "INSERT INTO campaigns VALUES (?, ?, ?, ?, ?, ?, ?, NULL)",
+                (name, method, experiment, experiment_text, seed, json.dumps(settings, sort_keys=True), time.time()),
+            )
         except sqlite3.IntegrityError:
-            raise StoreError(f"campaign {name!r} already exists in {self.path}: --resume it or choose another "
-                             f"--name") from None
+            raise StoreError(
+                f"campaign {name!r} already exists in {self.path}: --resume it or choose another " f"--name"
+            ) from None
 
     def finish_campaign(self, name):
         self.db.execute("UPDATE campaigns SET finished = ? WHERE name = ?", (time.time(), name))
@@ -140,14 +171,16 @@ class Store:
         """Writes one finished scenario (one transaction). A second row for the same job raises."""
         values = [row[c] for c in COLUMNS]
         try:
-            self.db.execute(f"INSERT INTO scenarios ({', '.join(COLUMNS)}) VALUES ({', '.join('?' * len(COLUMNS))})",
-                            values)
+            self.db.execute(
+                f"INSERT INTO scenarios ({', '.join(COLUMNS)}) VALUES ({', '.join('?' * len(COLUMNS))})", values
+            )
         except sqlite3.IntegrityError:
             raise StoreError(f"campaign {row['campaign']!r} already holds job {row['job']}") from None
 
     def rows(self, campaign: str, after_job: int = -1) -> Iterator[sqlite3.Row]:
-        yield from self.db.execute("SELECT * FROM scenarios WHERE campaign = ? AND job > ? ORDER BY job",
-                                   (campaign, after_job))
+        yield from self.db.execute(
+            "SELECT * FROM scenarios WHERE campaign = ? AND job > ? ORDER BY job", (campaign, after_job)
+        )
 
     def jobs(self, campaign: str) -> List[int]:
         return [r[0] for r in self.db.execute("SELECT job FROM scenarios WHERE campaign = ? ORDER BY job", (campaign,))]
@@ -161,37 +194,68 @@ class Store:
         c3 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= 3", (campaign,)).fetchone()[0]
         c4 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= 4", (campaign,)).fetchone()[0]
         best = q("SELECT MAX(proxy) FROM scenarios WHERE campaign = ?", (campaign,)).fetchone()[0]
-        terms = dict(q("SELECT termination, COUNT(*) FROM scenarios WHERE campaign = ? GROUP BY termination",
-                       (campaign,)).fetchall())
-        tops = [dict(r) for r in q("SELECT id, job, episode, step, scenario_id, proxy, vis, yaw_term, plr, termination "
-                                   "FROM scenarios WHERE campaign = ? AND proxy IS NOT NULL ORDER BY proxy DESC, "
-                                   "job LIMIT ?", (campaign, top))]
+        terms = dict(
+            q(
+                "SELECT termination, COUNT(*) FROM scenarios WHERE campaign = ? GROUP BY termination", (campaign,)
+            ).fetchall()
+        )
+        tops = [
+            dict(r)
+            for r in q(
+                "SELECT id, job, episode, step, scenario_id, proxy, vis, yaw_term, plr, termination "
+                "FROM scenarios WHERE campaign = ? AND proxy IS NOT NULL ORDER BY proxy DESC, "
+                "job LIMIT ?",
+                (campaign, top),
+            )
+        ]
         # Attribution (campaigns with a reference stack): a finding (proxy >= 3) is the perception's
         # when the reference stack (ground-truth labels, same planner and follower) stays below 2
         # on the same scene, and the stack's own when the reference reaches 3 as well.
         ref = "CAST(json_extract(reference, '$.proxy') AS REAL)"
         F, C = FINDING, REFERENCE_CLEAR  # attribute(), in SQL
-        attributed = q(f"SELECT COUNT(*), SUM(proxy >= {F} AND {ref} < {C}), SUM(proxy >= {F} AND {ref} >= {F}), "
-                       f"SUM(proxy - {ref} >= 1) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
-                       f"AND proxy IS NOT NULL AND {ref} IS NOT NULL", (campaign,)).fetchone()
+        attributed = q(
+            f"SELECT COUNT(*), SUM(proxy >= {F} AND {ref} < {C}), SUM(proxy >= {F} AND {ref} >= {F}), "
+            f"SUM(proxy - {ref} >= 1) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
+            f"AND proxy IS NOT NULL AND {ref} IS NOT NULL",
+            (campaign,),
+        ).fetchone()
         # A collision of the stack under test where the reference stack drove through the same
         # scene: the perception's fault whatever the proxy says (the paper's proxy does not score
         # collisions), and the stack's when both collide.
         rterm = "json_extract(reference, '$.termination')"
-        collided = q(f"SELECT SUM(termination = 'COLLISION' AND {rterm} = 'SUCCESS'), "
-                     f"SUM(termination = 'COLLISION' AND {rterm} = 'COLLISION') FROM scenarios "
-                     f"WHERE campaign = ? AND reference IS NOT NULL", (campaign,)).fetchone()
+        collided = q(
+            f"SELECT SUM(termination = 'COLLISION' AND {rterm} = 'SUCCESS'), "
+            f"SUM(termination = 'COLLISION' AND {rterm} = 'COLLISION') FROM scenarios "
+            f"WHERE campaign = ? AND reference IS NOT NULL",
+            (campaign,),
+        ).fetchone()
         low_plr = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND plr < 0.999", (campaign,)).fetchone()[0]
-        return {"scenarios": n, "proxy_ge_3": c3, "proxy_ge_4": c4, "max_proxy": best, "terminations": terms,
-                "top": tops, "attributed": attributed[0], "perception_ge3": attributed[1] or 0,
-                "stack_ge3": attributed[2] or 0, "differential_ge1": attributed[3] or 0, "plr_below_0999": low_plr,
-                "perception_collisions": collided[0] or 0, "stack_collisions": collided[1] or 0}
+        return {
+            "scenarios": n,
+            "proxy_ge_3": c3,
+            "proxy_ge_4": c4,
+            "max_proxy": best,
+            "terminations": terms,
+            "top": tops,
+            "attributed": attributed[0],
+            "perception_ge3": attributed[1] or 0,
+            "stack_ge3": attributed[2] or 0,
+            "differential_ge1": attributed[3] or 0,
+            "plr_below_0999": low_plr,
+            "perception_collisions": collided[0] or 0,
+            "stack_collisions": collided[1] or 0,
+        }
 
     def content_digest(self, campaign: str) -> List[tuple]:
         """What must repeat between two runs of a campaign with one seed (no workers, no times)."""
-        return [tuple(r) for r in self.db.execute(
-            "SELECT job, episode, step, scenario_id, request, termination, proxy, vis, yaw_term, plr, sim_time, "
-            "num_control_msgs, trajectory FROM scenarios WHERE campaign = ? ORDER BY job", (campaign,))]
+        return [
+            tuple(r)
+            for r in self.db.execute(
+                "SELECT job, episode, step, scenario_id, request, termination, proxy, vis, yaw_term, plr, sim_time, "
+                "num_control_msgs, trajectory FROM scenarios WHERE campaign = ? ORDER BY job",
+                (campaign,),
+            )
+        ]
 
 
 # -- parking: carrying an unfinished campaign from one machine (or checkout) to another ------------
@@ -200,11 +264,13 @@ class Store:
 # xz-compressed: about 6 kB a scenario), small enough to commit; `unpark`
 # puts them back into a store and beside it, and the campaign then resumes as if never moved.
 
+
 def park(store: "Store", campaign: str, checkpoint: str, out: str) -> int:
     """Writes campaign `campaign` of `store` (its campaign row and every scenario row) and its
     checkpoint file into the tar.xz `out`. Returns the number of scenario rows parked."""
     import tarfile
     import tempfile
+
     if store.campaign(campaign) is None:
         raise StoreError(f"no campaign {campaign!r} in {store.path} to park")
     if not os.path.isfile(checkpoint):
@@ -220,8 +286,10 @@ def park(store: "Store", campaign: str, checkpoint: str, out: str) -> int:
             db.create_function("unzip", 1, zlib.decompress, deterministic=True)
             cols = ", ".join(COLUMNS)
             raw = cols.replace("trajectory", "unzip(trajectory)")
-            db.execute(f"INSERT INTO scenarios ({cols}) SELECT {raw} FROM src.scenarios WHERE campaign = ? "
-                       f"ORDER BY job", (campaign,))
+            db.execute(
+                f"INSERT INTO scenarios ({cols}) SELECT {raw} FROM src.scenarios WHERE campaign = ? " f"ORDER BY job",
+                (campaign,),
+            )
             n = db.execute("SELECT COUNT(*) FROM scenarios").fetchone()[0]
             db.execute("DETACH DATABASE src")
             db.execute("PRAGMA journal_mode=DELETE")
@@ -251,6 +319,7 @@ def unpark(store: "Store", parked: str, checkpoint_for=None) -> Optional[int]:
     None): it is the newer copy. Otherwise returns the number of scenario rows restored."""
     import tarfile
     import tempfile
+
     try:
         tar = tarfile.open(parked, "r:xz")
     except (OSError, tarfile.TarError) as e:
@@ -258,8 +327,10 @@ def unpark(store: "Store", parked: str, checkpoint_for=None) -> Optional[int]:
     with tempfile.TemporaryDirectory() as tmp, tar:
         names = set(tar.getnames())
         if names != {"store.sqlite", "checkpoint.ckpt"}:
-            raise StoreError(f"{parked}: not a parked campaign (holds {sorted(names)}, expected store.sqlite and "
-                             f"checkpoint.ckpt)")
+            raise StoreError(
+                f"{parked}: not a parked campaign (holds {sorted(names)}, expected store.sqlite and "
+                f"checkpoint.ckpt)"
+            )
         for name in names:
             with tar.extractfile(name) as src, open(os.path.join(tmp, name), "wb") as dst:
                 dst.write(src.read())
@@ -278,8 +349,10 @@ def unpark(store: "Store", parked: str, checkpoint_for=None) -> Optional[int]:
         try:
             db.execute("BEGIN")
             db.execute("INSERT INTO campaigns SELECT * FROM src.campaigns")
-            db.execute(f"INSERT INTO scenarios ({cols}) SELECT {cols.replace('trajectory', 'rezip(trajectory)')} "
-                       f"FROM src.scenarios ORDER BY job")
+            db.execute(
+                f"INSERT INTO scenarios ({cols}) SELECT {cols.replace('trajectory', 'rezip(trajectory)')} "
+                f"FROM src.scenarios ORDER BY job"
+            )
             db.execute("COMMIT")
         except sqlite3.DatabaseError as e:
             db.execute("ROLLBACK")

@@ -19,6 +19,7 @@ added to the actor loss: zero while |u| <= u0 (tanh(u0) = 0.96 for u0 = 2, so in
 are not biased), quadratic beyond, and fading with the update count k so that a well-trained
 critic may still ask for edge positions later. docs/agent.md gives its measured effect.
 """
+
 import io
 import os
 import tempfile
@@ -67,7 +68,11 @@ class TD3Config:
 class Actor(nn.Module):
     def __init__(self, state_dim, action_dim, hidden):
         super().__init__()
-        self.l1, self.l2, self.l3 = nn.Linear(state_dim, hidden), nn.Linear(hidden, hidden), nn.Linear(hidden, action_dim)
+        self.l1, self.l2, self.l3 = (
+            nn.Linear(state_dim, hidden),
+            nn.Linear(hidden, hidden),
+            nn.Linear(hidden, action_dim),
+        )
 
     def pre_squash(self, s):
         return self.l3(F.relu(self.l2(F.relu(self.l1(s)))))
@@ -79,10 +84,20 @@ class Actor(nn.Module):
 class Critic(nn.Module):
     def __init__(self, state_dim, action_dim, hidden):
         super().__init__()
-        self.q1 = nn.Sequential(nn.Linear(state_dim + action_dim, hidden), nn.ReLU(), nn.Linear(hidden, hidden),
-                                nn.ReLU(), nn.Linear(hidden, 1))
-        self.q2 = nn.Sequential(nn.Linear(state_dim + action_dim, hidden), nn.ReLU(), nn.Linear(hidden, hidden),
-                                nn.ReLU(), nn.Linear(hidden, 1))
+        self.q1 = nn.Sequential(
+            nn.Linear(state_dim + action_dim, hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, 1),
+        )
+        self.q2 = nn.Sequential(
+            nn.Linear(state_dim + action_dim, hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, 1),
+        )
 
     def forward(self, s, a):
         x = torch.cat([s, a], 1)
@@ -93,8 +108,10 @@ class TD3Agent:
     def __init__(self, state_dim: int, action_dim: int, config: Optional[TD3Config] = None):
         self.config = c = config or TD3Config()
         if c.per and c.per_beta_steps < 1:
-            raise ValueError("TD3Config.per_beta_steps must be >= 1 with PER: the batches over which beta "
-                             "reaches 1 (TD3Search sets it to the campaign's)")
+            raise ValueError(
+                "TD3Config.per_beta_steps must be >= 1 with PER: the batches over which beta "
+                "reaches 1 (TD3Search sets it to the campaign's)"
+            )
         self.state_dim, self.action_dim = state_dim, action_dim
         self.torch_gen = torch.Generator().manual_seed(c.seed)
         self.rng = np.random.default_rng(c.seed)
@@ -108,8 +125,15 @@ class TD3Agent:
         self.critic_target.load_state_dict(self.critic.state_dict())
         self.actor_opt = torch.optim.Adam(self.actor.parameters(), lr=c.actor_lr)
         self.critic_opt = torch.optim.Adam(self.critic.parameters(), lr=c.critic_lr)
-        self.buffer = PrioritizedReplay(c.buffer_size, state_dim, action_dim, c.per_alpha if c.per else 0.0,
-                                        c.per_beta0, max(1, c.per_beta_steps), c.per_eps)
+        self.buffer = PrioritizedReplay(
+            c.buffer_size,
+            state_dim,
+            action_dim,
+            c.per_alpha if c.per else 0.0,
+            c.per_beta0,
+            max(1, c.per_beta_steps),
+            c.per_eps,
+        )
         self.observed = 0  # transitions observed
         self.acted = 0  # actions chosen
         self.updates = 0  # critic updates done
@@ -168,8 +192,11 @@ class TD3Agent:
         self.critic_opt.step()
         self.buffer.update_priorities(b["index"], (0.5 * (td1.abs() + td2.abs())).detach().numpy())
         self.updates += 1
-        out = {"critic_loss": float(critic_loss), "q": float(q1.mean()),
-               "per_beta": self.buffer.beta() if c.per else None}
+        out = {
+            "critic_loss": float(critic_loss),
+            "q": float(q1.mean()),
+            "per_beta": self.buffer.beta() if c.per else None,
+        }
         if self.updates % c.policy_delay == 0:
             u = self.actor.pre_squash(s)
             q = self.critic(s, torch.tanh(u))[0]
@@ -191,8 +218,7 @@ class TD3Agent:
                         tp.mul_(1 - c.tau).add_(c.tau * p)
             # Saturation: the share of the batch's actions within 1 % of the border (|a| >= 0.99).
             sat = float((torch.tanh(u.detach()).abs() >= 0.99).float().mean())
-            out.update(actor_loss=float(actor_loss), asp=float(asp), asp_weight=self.asp_weight(),
-                       actor_saturation=sat)
+            out.update(actor_loss=float(actor_loss), asp=float(asp), asp_weight=self.asp_weight(), actor_saturation=sat)
         return out
 
     def actor_terms(self, u, q, a, w):
@@ -207,17 +233,27 @@ class TD3Agent:
 
     # -- persistence ----------------------------------------------------------------------------
     def state_dict(self) -> dict:
-        return {"config": asdict(self.config), "dims": (self.state_dim, self.action_dim),
-                "actor": self.actor.state_dict(), "critic": self.critic.state_dict(),
-                "actor_target": self.actor_target.state_dict(), "critic_target": self.critic_target.state_dict(),
-                "actor_opt": self.actor_opt.state_dict(), "critic_opt": self.critic_opt.state_dict(),
-                "buffer": self.buffer.state_dict(), "rng": self.rng.bit_generator.state,
-                "torch_gen": self.torch_gen.get_state(), "counters": (self.observed, self.acted, self.updates)}
+        return {
+            "config": asdict(self.config),
+            "dims": (self.state_dim, self.action_dim),
+            "actor": self.actor.state_dict(),
+            "critic": self.critic.state_dict(),
+            "actor_target": self.actor_target.state_dict(),
+            "critic_target": self.critic_target.state_dict(),
+            "actor_opt": self.actor_opt.state_dict(),
+            "critic_opt": self.critic_opt.state_dict(),
+            "buffer": self.buffer.state_dict(),
+            "rng": self.rng.bit_generator.state,
+            "torch_gen": self.torch_gen.get_state(),
+            "counters": (self.observed, self.acted, self.updates),
+        }
 
     def load_state_dict(self, d: dict):
         if tuple(d["dims"]) != (self.state_dim, self.action_dim):
-            raise ValueError(f"checkpoint is for state/action sizes {tuple(d['dims'])}, "
-                             f"this agent has {(self.state_dim, self.action_dim)}")
+            raise ValueError(
+                f"checkpoint is for state/action sizes {tuple(d['dims'])}, "
+                f"this agent has {(self.state_dim, self.action_dim)}"
+            )
         for key in ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic_opt"):
             getattr(self, key).load_state_dict(d[key])
         self.buffer.load_state_dict(d["buffer"])

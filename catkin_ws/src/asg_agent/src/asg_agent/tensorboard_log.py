@@ -16,18 +16,29 @@ campaign passes its first job as `purge_step`, so TensorBoard drops what the int
 wrote past it. View with `tensorboard --logdir results/tensorboard` (the `tensorboard` package,
 which this project does not need).
 """
+
 import json
 from typing import Optional
 
 from .store import attribute
 
-AGENT_KEYS = {"critic_loss": "agent/critic_loss", "q": "agent/q", "actor_loss": "agent/actor_loss",
-              "asp": "agent/asp_penalty", "asp_weight": "agent/asp_weight", "per_beta": "agent/per_beta",
-              "actor_saturation": "agent/actor_saturation",
-              # the other searches' own figures
-              "cma_sigma": "search/cma_sigma", "cma_best": "search/cma_best",
-              "temperature": "search/temperature", "incumbent": "search/incumbent",
-              "qd_cells": "search/qd_cells", "qd_coverage": "search/qd_coverage", "qd_best": "search/qd_best"}
+AGENT_KEYS = {
+    "critic_loss": "agent/critic_loss",
+    "q": "agent/q",
+    "actor_loss": "agent/actor_loss",
+    "asp": "agent/asp_penalty",
+    "asp_weight": "agent/asp_weight",
+    "per_beta": "agent/per_beta",
+    "actor_saturation": "agent/actor_saturation",
+    # the other searches' own figures
+    "cma_sigma": "search/cma_sigma",
+    "cma_best": "search/cma_best",
+    "temperature": "search/temperature",
+    "incumbent": "search/incumbent",
+    "qd_cells": "search/qd_cells",
+    "qd_coverage": "search/qd_coverage",
+    "qd_best": "search/qd_best",
+}
 
 
 class TensorBoardLog:
@@ -35,8 +46,10 @@ class TensorBoardLog:
         try:
             from tensorboardX import SummaryWriter
         except ImportError as e:
-            raise RuntimeError(f"TensorBoard log: tensorboardX is not installed ({e}); run bash scripts/setup.sh, "
-                               "or pass --no-tensorboard") from None
+            raise RuntimeError(
+                f"TensorBoard log: tensorboardX is not installed ({e}); run bash scripts/setup.sh, "
+                "or pass --no-tensorboard"
+            ) from None
         self.logdir = logdir
         self.writer = SummaryWriter(logdir, purge_step=purge_step, flush_secs=10)
         # Running counts continue on resume from the rows learnt from before purge_step.

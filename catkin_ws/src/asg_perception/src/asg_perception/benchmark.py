@@ -3,12 +3,12 @@ backend's labels equal the plain eager model's on a dataset.
 
     python3 -m asg_perception.benchmark MODEL.pt --data DIR [--frames 50] [--repeats 5]
 """
+
 import argparse
 import statistics
 import sys
 import time
 
-import numpy as np
 
 from .data import DatasetError, load_frames
 from .inference import BACKENDS, Segmenter
@@ -28,16 +28,21 @@ def main(argv=None):
         print(f"error: {e}", file=sys.stderr)
         return 2
     reference = None
-    print(f"{len(frames)} frames, {a.threads} thread(s), medians of {a.repeats} passes, the backends "
-          "taking turns pass by pass (a load on the machine falls on all of them alike)")
+    print(
+        f"{len(frames)} frames, {a.threads} thread(s), medians of {a.repeats} passes, the backends "
+        "taking turns pass by pass (a load on the machine falls on all of them alike)"
+    )
     segs, agree = {}, {}
     for backend in BACKENDS:
         seg = segs[backend] = Segmenter(a.model, backend, a.threads)
         labels = seg.batch(frames.rgb)
         if reference is None:
             reference = labels
-        agree[backend] = (int((labels == reference).all(axis=(1, 2)).sum()), int((labels != reference).sum()),
-                          float((labels == reference).mean()))
+        agree[backend] = (
+            int((labels == reference).all(axis=(1, 2)).sum()),
+            int((labels != reference).sum()),
+            float((labels == reference).mean()),
+        )
     times = {b: [] for b in BACKENDS}
     for _ in range(a.repeats):
         for backend, seg in segs.items():
@@ -49,9 +54,11 @@ def main(argv=None):
     for backend in BACKENDS:
         same, differ, share = agree[backend]
         med = statistics.median(times[backend])
-        print(f"  {backend:>14}: {med:6.2f} ms/frame, {base / med:4.2f}x channels_last "
-              f"(runs {', '.join(f'{t:.2f}' for t in times[backend])}); labels equal to eager on "
-              f"{same}/{len(frames)} frames, {differ} pixels differ ({100 * share:.3f} % agree)")
+        print(
+            f"  {backend:>14}: {med:6.2f} ms/frame, {base / med:4.2f}x channels_last "
+            f"(runs {', '.join(f'{t:.2f}' for t in times[backend])}); labels equal to eager on "
+            f"{same}/{len(frames)} frames, {differ} pixels differ ({100 * share:.3f} % agree)"
+        )
     return 0
 
 

@@ -4,6 +4,7 @@ A dataset folder holds `manifest.csv` and `images/NNNNNN_{rgb,labels,lit}.png`: 
 images (0 traversable, 1 non-traversable, 2 sky, 3 void: ground under an obstacle's canopy) and
 sun-lit masks (0 shadow .. 255 lit).
 """
+
 import csv
 import os
 from dataclasses import dataclass
@@ -24,10 +25,10 @@ class DatasetError(ValueError):
 class Frames:
     """Decoded frames held in memory."""
 
-    rgb: np.ndarray     # N x H x W x 3 uint8
+    rgb: np.ndarray  # N x H x W x 3 uint8
     labels: np.ndarray  # N x H x W uint8
-    lit: np.ndarray     # N x H x W uint8
-    rows: List[dict]    # the manifest rows
+    lit: np.ndarray  # N x H x W uint8
+    rows: List[dict]  # the manifest rows
 
     def __len__(self):
         return len(self.rows)
@@ -56,6 +57,7 @@ def load_frames(folder: str, limit: Optional[int] = None, progress: bool = False
     it = rows
     if progress:
         from tqdm import tqdm
+
         it = tqdm(rows, desc=f"loading {os.path.basename(folder.rstrip('/'))}", unit="frame")
     for r in it:
         paths = [os.path.join(folder, r[k]) for k in ("rgb", "labels", "lit")]
@@ -68,8 +70,7 @@ def load_frames(folder: str, limit: Optional[int] = None, progress: bool = False
         if lab.shape != bgr.shape[:2] or lt.shape != bgr.shape[:2]:
             raise DatasetError(f"frame {r['index']}: image sizes differ")
         if lab.max() > VOID:
-            raise DatasetError(f"{paths[1]}: label {int(lab.max())} outside 0..{VOID} "
-                               f"(0..2 classes, {VOID} void)")
+            raise DatasetError(f"{paths[1]}: label {int(lab.max())} outside 0..{VOID} " f"(0..2 classes, {VOID} void)")
         rgb.append(bgr[:, :, ::-1])
         labels.append(lab)
         lit.append(lt)

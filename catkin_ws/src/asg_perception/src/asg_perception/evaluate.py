@@ -6,6 +6,7 @@ Prints per-class IoU, pixel accuracy and the shadow false-obstacle rate (ground 
 shadow predicted non-traversable) of each model, and optionally writes them as JSON and an
 image/label/prediction panel.
 """
+
 import argparse
 import json
 import os
@@ -49,13 +50,19 @@ def main(argv=None):
     p.add_argument("--json", default="", help="write the figures to this JSON file")
     p.add_argument("--panels", default="", help="write an example panel PNG here")
     p.add_argument("--threads", type=int, default=2)
-    p.add_argument("--backend", default="eager", help="inference backend (asg_perception.inference): "
-                   "eager (the model as trained, batched), channels_last, frozen or bf16 (frame by frame)")
+    p.add_argument(
+        "--backend",
+        default="eager",
+        help="inference backend (asg_perception.inference): "
+        "eager (the model as trained, batched), channels_last, frozen or bf16 (frame by frame)",
+    )
     a = p.parse_args(argv)
     from .inference import BACKENDS, Segmenter
+
     if a.backend not in BACKENDS:
         p.error(f"--backend {a.backend!r}: one of {', '.join(BACKENDS)}")
     import torch
+
     torch.set_num_threads(a.threads)
     try:
         frames = load_frames(a.data, a.limit or None, progress=True)
@@ -82,18 +89,25 @@ def main(argv=None):
                 out = seg.batch(rgb)
                 same += int((out == predict(model, rgb)).sum())
                 return out
+
             r = evaluate(model, frames, labeller=labeller)
             r["backend"], r["agreement_with_eager"] = a.backend, same / frames.labels.size
-            print(f"{name:>8}: {a.backend} labels agree with eager on {100 * r['agreement_with_eager']:.3f} % of pixels")
+            print(
+                f"{name:>8}: {a.backend} labels agree with eager on {100 * r['agreement_with_eager']:.3f} % of pixels"
+            )
         results[name] = r
         iou = "  ".join(f"{c} {r['iou'][c]:.3f}" for c in CLASSES)
-        print(f"{name:>8}: IoU {iou}  |  pixel acc {r['pixel_accuracy']:.4f}  |  shadow "
-              f"false-obstacle {r['shadow_false_obstacle_rate']:.4f} (away from obstacles "
-              f"{r['shadow_away_false_obstacle_rate']:.4f})  lit false-obstacle "
-              f"{r['lit_false_obstacle_rate']:.4f}")
-        print(f"{'':>8}  low sun (<= {r['low_sun_deg']:g} deg): shadow false-obstacle "
-              f"{r['low_sun']['shadow_false_obstacle_rate']:.4f}; by inclination: "
-              + ", ".join(f"{k}: {v:.4f}" for k, v in r["by_sun"].items()))
+        print(
+            f"{name:>8}: IoU {iou}  |  pixel acc {r['pixel_accuracy']:.4f}  |  shadow "
+            f"false-obstacle {r['shadow_false_obstacle_rate']:.4f} (away from obstacles "
+            f"{r['shadow_away_false_obstacle_rate']:.4f})  lit false-obstacle "
+            f"{r['lit_false_obstacle_rate']:.4f}"
+        )
+        print(
+            f"{'':>8}  low sun (<= {r['low_sun_deg']:g} deg): shadow false-obstacle "
+            f"{r['low_sun']['shadow_false_obstacle_rate']:.4f}; by inclination: "
+            + ", ".join(f"{k}: {v:.4f}" for k, v in r["by_sun"].items())
+        )
     if len(results) == 2:
         # The model with more shadow false obstacles over the other (the flaw's size).
         (na, ra), (nb, rb) = sorted(results.items(), key=lambda kv: -kv[1]["shadow_false_obstacle_rate"])
@@ -101,10 +115,12 @@ def main(argv=None):
         def ratio(get):
             return get(ra) / max(get(rb), 1e-9)
 
-        print(f"shadow false-obstacle rate {na}/{nb}: "
-              f"{ratio(lambda r: r['shadow_false_obstacle_rate']):.1f}x (away from obstacles "
-              f"{ratio(lambda r: r['shadow_away_false_obstacle_rate']):.1f}x, low sun "
-              f"{ratio(lambda r: r['low_sun']['shadow_false_obstacle_rate']):.1f}x)")
+        print(
+            f"shadow false-obstacle rate {na}/{nb}: "
+            f"{ratio(lambda r: r['shadow_false_obstacle_rate']):.1f}x (away from obstacles "
+            f"{ratio(lambda r: r['shadow_away_false_obstacle_rate']):.1f}x, low sun "
+            f"{ratio(lambda r: r['low_sun']['shadow_false_obstacle_rate']):.1f}x)"
+        )
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)

@@ -14,6 +14,7 @@ the tests):
   the CPU has AVX512-BF16 (or AMX); elsewhere oneDNN emulates it. The default since issue #24:
   1.9-2.0x channels_last per frame, 2,512 against 1,743 Exp. 1 scenarios an hour.
 """
+
 import numpy as np
 import torch
 
@@ -28,8 +29,9 @@ DEFAULT_BACKEND = "bf16"
 class Segmenter:
     """Labels (H x W uint8: 0 traversable, 1 non-traversable, 2 sky) for RGB frames."""
 
-    def __init__(self, model_path: str, backend: str = DEFAULT_BACKEND, threads: int = 1,
-                 height: int = 256, width: int = 256):
+    def __init__(
+        self, model_path: str, backend: str = DEFAULT_BACKEND, threads: int = 1, height: int = 256, width: int = 256
+    ):
         if backend not in BACKENDS:
             raise ValueError(f"backend {backend!r}: one of {', '.join(BACKENDS)}")
         if height % 32 or width % 32:
@@ -60,8 +62,10 @@ class Segmenter:
         if rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
             raise ValueError(f"expected H x W x 3 uint8 RGB, got {rgb.dtype} {rgb.shape}")
         if rgb.shape[:2] != self.shape:
-            raise ValueError(f"frame is {rgb.shape[1]}x{rgb.shape[0]}, the segmenter was made "
-                             f"for {self.shape[1]}x{self.shape[0]}")
+            raise ValueError(
+                f"frame is {rgb.shape[1]}x{rgb.shape[0]}, the segmenter was made "
+                f"for {self.shape[1]}x{self.shape[0]}"
+            )
         with torch.no_grad(), torch.autocast("cpu", dtype=torch.bfloat16, enabled=self.bf16):
             logits = self.model(self._input(rgb))
         return logits[0].argmax(0).to(torch.uint8).numpy()

@@ -1,4 +1,5 @@
 """Segmentation figures (no rospy): per-class IoU and the shadow false-obstacle rate."""
+
 from dataclasses import dataclass, field
 from typing import Dict
 

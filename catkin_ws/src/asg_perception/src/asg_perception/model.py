@@ -6,6 +6,7 @@ concatenates the encoder feature map of that resolution; a final x2 upsample and
 give the 3 class logits at the input resolution. 587,123 parameters, about 1.2 GFLOP for a
 256 x 256 frame.
 """
+
 from typing import List
 
 import torch
@@ -16,16 +17,22 @@ CLASSES = ("traversable", "non_traversable", "sky")
 
 
 class UNet(nn.Module):
-    def __init__(self, in_channels: int = 3, classes: int = 3,
-                 encoder: List[int] = (16, 32, 64, 128, 128),
-                 decoder: List[int] = (128, 64, 32, 16), slope: float = 0.2):
+    def __init__(
+        self,
+        in_channels: int = 3,
+        classes: int = 3,
+        encoder: List[int] = (16, 32, 64, 128, 128),
+        decoder: List[int] = (128, 64, 32, 16),
+        slope: float = 0.2,
+    ):
         super().__init__()
         if len(decoder) != len(encoder) - 1:
             raise ValueError("decoder needs one stage fewer than the encoder")
         self.slope = slope
         chans = [in_channels] + list(encoder)
         self.down = nn.ModuleList(
-            nn.Conv2d(chans[i], chans[i + 1], 3, stride=2, padding=1) for i in range(len(encoder)))
+            nn.Conv2d(chans[i], chans[i + 1], 3, stride=2, padding=1) for i in range(len(encoder))
+        )
         self.up = nn.ModuleList()
         c = encoder[-1]
         for k, out in enumerate(decoder):

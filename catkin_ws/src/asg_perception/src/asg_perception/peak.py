@@ -5,6 +5,7 @@ AVX-512 FMA width beside it (docs/benchmarks.md).
 
     python3 -m asg_perception.peak MODEL.pt [--repeats 5] [--json OUT]
 """
+
 import argparse
 import json
 import statistics
@@ -76,13 +77,20 @@ def main(argv=None):
         per.append((time.perf_counter() - t0) / len(frames))
     ms = statistics.median(per) * 1000
     peak = conv_peak_gflops(repeats=a.repeats)
-    out = {"unet_gflop_per_frame": flops / 1e9, "unet_ms_per_frame": ms,
-           "unet_gflops": flops / 1e9 / (ms / 1000), "conv_peak_gflops_one_core": peak,
-           "fraction_of_conv_peak": flops / 1e9 / (ms / 1000) / peak, "torch": torch.__version__}
-    print(f"U-Net: {out['unet_gflop_per_frame']:.2f} GFLOP a frame, {ms:.1f} ms a frame on one core "
-          f"(median of {a.repeats} x {a.frames} frames) = {out['unet_gflops']:.0f} GFLOP/s; a large 3x3 "
-          f"convolution on the same backend: {peak:.0f} GFLOP/s; the U-Net reaches "
-          f"{out['fraction_of_conv_peak']:.0%} of it (torch {torch.__version__})")
+    out = {
+        "unet_gflop_per_frame": flops / 1e9,
+        "unet_ms_per_frame": ms,
+        "unet_gflops": flops / 1e9 / (ms / 1000),
+        "conv_peak_gflops_one_core": peak,
+        "fraction_of_conv_peak": flops / 1e9 / (ms / 1000) / peak,
+        "torch": torch.__version__,
+    }
+    print(
+        f"U-Net: {out['unet_gflop_per_frame']:.2f} GFLOP a frame, {ms:.1f} ms a frame on one core "
+        f"(median of {a.repeats} x {a.frames} frames) = {out['unet_gflops']:.0f} GFLOP/s; a large 3x3 "
+        f"convolution on the same backend: {peak:.0f} GFLOP/s; the U-Net reaches "
+        f"{out['fraction_of_conv_peak']:.0%} of it (torch {torch.__version__})"
+    )
     if a.json:
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)

@@ -6,6 +6,7 @@ model is loaded. Images stamped outside the current run's window (ScenarioInfo.R
 dropped before inference and counted; a camera size it was not made for, or a frame it cannot
 label, ends the run at once with a StackError naming this node.
 """
+
 import os
 import threading
 
@@ -26,6 +27,7 @@ def resolve_model(name: str) -> str:
         path = os.path.join(MODELS, name + ".pt")
         if not os.path.isfile(path):
             import rospkg
+
             path = os.path.join(rospkg.RosPack().get_path("asg_perception"), "models", name + ".pt")
         return path
     return name
@@ -62,8 +64,7 @@ class SegmenterNode:
         self.publish_stage_times()
         rospy.Timer(rospy.Duration(1.0), lambda _: self.publish_stage_times())
         rospy.Subscriber("scenario", ScenarioInfo, self.on_scenario, queue_size=4)
-        rospy.Subscriber("camera/image", Image, self.on_image, queue_size=64, tcp_nodelay=True,
-                         buff_size=2 ** 24)
+        rospy.Subscriber("camera/image", Image, self.on_image, queue_size=64, tcp_nodelay=True, buff_size=2**24)
 
     def on_scenario(self, info):
         with self.lock:
@@ -71,13 +72,14 @@ class SegmenterNode:
                 self.info, self.failed = info, None
                 self.runs += 1
                 if (info.camera_width, info.camera_height) != (self.width, self.height):
-                    self.fail(f"camera frames are {info.camera_width}x{info.camera_height}, this "
-                              f"segmenter was made for {self.width}x{self.height} (~width, ~height)")
+                    self.fail(
+                        f"camera frames are {info.camera_width}x{info.camera_height}, this "
+                        f"segmenter was made for {self.width}x{self.height} (~width, ~height)"
+                    )
             if self.failed:  # say it again: the first one may have gone out before the worker listened
                 self.error_pub.publish(self.failed)
             else:
-                self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id,
-                                              run=info.run))
+                self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id, run=info.run))
 
     def publish_stage_times(self):
         stages, seconds, calls, cpu = self.clock.read()
@@ -85,14 +87,24 @@ class SegmenterNode:
         if key == self._last_reading:
             return
         self._last_reading = key
-        self.stage_pub.publish(StageTimes(stamp=rospy.Time.now(), node=self.ack_name, runs=self.runs,
-                                          cpu_seconds=cpu, stages=stages, seconds=seconds, calls=calls))
+        self.stage_pub.publish(
+            StageTimes(
+                stamp=rospy.Time.now(),
+                node=self.ack_name,
+                runs=self.runs,
+                cpu_seconds=cpu,
+                stages=stages,
+                seconds=seconds,
+                calls=calls,
+            )
+        )
 
     def fail(self, reason):
         """Ends the current run (the caller holds the lock)."""
         rospy.logerr(f"segmenter: scenario {self.info.scenario_id}: {reason}")
-        self.failed = StackError(node=self.ack_name, scenario_id=self.info.scenario_id,
-                                 run=self.info.run, reason=reason)
+        self.failed = StackError(
+            node=self.ack_name, scenario_id=self.info.scenario_id, run=self.info.run, reason=reason
+        )
         self.error_pub.publish(self.failed)
 
     def current(self, stamp) -> bool:
@@ -107,28 +119,39 @@ class SegmenterNode:
             if not self.current(msg.header.stamp):
                 self.stale_dropped += 1
                 # Normal after a run ends early (late frames of the last run): counted, not a warning.
-                rospy.logdebug_throttle(5.0, f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
-                                            f"is not of the current run: dropped ({self.stale_dropped} so far)")
+                rospy.logdebug_throttle(
+                    5.0,
+                    f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
+                    f"is not of the current run: dropped ({self.stale_dropped} so far)",
+                )
                 return
             if self.failed:
                 return
             t = (msg.header.stamp - self.info.base_stamp).to_sec()
             with self.clock.time("decode"):
-                ok = (msg.encoding == "rgb8" and msg.step == msg.width * 3
-                      and len(msg.data) == msg.step * msg.height)
+                ok = msg.encoding == "rgb8" and msg.step == msg.width * 3 and len(msg.data) == msg.step * msg.height
                 if ok:
                     rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
             if not ok:
-                return self.fail(f"cannot label the image at t = {t:.3f} s: encoding {msg.encoding!r}, "
-                                 f"{msg.width}x{msg.height}, step {msg.step} (expected packed rgb8)")
+                return self.fail(
+                    f"cannot label the image at t = {t:.3f} s: encoding {msg.encoding!r}, "
+                    f"{msg.width}x{msg.height}, step {msg.step} (expected packed rgb8)"
+                )
             try:
                 with self.clock.time("inference"):
                     labels = self.segmenter(rgb)
             except (ValueError, RuntimeError) as e:
                 return self.fail(f"cannot label the image at t = {t:.3f} s: {e}")
         with self.clock.time("publish"):
-            out = Image(header=msg.header, height=msg.height, width=msg.width, encoding="mono8",
-                        is_bigendian=0, step=msg.width, data=labels.tobytes())
+            out = Image(
+                header=msg.header,
+                height=msg.height,
+                width=msg.width,
+                encoding="mono8",
+                is_bigendian=0,
+                step=msg.width,
+                data=labels.tobytes(),
+            )
             self.pub.publish(out)
 
 

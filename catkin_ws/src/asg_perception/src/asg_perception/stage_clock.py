@@ -1,5 +1,6 @@
 """Where a process's time goes: wall seconds and calls per named stage, plus the process's CPU
 time (no rospy). The segmenter publishes it as asg_msgs/StageTimes; docs/benchmarks.md."""
+
 import threading
 import time
 from contextlib import contextmanager
@@ -28,5 +29,9 @@ class StageClock:
     def read(self):
         """(stages, seconds, calls, process CPU seconds)."""
         with self._lock:
-            return (list(self.stages), [self.seconds[s] for s in self.stages],
-                    [self.calls[s] for s in self.stages], time.process_time())
+            return (
+                list(self.stages),
+                [self.seconds[s] for s in self.stages],
+                [self.calls[s] for s in self.stages],
+                time.process_time(),
+            )

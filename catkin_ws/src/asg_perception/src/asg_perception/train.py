@@ -1,4 +1,5 @@
 """Training of the traversability U-Net (no rospy): `python3 -m asg_perception.train --help`."""
+
 import argparse
 import json
 import os
@@ -12,7 +13,7 @@ import torch.nn.functional as F
 
 from .data import VOID, DatasetError, load_frames, to_tensor
 from .metrics import Confusion
-from .model import CLASSES, UNet, parameter_count
+from .model import UNet, parameter_count
 
 FORMAT = "asg_unet/1"
 
@@ -21,22 +22,21 @@ FORMAT = "asg_unet/1"
 class TrainConfig:
     """Hyper-parameters of one training run (REFERENCE.md values unless noted)."""
 
-    data: str = ""              #: dataset folder (asg_sim_dataset output)
-    out: str = "runs/unet"      #: output folder: checkpoint.pt, model.pt, history.json
-    epochs: int = 4             #: passes over the training split
-    batch_size: int = 16        #: frames per step
-    lr: float = 1e-4            #: Adam learning rate
-    val_fraction: float = 0.1   #: share of frames held out for per-epoch validation
-    flip_prob: float = 0.5      #: probability of a horizontal flip per frame
-    crop: int = 0               #: [px] random square training crop (0: whole frame, as shipped)
-    seed: int = 0               #: seeds the split, the shuffles, the crops and the weights
-    threads: int = 2            #: torch CPU threads
-    limit: int = 0              #: use only the first N frames (0: all)
+    data: str = ""  #: dataset folder (asg_sim_dataset output)
+    out: str = "runs/unet"  #: output folder: checkpoint.pt, model.pt, history.json
+    epochs: int = 4  #: passes over the training split
+    batch_size: int = 16  #: frames per step
+    lr: float = 1e-4  #: Adam learning rate
+    val_fraction: float = 0.1  #: share of frames held out for per-epoch validation
+    flip_prob: float = 0.5  #: probability of a horizontal flip per frame
+    crop: int = 0  #: [px] random square training crop (0: whole frame, as shipped)
+    seed: int = 0  #: seeds the split, the shuffles, the crops and the weights
+    threads: int = 2  #: torch CPU threads
+    limit: int = 0  #: use only the first N frames (0: all)
 
 
 def save_model(path: str, model: UNet, config: TrainConfig, history: list, extra: dict = None):
-    blob = {"format": FORMAT, "state_dict": model.state_dict(), "config": asdict(config),
-            "history": history}
+    blob = {"format": FORMAT, "state_dict": model.state_dict(), "config": asdict(config), "history": history}
     blob.update(extra or {})
     tmp = path + ".tmp"
     torch.save(blob, tmp)
@@ -66,7 +66,7 @@ def predict(model: UNet, rgb: np.ndarray, batch: int = 8) -> np.ndarray:
     out = []
     with torch.no_grad():
         for i in range(0, len(rgb), batch):
-            out.append(model(to_tensor(rgb[i:i + batch])).argmax(1).to(torch.uint8).numpy())
+            out.append(model(to_tensor(rgb[i : i + batch])).argmax(1).to(torch.uint8).numpy())
     return np.concatenate(out)
 
 
@@ -79,7 +79,7 @@ def evaluate(model: UNet, frames, batch: int = 8, low_sun_deg: float = 15.0, lab
     by_sun = {}
     inc = [float(r.get("sun_inclination_deg", "nan")) for r in frames.rows]
     for i in range(0, len(frames), batch):
-        pred = labeller(frames.rgb[i:i + batch]) if labeller else predict(model, frames.rgb[i:i + batch], batch)
+        pred = labeller(frames.rgb[i : i + batch]) if labeller else predict(model, frames.rgb[i : i + batch], batch)
         for k in range(len(pred)):
             args = (pred[k], frames.labels[i + k], frames.lit[i + k])
             conf.add(*args)
@@ -119,27 +119,35 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
         rng.bit_generator.state = blob["numpy_rng"]
         torch.set_rng_state(blob["torch_rng"])
         print(f"resuming {ckpt} after epoch {start}", flush=True)
-    val = type(frames)(frames.rgb[val_idx], frames.labels[val_idx], frames.lit[val_idx],
-                       [frames.rows[i] for i in val_idx])
-    print(f"U-Net {parameter_count(model):,} parameters; {len(train_idx)} training and "
-          f"{len(val_idx)} validation frames; {cfg.epochs} epochs", flush=True)
+    val = type(frames)(
+        frames.rgb[val_idx], frames.labels[val_idx], frames.lit[val_idx], [frames.rows[i] for i in val_idx]
+    )
+    print(
+        f"U-Net {parameter_count(model):,} parameters; {len(train_idx)} training and "
+        f"{len(val_idx)} validation frames; {cfg.epochs} epochs",
+        flush=True,
+    )
     for epoch in range(start, cfg.epochs):
         model.train()
         perm = rng.permutation(train_idx)
         losses = []
-        bar = tqdm(range(0, len(perm), cfg.batch_size), desc=f"epoch {epoch + 1}/{cfg.epochs}",
-                   unit="batch", disable=not progress)
+        bar = tqdm(
+            range(0, len(perm), cfg.batch_size),
+            desc=f"epoch {epoch + 1}/{cfg.epochs}",
+            unit="batch",
+            disable=not progress,
+        )
         t0 = time.time()
         for b in bar:
-            idx = perm[b:b + cfg.batch_size]
+            idx = perm[b : b + cfg.batch_size]
             x = frames.rgb[idx]
             y = frames.labels[idx]
             if cfg.crop:
                 h, w = x.shape[1:3]
                 r = rng.integers(0, h - cfg.crop + 1, len(idx))
                 c = rng.integers(0, w - cfg.crop + 1, len(idx))
-                x = np.stack([x[k, r[k]:r[k] + cfg.crop, c[k]:c[k] + cfg.crop] for k in range(len(idx))])
-                y = np.stack([y[k, r[k]:r[k] + cfg.crop, c[k]:c[k] + cfg.crop] for k in range(len(idx))])
+                x = np.stack([x[k, r[k] : r[k] + cfg.crop, c[k] : c[k] + cfg.crop] for k in range(len(idx))])
+                y = np.stack([y[k, r[k] : r[k] + cfg.crop, c[k] : c[k] + cfg.crop] for k in range(len(idx))])
             flip = rng.random(len(idx)) < cfg.flip_prob
             x = np.where(flip[:, None, None, None], x[:, :, ::-1], x)
             y = np.where(flip[:, None, None], y[:, :, ::-1], y)
@@ -153,15 +161,26 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
             bar.set_postfix(loss=f"{np.mean(losses[-20:]):.4f}")
         model.eval()
         metrics = evaluate(model, val)
-        entry = {"epoch": epoch + 1, "train_loss": float(np.mean(losses)),
-                 "seconds": time.time() - t0, **metrics}
+        entry = {"epoch": epoch + 1, "train_loss": float(np.mean(losses)), "seconds": time.time() - t0, **metrics}
         history.append(entry)
         iou = " ".join(f"{k} {v:.3f}" for k, v in metrics["iou"].items())
-        print(f"epoch {epoch + 1}: loss {entry['train_loss']:.4f}, validation IoU {iou}, "
-              f"shadow false-obstacle {metrics['shadow_false_obstacle_rate']:.4f}", flush=True)
-        save_model(ckpt, model, cfg, history,
-                   {"epoch": epoch, "optimizer": opt.state_dict(),
-                    "numpy_rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state()})
+        print(
+            f"epoch {epoch + 1}: loss {entry['train_loss']:.4f}, validation IoU {iou}, "
+            f"shadow false-obstacle {metrics['shadow_false_obstacle_rate']:.4f}",
+            flush=True,
+        )
+        save_model(
+            ckpt,
+            model,
+            cfg,
+            history,
+            {
+                "epoch": epoch,
+                "optimizer": opt.state_dict(),
+                "numpy_rng": rng.bit_generator.state,
+                "torch_rng": torch.get_rng_state(),
+            },
+        )
     save_model(os.path.join(cfg.out, "model.pt"), model, cfg, history)
     with open(os.path.join(cfg.out, "history.json"), "w") as f:
         json.dump(history, f, indent=1)
@@ -169,12 +188,16 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="train_unet", description="Train the traversability U-Net "
-                                "on an asg_sim_dataset folder; writes checkpoint.pt after every "
-                                "epoch (resumable) and model.pt at the end.")
+    p = argparse.ArgumentParser(
+        prog="train_unet",
+        description="Train the traversability U-Net "
+        "on an asg_sim_dataset folder; writes checkpoint.pt after every "
+        "epoch (resumable) and model.pt at the end.",
+    )
     for f in fields(TrainConfig):
-        p.add_argument("--" + f.name.replace("_", "-"), type=type(f.default), default=f.default,
-                       required=f.name == "data")
+        p.add_argument(
+            "--" + f.name.replace("_", "-"), type=type(f.default), default=f.default, required=f.name == "data"
+        )
     p.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
     a = p.parse_args(argv)
     cfg = TrainConfig(**{f.name: getattr(a, f.name) for f in fields(TrainConfig)})

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
 """rostest: the segmenter turns published images into label images with the same stamps."""
+
 import os
 import unittest
 
@@ -27,16 +28,16 @@ class SegmenterTest(unittest.TestCase):
         while not acks and rospy.Time.now() < deadline:
             # Announce as the worker does: again every 0.5 s until acknowledged (an ack sent
             # before our subscription was connected is lost). The model is loaded by then.
-            ann.publish(ScenarioInfo(scenario_id=7, run=3, base_stamp=base, camera_width=256,
-                                     camera_height=256))
+            ann.publish(ScenarioInfo(scenario_id=7, run=3, base_stamp=base, camera_width=256, camera_height=256))
             rospy.sleep(0.5)
         self.assertTrue(acks, "no acknowledgement from the segmenter")
         self.assertEqual((acks[0].node, acks[0].scenario_id, acks[0].run), ("segmenter", 7, 3))
         while pub.get_num_connections() == 0:
             rospy.sleep(0.05)
         # A rendered camera frame (left third of the docs panel): sky on top, ground below.
-        rgb = np.asarray(PILImage.open(os.path.join(REPO, "docs", "images", "shadows_panel.png"))
-                         .convert("RGB"))[:256, :256].copy()
+        rgb = np.asarray(PILImage.open(os.path.join(REPO, "docs", "images", "shadows_panel.png")).convert("RGB"))[
+            :256, :256
+        ].copy()
         stamps = [base + rospy.Duration(k / 15.0) for k in range(3)]
         stale = rospy.Time(2 * ScenarioInfo.RUN_WINDOW + 1)  # a late frame of the run before
         for st in [stale] + stamps:
@@ -59,8 +60,8 @@ class SegmenterTest(unittest.TestCase):
             self.assertEqual((m.encoding, m.width, m.height, m.header.frame_id), ("mono8", 256, 256, "camera"))
             labels = np.frombuffer(m.data, np.uint8).reshape(256, 256)
             self.assertTrue(set(np.unique(labels)) <= {0, 1, 2})
-            self.assertGreater((labels[:64] == 2).mean(), 0.95)    # sky
-            self.assertGreater((labels[200:] == 0).mean(), 0.7)    # near ground
+            self.assertGreater((labels[:64] == 2).mean(), 0.95)  # sky
+            self.assertGreater((labels[200:] == 0).mean(), 0.7)  # near ground
 
 
 if __name__ == "__main__":

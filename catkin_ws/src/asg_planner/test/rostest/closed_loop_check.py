@@ -1,5 +1,6 @@
 #!/usr/bin/python3
 """rostest: the scene worker and the planner in closed loop on ground-truth labels."""
+
 import math
 import os
 import unittest
@@ -26,9 +27,15 @@ def exp1(scenario_id, layouts):
 def bush_row():
     # Five bushes 2.5 m apart across the start-goal diagonal at its middle (50, 50).
     d = 2.5 / math.sqrt(2)
-    return [{"mesh_name": "barberry", "instances": [
-        {"visible": True, "cast_shadow": True, "x": 50 + k * d, "y": 50 - k * d, "yaw": 0.0,
-         "scale": 1.0} for k in range(-2, 3)]}]
+    return [
+        {
+            "mesh_name": "barberry",
+            "instances": [
+                {"visible": True, "cast_shadow": True, "x": 50 + k * d, "y": 50 - k * d, "yaw": 0.0, "scale": 1.0}
+                for k in range(-2, 3)
+            ],
+        }
+    ]
 
 
 def path_length(traj):

@@ -4,6 +4,7 @@ The C++ simulator builds the meshes (asg_sim_core, ``meshCatalogue()``); this mo
 figures that Python tools need without the simulator: footprint radius and height at scale 1.
 A test compares both sides (``asg_sim_catalogue`` prints the C++ figures).
 """
+
 from dataclasses import dataclass
 
 #: An obstacle no taller than this counts as traversable: the vehicle may drive over it [m].

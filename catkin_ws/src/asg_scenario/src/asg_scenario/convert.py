@@ -2,6 +2,7 @@
 
 Imports only the generated message classes (genpy), never rospy.
 """
+
 from .schema import INSTANCE_FIELDS, LANDSCAPE_FIELDS, OPERATIONAL_FIELDS, TEXTURAL_FIELDS
 
 
@@ -17,8 +18,16 @@ def _read(msg, fields):
 
 def to_scene_msg(scenario: dict):
     """asg_msgs/SceneDescription from a validated scenario dict."""
-    from asg_msgs.msg import (Landscape, ObstacleInstance, ObstacleLayout, OperationalAttributes,
-                              SceneDescription, StructuralAttributes, TexturalAttributes)
+    from asg_msgs.msg import (
+        Landscape,
+        ObstacleInstance,
+        ObstacleLayout,
+        OperationalAttributes,
+        SceneDescription,
+        StructuralAttributes,
+        TexturalAttributes,
+    )
+
     st = scenario["structural"]
     layouts = []
     for layout in st["layouts"]:
@@ -26,7 +35,8 @@ def to_scene_msg(scenario: dict):
         layouts.append(ObstacleLayout(mesh_name=layout["mesh_name"], instances=insts))
     return SceneDescription(
         structural=StructuralAttributes(
-            landscape=_fill(Landscape(), st["landscape"], LANDSCAPE_FIELDS), layouts=layouts),
+            landscape=_fill(Landscape(), st["landscape"], LANDSCAPE_FIELDS), layouts=layouts
+        ),
         textural=_fill(TexturalAttributes(), scenario["textural"], TEXTURAL_FIELDS),
         operational=_fill(OperationalAttributes(), scenario["operational"], OPERATIONAL_FIELDS),
     )
@@ -35,8 +45,10 @@ def to_scene_msg(scenario: dict):
 def to_goal_msg(scenario: dict):
     """asg_msgs/RunScenarioGoal from a validated scenario dict."""
     from asg_msgs.msg import RunScenarioGoal
-    return RunScenarioGoal(scenario_id=scenario["scenario_id"], scene=to_scene_msg(scenario),
-                           record_labels=scenario["record_labels"])
+
+    return RunScenarioGoal(
+        scenario_id=scenario["scenario_id"], scene=to_scene_msg(scenario), record_labels=scenario["record_labels"]
+    )
 
 
 def from_scene_msg(scene, scenario_id: int = 1, name: str = "", record_labels: bool = True) -> dict:
@@ -49,9 +61,10 @@ def from_scene_msg(scene, scenario_id: int = 1, name: str = "", record_labels: b
         "record_labels": record_labels,
         "structural": {
             "landscape": _read(st.landscape, LANDSCAPE_FIELDS),
-            "layouts": [{"mesh_name": l.mesh_name,
-                         "instances": [_read(i, INSTANCE_FIELDS) for i in l.instances]}
-                        for l in st.layouts],
+            "layouts": [
+                {"mesh_name": l.mesh_name, "instances": [_read(i, INSTANCE_FIELDS) for i in l.instances]}
+                for l in st.layouts
+            ],
         },
         "textural": _read(scene.textural, TEXTURAL_FIELDS),
         "operational": _read(scene.operational, OPERATIONAL_FIELDS),

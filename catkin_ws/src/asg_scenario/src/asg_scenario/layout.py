@@ -4,6 +4,7 @@ The generator's action is the x, y of every obstacle instance of a scenario, in 
 order of its layouts (layout 0's instances, then layout 1's, ...): the same order as
 RunScenarioResult.obstacle_visibility. These helpers move between that vector and a scenario.
 """
+
 import copy
 from typing import List, Sequence, Tuple
 

@@ -1,4 +1,5 @@
 """Writing a run's outcome: trajectory CSV, result YAML and a top-down picture (no ROS)."""
+
 import csv
 import math
 import os
@@ -8,8 +9,16 @@ import yaml
 
 from .catalogue import MESHES
 
-TERMINATION_NAMES = ["SUCCESS", "COLLISION", "FLIPPED", "SIM_TIMEOUT", "IDLING_TIMEOUT",
-                     "STUCK_TIMEOUT", "OUT_OF_BOUNDS", "ERROR"]
+TERMINATION_NAMES = [
+    "SUCCESS",
+    "COLLISION",
+    "FLIPPED",
+    "SIM_TIMEOUT",
+    "IDLING_TIMEOUT",
+    "STUCK_TIMEOUT",
+    "OUT_OF_BOUNDS",
+    "ERROR",
+]
 
 
 def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
@@ -37,10 +46,19 @@ def write_result_yaml(path: str, result: dict):
         yaml.safe_dump(result, f, sort_keys=False)
 
 
-def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: str = "",
-             removed: Optional[set] = None, background=None, votes=None, vote_cell: float = 0.0,
-             optimal: Optional[Sequence[Sequence[float]]] = None, label: str = "vehicle",
-             others: Sequence[tuple] = ()):
+def plot_run(
+    path: str,
+    scenario: dict,
+    xy: Sequence[Sequence[float]],
+    title: str = "",
+    removed: Optional[set] = None,
+    background=None,
+    votes=None,
+    vote_cell: float = 0.0,
+    optimal: Optional[Sequence[Sequence[float]]] = None,
+    label: str = "vehicle",
+    others: Sequence[tuple] = (),
+):
     """Top-down PNG: landscape, obstacles (removed ones dashed), start, goal, trajectory.
 
     background: optional HxWx3 uint8 rendering of [0, size]^2 (row 0 at y = size) drawn below.
@@ -52,6 +70,7 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
     scenario driven by a reference stack).
     """
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
@@ -71,32 +90,45 @@ def plot_run(path: str, scenario: dict, xy: Sequence[Sequence[float]], title: st
             if not inst["visible"]:
                 continue
             gone = (i, j) in removed
-            ax.add_patch(Circle((inst["x"], inst["y"]), mesh.collision_radius * inst["scale"],
-                                color=colors.get(layout["mesh_name"], "k"),
-                                fill=not gone and background is None,
-                                ls="--" if gone else "-", alpha=0.8))
+            ax.add_patch(
+                Circle(
+                    (inst["x"], inst["y"]),
+                    mesh.collision_radius * inst["scale"],
+                    color=colors.get(layout["mesh_name"], "k"),
+                    fill=not gone and background is None,
+                    ls="--" if gone else "-",
+                    alpha=0.8,
+                )
+            )
     if votes:
         from matplotlib.patches import Rectangle
+
         side = vote_cell or 1.0
         for v in votes:
             w = max(0.0, min(1.0, v["weight"]))
-            ax.add_patch(Rectangle((v["x"] - side / 2, v["y"] - side / 2), side, side,
-                                   color=(1.0, 1.0 - w, 0.0), alpha=0.25 + 0.6 * w, lw=0))
-    for (x, y), r, c, label in (((op["start_x"], op["start_y"]), op["safety_radius"], "tab:blue",
-                                 "start"), ((op["goal_x"], op["goal_y"]), op["goal_radius"],
-                                            "tab:orange", "goal")):
+            ax.add_patch(
+                Rectangle(
+                    (v["x"] - side / 2, v["y"] - side / 2),
+                    side,
+                    side,
+                    color=(1.0, 1.0 - w, 0.0),
+                    alpha=0.25 + 0.6 * w,
+                    lw=0,
+                )
+            )
+    for (x, y), r, c, label in (
+        ((op["start_x"], op["start_y"]), op["safety_radius"], "tab:blue", "start"),
+        ((op["goal_x"], op["goal_y"]), op["goal_radius"], "tab:orange", "goal"),
+    ):
         ax.add_patch(Circle((x, y), r, fill=False, color=c, ls=":"))
         ax.plot([x], [y], "o", color=c, label=label)
     if optimal is not None and len(optimal):
-        ax.plot([p[0] for p in optimal], [p[1] for p in optimal], "--", color="0.15", lw=1.2,
-                label="optimal path")
+        ax.plot([p[0] for p in optimal], [p[1] for p in optimal], "--", color="0.15", lw=1.2, label="optimal path")
     for other_label, other_xy, colour in others:
         if len(other_xy):
-            ax.plot([p[0] for p in other_xy], [p[1] for p in other_xy], "-", color=colour, lw=1.5,
-                    label=other_label)
+            ax.plot([p[0] for p in other_xy], [p[1] for p in other_xy], "-", color=colour, lw=1.5, label=other_label)
     if len(xy):
-        ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="magenta", lw=1.8,
-                label=vehicle_label)
+        ax.plot([p[0] for p in xy], [p[1] for p in xy], "-", color="magenta", lw=1.8, label=vehicle_label)
     ax.set_xlim(-2, size + 2)
     ax.set_ylim(-2, size + 2)
     ax.set_aspect("equal")

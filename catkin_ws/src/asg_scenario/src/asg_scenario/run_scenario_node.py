@@ -2,13 +2,13 @@
 
 The ROS adapter of the scenario tools (this module is the only one here that imports rospy).
 """
+
 import argparse
 import os
 import sys
 
 from .convert import to_goal_msg
-from .report import (TERMINATION_NAMES, path_length, plot_run, write_result_yaml,
-                     write_trajectory_csv, yaw_of)
+from .report import TERMINATION_NAMES, path_length, plot_run, write_result_yaml, write_trajectory_csv, yaw_of
 from .schema import ScenarioError, dump_scenario, load_scenario
 from .votes import phantom_votes, shadow_votes
 
@@ -17,8 +17,21 @@ def _samples(result):
     out = []
     for s in result.trajectory:
         p, q, v, w = s.pose.position, s.pose.orientation, s.twist.linear, s.twist.angular
-        out.append(dict(t=s.t, x=p.x, y=p.y, z=p.z, yaw=yaw_of(q.x, q.y, q.z, q.w), vx=v.x,
-                        vy=v.y, vz=v.z, wx=w.x, wy=w.y, wz=w.z))
+        out.append(
+            dict(
+                t=s.t,
+                x=p.x,
+                y=p.y,
+                z=p.z,
+                yaw=yaw_of(q.x, q.y, q.z, q.w),
+                vx=v.x,
+                vy=v.y,
+                vz=v.z,
+                wx=w.x,
+                wy=w.y,
+                wz=w.z,
+            )
+        )
     return out
 
 
@@ -30,19 +43,22 @@ def main(argv=None):
     parser = argparse.ArgumentParser(
         prog="run_scenario",
         description="Run a scenario YAML file on a scene worker and write the outcome "
-                    "(result.yaml, trajectory.csv, run.png) to an output folder.")
+        "(result.yaml, trajectory.csv, run.png) to an output folder.",
+    )
     parser.add_argument("scenario", help="scenario YAML file (docs/scenario-format.md)")
     parser.add_argument("--worker", default="/worker_0", help="worker namespace [/worker_0]")
     parser.add_argument("--out", default="runs/latest", help="output folder [runs/latest]")
-    parser.add_argument("--timeout", type=float, default=600.0,
-                        help="wall-clock limit for the whole run [s] (600)")
-    parser.add_argument("--scenario-id", type=int, default=None,
-                        help="override the file's scenario_id")
-    parser.add_argument("--votes", action="store_true",
-                        help="also record the planner's final vote grid (WORKER/planner/votes) "
-                             "into result.yaml and draw it in run.png")
-    parser.add_argument("--top-down", type=int, default=768,
-                        help="size of the rendered top-down picture [px] (768; 0: none)")
+    parser.add_argument("--timeout", type=float, default=600.0, help="wall-clock limit for the whole run [s] (600)")
+    parser.add_argument("--scenario-id", type=int, default=None, help="override the file's scenario_id")
+    parser.add_argument(
+        "--votes",
+        action="store_true",
+        help="also record the planner's final vote grid (WORKER/planner/votes) "
+        "into result.yaml and draw it in run.png",
+    )
+    parser.add_argument(
+        "--top-down", type=int, default=768, help="size of the rendered top-down picture [px] (768; 0: none)"
+    )
     args = parser.parse_args(argv)
 
     try:
@@ -62,8 +78,7 @@ def main(argv=None):
     client = actionlib.SimpleActionClient(name, RunScenarioAction)
     print(f"waiting for worker action server {name} ...", flush=True)
     if not client.wait_for_server(rospy.Duration(60.0)):
-        print(f"error: no action server at {name} after 60 s (is the worker launched?)",
-              file=sys.stderr)
+        print(f"error: no action server at {name} after 60 s (is the worker launched?)", file=sys.stderr)
         return 3
     last = [-1.0]
     votes = {}
@@ -75,19 +90,19 @@ def main(argv=None):
                 if m.ns == "votes":
                     votes["cells"] = [(p.x, p.y, c.a) for p, c in zip(m.points, m.colors)]
                     votes["size"] = m.scale.x
+
         rospy.Subscriber(args.worker.rstrip("/") + "/planner/votes", MarkerArray, on_votes)
 
     def feedback(fb):
         if fb.sim_time - last[0] >= 1.0:
             last[0] = fb.sim_time
-            print(f"  t = {fb.sim_time:6.1f} s   distance to goal {fb.distance_to_goal:7.2f} m",
-                  flush=True)
+            print(f"  t = {fb.sim_time:6.1f} s   distance to goal {fb.distance_to_goal:7.2f} m", flush=True)
 
-    print(f"running scenario {scenario['scenario_id']} ({scenario['name'] or args.scenario})",
-          flush=True)
+    print(f"running scenario {scenario['scenario_id']} ({scenario['name'] or args.scenario})", flush=True)
     goal = to_goal_msg(scenario)
     goal.top_down_px = max(0, args.top_down)
     import time
+
     wall0 = time.monotonic()
     client.send_goal(goal, feedback_cb=feedback)
     if not client.wait_for_result(rospy.Duration(args.timeout)):
@@ -101,8 +116,11 @@ def main(argv=None):
     samples = _samples(result)
     xy = [(s["x"], s["y"]) for s in samples]
     os.makedirs(args.out, exist_ok=True)
-    name = TERMINATION_NAMES[result.termination] if result.termination < len(
-        TERMINATION_NAMES) else str(result.termination)
+    name = (
+        TERMINATION_NAMES[result.termination]
+        if result.termination < len(TERMINATION_NAMES)
+        else str(result.termination)
+    )
     summary = {
         "scenario_id": int(result.scenario_id),
         "termination": name,
@@ -113,20 +131,23 @@ def main(argv=None):
         "path_length": path_length(xy),
         "trajectory_samples": len(samples),
         "obstacle_visibility": [float(v) for v in result.obstacle_visibility],
-        "removed_obstacles": [{"layout": int(r.layout_index), "instance": int(r.instance_index),
-                               "reason": r.reason} for r in result.removed_obstacles],
+        "removed_obstacles": [
+            {"layout": int(r.layout_index), "instance": int(r.instance_index), "reason": r.reason}
+            for r in result.removed_obstacles
+        ],
         "collision_with": result.collision_with,
     }
     removed = removed_set(result)
     cell = votes.get("size", 0) / 0.6 if votes else 0  # the marker side is 0.6 x the vote spacing
     if args.votes:
         # Marker alpha is 0.3 + 0.7 votes / max_votes (planner.yaml max_votes: 50).
-        summary["votes"] = [{"x": x, "y": y, "weight": round((a - 0.3) / 0.7, 3)}
-                            for x, y, a in votes.get("cells", [])]
+        summary["votes"] = [{"x": x, "y": y, "weight": round((a - 0.3) / 0.7, 3)} for x, y, a in votes.get("cells", [])]
         summary["phantom_vote_vertices"] = phantom_votes(scenario, summary["votes"], cell, removed)
         summary["shadow_vote_vertices"] = shadow_votes(scenario, summary["votes"], cell, removed)
-        print(f"votes: {len(summary['votes'])} vertices, {summary['phantom_vote_vertices']} with no "
-              f"obstacle near, {summary['shadow_vote_vertices']} of those in a cast shadow")
+        print(
+            f"votes: {len(summary['votes'])} vertices, {summary['phantom_vote_vertices']} with no "
+            f"obstacle near, {summary['shadow_vote_vertices']} of those in a cast shadow"
+        )
     write_result_yaml(os.path.join(args.out, "result.yaml"), summary)
     write_trajectory_csv(os.path.join(args.out, "trajectory.csv"), samples)
     with open(os.path.join(args.out, "scenario.yaml"), "w") as f:
@@ -134,14 +155,24 @@ def main(argv=None):
     background = None
     if result.top_down.width > 0 and result.top_down.encoding == "rgb8":
         import numpy as np
+
         background = np.frombuffer(bytes(result.top_down.data), dtype=np.uint8).reshape(
-            result.top_down.height, result.top_down.width, 3)
-    plot_run(os.path.join(args.out, "run.png"), scenario, xy,
-             f"{scenario['name']}: {name} after {result.sim_time:.1f} s", removed, background,
-             votes=summary.get("votes"), vote_cell=cell)
-    print(f"outcome: {name}  sim_time {result.sim_time:.2f} s  wall {wall:.2f} s "
-          f"({result.sim_time / max(wall, 1e-9):.1f}x real time)  path {summary['path_length']:.1f} m"
-          f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}"
-                                                         if result.error else ""))
+            result.top_down.height, result.top_down.width, 3
+        )
+    plot_run(
+        os.path.join(args.out, "run.png"),
+        scenario,
+        xy,
+        f"{scenario['name']}: {name} after {result.sim_time:.1f} s",
+        removed,
+        background,
+        votes=summary.get("votes"),
+        vote_cell=cell,
+    )
+    print(
+        f"outcome: {name}  sim_time {result.sim_time:.2f} s  wall {wall:.2f} s "
+        f"({result.sim_time / max(wall, 1e-9):.1f}x real time)  path {summary['path_length']:.1f} m"
+        f"  control msgs {result.num_control_msgs}" + (f"  error: {result.error}" if result.error else "")
+    )
     print(f"wrote {args.out}/result.yaml, trajectory.csv, scenario.yaml, run.png")
     return 0 if name != "ERROR" else 1

@@ -6,6 +6,7 @@ tool loads scenarios through :func:`load_scenario` or :func:`validate_scenario`,
 canonical dict (every field present, with its documented type) or raise :class:`ScenarioError`
 listing every problem found, each naming the field, the value and what is allowed.
 """
+
 import math
 from dataclasses import dataclass
 from typing import Any, List, Optional, Tuple
@@ -58,17 +59,32 @@ class Field:
 TOP_FIELDS = [
     Field("format_version", int, "-", 1, 1, "Version of this format.", FORMAT_VERSION),
     Field("name", str, "-", None, None, "Free-form name shown in logs and reports.", ""),
-    Field("scenario_id", int, "-", 1, 2**32 - 1,
-          "Id announced to the autonomy stack; tools assign one when absent.", 1),
-    Field("record_labels", bool, "-", None, None,
-          "Render ground-truth labels during the run (needed for per-obstacle visibility).", True),
+    Field(
+        "scenario_id", int, "-", 1, 2**32 - 1, "Id announced to the autonomy stack; tools assign one when absent.", 1
+    ),
+    Field(
+        "record_labels",
+        bool,
+        "-",
+        None,
+        None,
+        "Render ground-truth labels during the run (needed for per-obstacle visibility).",
+        True,
+    ),
 ]
 
 LANDSCAPE_FIELDS = [
     Field("size", float, "m", 1.0, MAX_LANDSCAPE_SIZE, "Side of the nominal square [0, size]^2."),
     Field("subdivisions", int, "-", 1, 4096, "Ground mesh cells per side.", 64),
-    Field("border", float, "m", 0.0, MAX_BORDER,
-          "Ground rendered around the nominal square (horizon, leaving the area).", 50.0),
+    Field(
+        "border",
+        float,
+        "m",
+        0.0,
+        MAX_BORDER,
+        "Ground rendered around the nominal square (horizon, leaving the area).",
+        50.0,
+    ),
 ]
 
 INSTANCE_FIELDS = [
@@ -81,10 +97,23 @@ INSTANCE_FIELDS = [
 ]
 
 TEXTURAL_FIELDS = [
-    Field("sun_inclination_deg", float, "deg", 0.0, 90.0,
-          "Sun elevation above the horizon (90: overhead, no visible shadows)."),
-    Field("sun_yaw_deg", float, "deg", -360.0, 360.0,
-          "Direction the sunlight comes from, counter-clockwise from map +x.", 0.0),
+    Field(
+        "sun_inclination_deg",
+        float,
+        "deg",
+        0.0,
+        90.0,
+        "Sun elevation above the horizon (90: overhead, no visible shadows).",
+    ),
+    Field(
+        "sun_yaw_deg",
+        float,
+        "deg",
+        -360.0,
+        360.0,
+        "Direction the sunlight comes from, counter-clockwise from map +x.",
+        0.0,
+    ),
     Field("ground_texture_seed", int, "-", 0, 2**32 - 1, "Seed of the ground texture.", 0),
 ]
 
@@ -95,17 +124,22 @@ OPERATIONAL_FIELDS = [
     Field("goal_x", float, "m", None, None, "Goal, within the landscape."),
     Field("goal_y", float, "m", None, None, "Goal, within the landscape."),
     Field("goal_radius", float, "m", 0.1, 1000.0, "Success within this distance of the goal.", 11.0),
-    Field("safety_radius", float, "m", 0.0, 1000.0,
-          "Obstacles closer than this to start or goal are removed.", 11.0),
+    Field("safety_radius", float, "m", 0.0, 1000.0, "Obstacles closer than this to start or goal are removed.", 11.0),
     Field("speed", float, "m/s", 0.1, 30.0, "Tracking speed of the vehicle under test.", 5.0),
-    Field("sim_timeout", float, "s", 0.1, MAX_SIM_TIMEOUT,
-          "Simulated time limit (required to be finite: every run ends).", 120.0),
+    Field(
+        "sim_timeout",
+        float,
+        "s",
+        0.1,
+        MAX_SIM_TIMEOUT,
+        "Simulated time limit (required to be finite: every run ends).",
+        120.0,
+    ),
     Field("idle_timeout", float, "s", 0.1, MAX_SIM_TIMEOUT, "Idling time limit.", 10.0, -1.0),
     Field("stuck_timeout", float, "s", 0.1, MAX_SIM_TIMEOUT, "Stuck time limit.", 10.0, -1.0),
     Field("max_roll_deg", float, "deg", 1.0, 180.0, "Roll beyond this ends the run (FLIPPED).", 70.0),
     Field("max_pitch_deg", float, "deg", 1.0, 180.0, "Pitch beyond this ends the run.", 70.0),
-    Field("allow_collisions", bool, "-", None, None, "Contact with obstacles does not end the run.",
-          False),
+    Field("allow_collisions", bool, "-", None, None, "Contact with obstacles does not end the run.", False),
 ]
 
 #: Sections of the format, for docs and iteration: (path, fields).
@@ -150,8 +184,7 @@ class _Checker:
         known = {f.key for f in fields}
         for key in data:
             if key not in known:
-                self.fail(_join(path, str(key)),
-                          f"unknown field (allowed: {', '.join(sorted(known))})")
+                self.fail(_join(path, str(key)), f"unknown field (allowed: {', '.join(sorted(known))})")
         for f in fields:
             out[f.key] = self.scalar(data, f, path)
         return out
@@ -212,8 +245,7 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
     """
     c = _Checker()
     if not isinstance(data, dict):
-        raise ScenarioError([("<root>", f"must be a mapping of sections, got {type(data).__name__}")],
-                            source)
+        raise ScenarioError([("<root>", f"must be a mapping of sections, got {type(data).__name__}")], source)
     sections = {"structural", "textural", "operational"}
     top_keys = {f.key for f in TOP_FIELDS}
     for key in data:
@@ -225,8 +257,9 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
     for key in structural:
         if key not in ("landscape", "layouts"):
             c.fail(f"structural.{key}", "unknown field (allowed: landscape, layouts)")
-    landscape = c.fields(c.mapping(structural.get("landscape"), "structural.landscape"),
-                         LANDSCAPE_FIELDS, "structural.landscape")
+    landscape = c.fields(
+        c.mapping(structural.get("landscape"), "structural.landscape"), LANDSCAPE_FIELDS, "structural.landscape"
+    )
     layouts = []
     raw_layouts = structural.get("layouts", [])
     if not isinstance(raw_layouts, list):
@@ -260,10 +293,8 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
     if total > MAX_OBSTACLES:
         c.fail("structural.layouts", f"{total} obstacle instances: at most {MAX_OBSTACLES} allowed")
     out["structural"] = {"landscape": landscape, "layouts": layouts}
-    out["textural"] = c.fields(c.mapping(data.get("textural"), "textural"), TEXTURAL_FIELDS,
-                               "textural")
-    out["operational"] = c.fields(c.mapping(data.get("operational"), "operational"),
-                                  OPERATIONAL_FIELDS, "operational")
+    out["textural"] = c.fields(c.mapping(data.get("textural"), "textural"), TEXTURAL_FIELDS, "textural")
+    out["operational"] = c.fields(c.mapping(data.get("operational"), "operational"), OPERATIONAL_FIELDS, "operational")
     if not c.problems:
         _check_geometry(out, c)
     if c.problems:
@@ -277,9 +308,11 @@ def _check_geometry(s: dict, c: _Checker):
     op = s["operational"]
     cells = land["subdivisions"] * (size + 2.0 * land["border"]) / size
     if cells > MAX_GROUND_CELLS_PER_SIDE:
-        c.fail("structural.landscape.subdivisions",
-               f"= {land['subdivisions']} gives {math.ceil(cells)} ground cells per side with the "
-               f"border: at most {MAX_GROUND_CELLS_PER_SIDE:g} (subdivisions x (size + 2 border) / size)")
+        c.fail(
+            "structural.landscape.subdivisions",
+            f"= {land['subdivisions']} gives {math.ceil(cells)} ground cells per side with the "
+            f"border: at most {MAX_GROUND_CELLS_PER_SIDE:g} (subdivisions x (size + 2 border) / size)",
+        )
 
     def inside(path, x, y):
         ok = True
@@ -304,9 +337,12 @@ def _check_geometry(s: dict, c: _Checker):
                 continue  # the worker removes it
             reach = mesh.collision_radius * inst["scale"] + VEHICLE_HALF_WIDTH
             if d_start < reach:
-                c.fail(ipath[:-1], f"the start pose ({op['start_x']:g}, {op['start_y']:g}) is "
-                       f"inside this {layout['mesh_name']} (distance {d_start:.2f} m < {reach:.2f} m "
-                       f"and safety_radius {op['safety_radius']:g} m does not remove it)")
+                c.fail(
+                    ipath[:-1],
+                    f"the start pose ({op['start_x']:g}, {op['start_y']:g}) is "
+                    f"inside this {layout['mesh_name']} (distance {d_start:.2f} m < {reach:.2f} m "
+                    f"and safety_radius {op['safety_radius']:g} m does not remove it)",
+                )
 
 
 def load_scenario(path: str) -> dict:
@@ -321,8 +357,9 @@ def load_scenario(path: str) -> dict:
     except OSError as e:
         raise ScenarioError([("<file>", f"cannot read: {e.strerror}")], str(path)) from None
     except UnicodeDecodeError as e:
-        raise ScenarioError([("<file>", f"not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start})")],
-                            str(path)) from None
+        raise ScenarioError(
+            [("<file>", f"not UTF-8 text (byte 0x{e.object[e.start]:02x} at offset {e.start})")], str(path)
+        ) from None
     return parse_scenario(text, str(path))
 
 
@@ -340,8 +377,9 @@ def _no_duplicates(loader, node, deep=False):
         except TypeError:
             continue  # an unhashable key: construct_mapping reports it
         if key in seen:
-            raise yaml.constructor.ConstructorError(None, None, f"key {key!r} is given twice in one mapping",
-                                                    key_node.start_mark)
+            raise yaml.constructor.ConstructorError(
+                None, None, f"key {key!r} is given twice in one mapping", key_node.start_mark
+            )
         seen.add(key)
     return loader.construct_mapping(node, deep=deep)
 
@@ -361,8 +399,7 @@ def parse_scenario(text: str, source: str = "scenario") -> dict:
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "?"
-        raise ScenarioError([("<yaml>", f"not valid YAML at {where}: {getattr(e, 'problem', e)}")],
-                            source) from None
+        raise ScenarioError([("<yaml>", f"not valid YAML at {where}: {getattr(e, 'problem', e)}")], source) from None
     except RecursionError:
         raise ScenarioError([("<yaml>", "nested too deeply to be a scenario")], source) from None
     return validate_scenario(data, source)

@@ -1,5 +1,6 @@
 """Where a planner's votes fell, judged against the scene (no rospy): votes no obstacle explains,
 and votes that lie in an obstacle's sun shadow (the perception flaw of the paper)."""
+
 import math
 from typing import Iterable, List, Set, Tuple
 
@@ -19,20 +20,21 @@ def _placed(scenario: dict, removed: Set[Tuple[int, int]]):
 
 def _unexplained(scenario, votes, cell, removed) -> List[dict]:
     obstacles = [(i["x"], i["y"], m.collision_radius * i["scale"]) for m, i in _placed(scenario, removed)]
-    return [v for v in votes
-            if all(math.hypot(v["x"] - x, v["y"] - y) > r + cell for x, y, r in obstacles)]
+    return [v for v in votes if all(math.hypot(v["x"] - x, v["y"] - y) > r + cell for x, y, r in obstacles)]
 
 
-def phantom_votes(scenario: dict, votes: Iterable[dict], cell: float,
-                  removed: Set[Tuple[int, int]] = frozenset()) -> int:
+def phantom_votes(
+    scenario: dict, votes: Iterable[dict], cell: float, removed: Set[Tuple[int, int]] = frozenset()
+) -> int:
     """Voted vertices with no placed obstacle within its collision radius plus one vote cell:
     votes that only a perception error can have cast. votes: dicts with x, y [m]; removed:
     (layout, instance) pairs the worker did not place."""
     return len(_unexplained(scenario, list(votes), cell, removed))
 
 
-def in_cast_shadow(scenario: dict, x: float, y: float, margin: float = 0.0,
-                   removed: Set[Tuple[int, int]] = frozenset()) -> bool:
+def in_cast_shadow(
+    scenario: dict, x: float, y: float, margin: float = 0.0, removed: Set[Tuple[int, int]] = frozenset()
+) -> bool:
     """Whether ground point (x, y) lies in the sun shadow of a shadow-casting obstacle: the
     shadow of a conifer-like shape, a strip from the obstacle's foot away from the sun, as long
     as height / tan(inclination) and as wide as the obstacle at its foot, narrowing to its
@@ -53,9 +55,13 @@ def in_cast_shadow(scenario: dict, x: float, y: float, margin: float = 0.0,
     return False
 
 
-def shadow_votes(scenario: dict, votes: Iterable[dict], cell: float,
-                 removed: Set[Tuple[int, int]] = frozenset()) -> int:
+def shadow_votes(
+    scenario: dict, votes: Iterable[dict], cell: float, removed: Set[Tuple[int, int]] = frozenset()
+) -> int:
     """Phantom voted vertices (see phantom_votes) that lie in an obstacle's cast shadow (half a
     cell of margin): obstacles a segmenter saw in a shadow."""
-    return sum(1 for v in _unexplained(scenario, list(votes), cell, removed)
-               if in_cast_shadow(scenario, v["x"], v["y"], cell / 2, removed))
+    return sum(
+        1
+        for v in _unexplained(scenario, list(votes), cell, removed)
+        if in_cast_shadow(scenario, v["x"], v["y"], cell / 2, removed)
+    )

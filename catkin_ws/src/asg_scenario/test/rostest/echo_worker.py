@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """A minimal RunScenario action server for the round-trip test: it validates the goal with the
 scenario validator and answers with a two-sample straight-line trajectory from start to goal."""
+
 import math
 
 import actionlib
@@ -16,8 +17,7 @@ def execute(goal):
     try:
         s = validate_scenario(from_scene_msg(goal.scene, goal.scenario_id), "goal")
     except ScenarioError as e:
-        result.termination, result.termination_name, result.error = (
-            RunScenarioResult.ERROR, "ERROR", str(e))
+        result.termination, result.termination_name, result.error = (RunScenarioResult.ERROR, "ERROR", str(e))
         server.set_succeeded(result)
         return
     op = s["operational"]
@@ -27,8 +27,7 @@ def execute(goal):
         sample.pose.orientation.z = math.sin(op["start_yaw"] / 2)
         sample.pose.orientation.w = math.cos(op["start_yaw"] / 2)
         result.trajectory.append(sample)
-    result.termination, result.termination_name, result.sim_time = (
-        RunScenarioResult.SUCCESS, "SUCCESS", 1.0)
+    result.termination, result.termination_name, result.sim_time = (RunScenarioResult.SUCCESS, "SUCCESS", 1.0)
     result.obstacle_visibility = [-1.0] * sum(len(l.instances) for l in goal.scene.structural.layouts)
     server.set_succeeded(result)
 

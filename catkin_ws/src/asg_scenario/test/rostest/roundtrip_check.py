@@ -1,5 +1,6 @@
 #!/usr/bin/python3
 """rostest: a RunScenario goal built from a scenario file round-trips through an action server."""
+
 import math
 import os
 import unittest
@@ -30,8 +31,7 @@ class RoundTrip(unittest.TestCase):
     def test_good_goal(self):
         s = load_scenario(os.path.join(REPO, "scenarios", "exp3.yaml"))
         goal = to_goal_msg(s)
-        self.assertEqual(from_scene_msg(goal.scene, s["scenario_id"], s["name"])["structural"],
-                         s["structural"])
+        self.assertEqual(from_scene_msg(goal.scene, s["scenario_id"], s["name"])["structural"], s["structural"])
         r = self.run_goal(goal)
         self.assertEqual(r.termination, RunScenarioResult.SUCCESS, r.error)
         self.assertEqual(r.scenario_id, 3)

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
 """rostest: RunScenario goals through actionlib against real scene workers."""
+
 import copy
 import math
 import os
