@@ -115,6 +115,25 @@ TEXTURAL_FIELDS = [
         0.0,
     ),
     Field("ground_texture_seed", int, "-", 0, 2**32 - 1, "Seed of the ground texture.", 0),
+    Field(
+        "fog_visibility_m",
+        float,
+        "m",
+        0.0,
+        100000.0,
+        "Fog: the distance at which a surface keeps 5 % of its contrast (transmittance exp(-3 d / V)); "
+        "nothing beyond it is labelled visible. 0: no fog.",
+        0.0,
+    ),
+    Field(
+        "cloud_cover",
+        float,
+        "-",
+        0.0,
+        1.0,
+        "0 (clear sky) .. 1 (overcast): direct sunlight down to 20 %, more diffuse light, weaker shadows, grey sky.",
+        0.0,
+    ),
 ]
 
 OPERATIONAL_FIELDS = [

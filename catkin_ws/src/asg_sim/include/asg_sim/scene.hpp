@@ -37,6 +37,12 @@ struct Textural {
   double sun_inclination_deg = 45.0;  ///< [deg] elevation, 0..90
   double sun_yaw_deg = 0.0;           ///< [deg] direction the light comes from
   uint32_t ground_texture_seed = 0;
+  /// [m] meteorological visibility of fog: the distance at which a surface keeps 5 % of its
+  /// contrast (transmittance exp(-3 d / V)); 0: no fog. Beyond it nothing is labelled visible.
+  double fog_visibility_m = 0.0;
+  /// [-] cloud cover, 0 (clear sky) .. 1 (overcast): the sun's direct light falls to 20 %, the
+  /// diffuse sky light rises, so shadows are weaker, and the sky turns grey.
+  double cloud_cover = 0.0;
 };
 
 struct Operational {

@@ -71,6 +71,8 @@ uniform int uShadows;
 uniform vec4 uLabel;  // r: label / 255, g, b: instance id low, high byte / 255
 uniform sampler2D uFootprint;  // ground under a non-traversable obstacle's canopy (top-down)
 uniform vec4 uFootprintBox;    // xy: world corner of the footprint map, zw: 1 / its extent
+uniform float uFogVisibility;  // [m] contrast down to 5 % at this eye depth; 0: no fog
+uniform vec3 uFogColor;        // display colour of the fog (and of the sky far away in it)
 layout(location = 0) out vec4 oColor;
 layout(location = 1) out float oDepth;
 layout(location = 2) out vec4 oLabel;
@@ -106,9 +108,15 @@ void main() {
   }
   float diffuse = max(dot(n, uSunDir), 0.0);
   vec3 c = albedo * (uAmbient + uSunIntensity * diffuse * lit);
-  oColor = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.6)), 1.0);
+  vec3 display = pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.6));
+  if (uFogVisibility > 0.0)  // Koschmieder: transmittance exp(-3 d / V), 5 % at d = V
+    display = mix(uFogColor, display, exp(-3.0 * vEyeDepth / uFogVisibility));
+  oColor = vec4(display, 1.0);
   oDepth = vEyeDepth;
   vec4 label = uLabel;
+  // In fog, what lies beyond the visibility is not seen: labelled as sky (no obstacle, no
+  // ground), instance 0, so it neither counts as visible nor gets a label to vote from.
+  if (uFogVisibility > 0.0 && vEyeDepth > uFogVisibility) label = vec4(2.0 / 255.0, 0.0, 0.0, 0.0);
 #ifdef LABELS
   if (uGround == 1) {
     // Ground under an obstacle's canopy (seen from straight above): void (kUnderCanopy).
@@ -323,6 +331,10 @@ struct Renderer::Gl {
   Mat4 light_view_proj = Mat4::Identity();
   float seed = 0.0f;
   float sun_intensity = 0.9f;
+  float ambient = 0.38f;
+  float fog_visibility = 0.0f;      // [m]
+  float fog_color[3] = {0, 0, 0};   // display colour
+  float sky[4] = {0.62f, 0.75f, 0.90f, 1.0f};
   std::vector<uint8_t> scratch8, rows8;
   std::vector<float> scratchf;
 
@@ -508,7 +520,24 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
     hi = hi.cwiseMax(v.head<3>());
   }
   gl_->light_view_proj = ortho(lo.x(), hi.x(), lo.y(), hi.y(), -hi.z() - 1, -lo.z() + 1) * view;
-  gl_->sun_intensity = 0.95f;
+  // Weather (textural): cloud cover c takes the direct sun to (1 - 0.8 c) of clear sky and adds
+  // 0.3 c of diffuse sky light (weaker shadows), and greys the sky; fog blends towards its colour
+  // with eye depth. Clear skies (c = 0, no fog) keep exactly the constants of before.
+  const float c = float(spec.textural.cloud_cover);
+  gl_->sun_intensity = c > 0.0f ? 0.95f * (1.0f - 0.8f * c) : 0.95f;
+  gl_->ambient = c > 0.0f ? 0.38f + 0.30f * c : 0.38f;
+  const float clear_sky[3] = {0.62f, 0.75f, 0.90f}, grey_sky[3] = {0.70f, 0.72f, 0.75f};
+  const float fog_clear[3] = {0.80f, 0.82f, 0.85f}, fog_grey[3] = {0.72f, 0.73f, 0.75f};
+  gl_->fog_visibility = float(spec.textural.fog_visibility_m);
+  // The sky seen through fog: as a surface 1 km away.
+  const float sky_t = gl_->fog_visibility > 0.0f ? std::exp(-3.0f * 1000.0f / gl_->fog_visibility) : 1.0f;
+  for (int k = 0; k < 3; ++k) {
+    gl_->fog_color[k] = fog_clear[k] + (fog_grey[k] - fog_clear[k]) * c;
+    const float sky = clear_sky[k] + (grey_sky[k] - clear_sky[k]) * c;
+    gl_->sky[k] = gl_->fog_color[k] + (sky - gl_->fog_color[k]) * sky_t;
+  }
+  if (c == 0.0f && gl_->fog_visibility == 0.0f)
+    for (int k = 0; k < 3; ++k) gl_->sky[k] = clear_sky[k];
 
   const auto t0 = std::chrono::steady_clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, gl_->shadow_fbo);
@@ -559,16 +588,18 @@ void Renderer::renderFootprints(double size) {
 
 namespace {
 void setCommonUniforms(GLuint prog, const Mat4& view, const Mat4& proj, const Mat4& light,
-                       const Eigen::Vector3d& sun, float intensity, float seed, bool shadows,
-                       GLuint shadow_tex, GLuint shadow_opacity, GLuint footprint_tex,
-                       const float* footprint_box) {
+                       const Eigen::Vector3d& sun, float intensity, float ambient, float fog_visibility,
+                       const float* fog_color, float seed, bool shadows, GLuint shadow_tex,
+                       GLuint shadow_opacity, GLuint footprint_tex, const float* footprint_box) {
   glUseProgram(prog);
   glUniformMatrix4fv(glGetUniformLocation(prog, "uView"), 1, GL_FALSE, view.data());
   glUniformMatrix4fv(glGetUniformLocation(prog, "uProj"), 1, GL_FALSE, proj.data());
   glUniformMatrix4fv(glGetUniformLocation(prog, "uLightViewProj"), 1, GL_FALSE, light.data());
   glUniform3f(glGetUniformLocation(prog, "uSunDir"), sun.x(), sun.y(), sun.z());
   glUniform1f(glGetUniformLocation(prog, "uSunIntensity"), intensity);
-  glUniform1f(glGetUniformLocation(prog, "uAmbient"), 0.38f);
+  glUniform1f(glGetUniformLocation(prog, "uAmbient"), ambient);
+  glUniform1f(glGetUniformLocation(prog, "uFogVisibility"), fog_visibility);
+  glUniform3fv(glGetUniformLocation(prog, "uFogColor"), 1, fog_color);
   glUniform1f(glGetUniformLocation(prog, "uSeed"), seed);
   glUniform1i(glGetUniformLocation(prog, "uShadows"), shadows ? 1 : 0);
   glActiveTexture(GL_TEXTURE0);
@@ -598,7 +629,7 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
   glViewport(0, 0, w, h);
   const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
   glDrawBuffers(with_labels ? 3 : 2, bufs);
-  const float sky[] = {0.62f, 0.75f, 0.90f, 1.0f};
+  const float* sky = gl_->sky;
   const float nan[] = {std::numeric_limits<float>::quiet_NaN(), 0, 0, 0};
   const float sky_label[] = {kSky / 255.0f, 0, 0, 0};
   glClearBufferfv(GL_COLOR, 0, sky);
@@ -606,9 +637,9 @@ void Renderer::renderCamera(const Eigen::Isometry3d& T_map_optical, bool with_la
   if (with_labels) glClearBufferfv(GL_COLOR, 2, sky_label);
   glClear(GL_DEPTH_BUFFER_BIT);
   const GLuint prog = with_labels ? gl_->label_program : gl_->program;
-  setCommonUniforms(prog, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
-                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
-                    gl_->footprint_tex, gl_->footprint_box);
+  setCommonUniforms(prog, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity, gl_->ambient,
+                    gl_->fog_visibility, gl_->fog_color, gl_->seed, options_.shadows, gl_->shadow_tex,
+                    gl_->shadow_opacity, gl_->footprint_tex, gl_->footprint_box);
   gl_->drawScene(prog, Gl::Pass::kCamera);
 
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, w, h, 4, &gl_->rows8, &gl_->scratch8);
@@ -649,8 +680,9 @@ void Renderer::renderTopDown(int px, RgbImage* out) {
   glDrawBuffers(1, bufs);
   glClearColor(0.62f, 0.75f, 0.90f, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity,
-                    gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
+  // From above, fog would hide the whole scene: the top-down view shows the light, not the fog.
+  setCommonUniforms(gl_->program, view, proj, gl_->light_view_proj, sun_dir_, gl_->sun_intensity, gl_->ambient,
+                    0.0f, gl_->fog_color, gl_->seed, options_.shadows, gl_->shadow_tex, gl_->shadow_opacity,
                     gl_->footprint_tex, gl_->footprint_box);
   gl_->drawScene(gl_->program, Gl::Pass::kCamera);
   readRows(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, px, px, 4, &gl_->rows8, &gl_->scratch8);

@@ -96,6 +96,8 @@ void validateScene(const SceneSpec& spec) {
   p.range("operational.max_pitch_deg", O.max_pitch_deg, 1.0, 180.0, "deg");
   p.range("textural.sun_inclination_deg", spec.textural.sun_inclination_deg, 0.0, 90.0, "deg");
   p.range("textural.sun_yaw_deg", spec.textural.sun_yaw_deg, -360.0, 360.0, "deg");
+  p.range("textural.fog_visibility_m", spec.textural.fog_visibility_m, 0.0, 100000.0, "m");
+  p.range("textural.cloud_cover", spec.textural.cloud_cover, 0.0, 1.0, "-");
 
   const size_t n = instanceCount(spec);
   if (n > kMaxObstacles) {

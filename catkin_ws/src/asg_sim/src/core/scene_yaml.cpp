@@ -335,10 +335,13 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
     }
   }
   const YAML::Node tx = r.mapping(root["textural"], "textural");
-  r.allowOnly(tx, {"sun_inclination_deg", "sun_yaw_deg", "ground_texture_seed"}, "textural");
+  r.allowOnly(tx, {"sun_inclination_deg", "sun_yaw_deg", "ground_texture_seed", "fog_visibility_m", "cloud_cover"},
+              "textural");
   r.number(tx, "sun_inclination_deg", &s.textural.sun_inclination_deg, "textural", true);
   r.number(tx, "sun_yaw_deg", &s.textural.sun_yaw_deg, "textural", false);
   r.integer(tx, "ground_texture_seed", &s.textural.ground_texture_seed, "textural", false, 0, 4294967295.0L);
+  r.number(tx, "fog_visibility_m", &s.textural.fog_visibility_m, "textural", false);
+  r.number(tx, "cloud_cover", &s.textural.cloud_cover, "textural", false);
   const YAML::Node op = r.mapping(root["operational"], "operational");
   const std::string ow = "operational";
   r.allowOnly(op, {"start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_radius", "safety_radius",

@@ -32,6 +32,8 @@ SceneSpec toSpec(const asg_msgs::SceneDescription& m) {
   s.textural.sun_inclination_deg = m.textural.sun_inclination_deg;
   s.textural.sun_yaw_deg = m.textural.sun_yaw_deg;
   s.textural.ground_texture_seed = m.textural.ground_texture_seed;
+  s.textural.fog_visibility_m = m.textural.fog_visibility_m;
+  s.textural.cloud_cover = m.textural.cloud_cover;
   const auto& o = m.operational;
   auto& d = s.operational;
   d.start_x = o.start_x;

@@ -157,3 +157,95 @@ TEST(Runner, VisibilityCountsSeenObstacles) {
   EXPECT_FLOAT_EQ(vis[2], -1.0f);
   ASSERT_EQ(runner.removed().size(), 1u);
 }
+
+namespace {
+// The contrast left in rows [v0, v1): the standard deviation of brightness along each row (flat
+// ground at one depth per row, so one fog transmittance per row), averaged over the rows.
+double rowContrast(const CameraFrame& f, int v0, int v1) {
+  double sum = 0;
+  for (int v = v0; v < v1; ++v) {
+    double s = 0, s2 = 0;
+    const int n = f.rgb.width;
+    for (int u = 0; u < n; ++u) {
+      const double b = brightness(f, u, v);
+      s += b;
+      s2 += b * b;
+    }
+    sum += std::sqrt(std::max(0.0, s2 / n - (s / n) * (s / n)));
+  }
+  return sum / (v1 - v0);
+}
+}  // namespace
+
+TEST(Renderer, FogFadesContrastWithDistanceAndHidesWhatLiesBeyond) {
+  // Issue #27: fog of 40 m visibility. Near ground (rows near the bottom, 2-4 m ahead) keeps most
+  // of its texture contrast, far ground (near the horizon, 30-80 m) loses most of it; the sky
+  // turns fog-coloured; a tree 50 m away (beyond the visibility) is neither labelled nor counted.
+  auto s = emptyScene();
+  addObstacle(&s, "juniper", 85.0, 40.0);
+  CameraFrame clear, fog;
+  setScene(s);
+  renderer().renderCamera(cameraAt(35, 50, 0), true, &clear);
+  s.textural.fog_visibility_m = 40.0;
+  setScene(s);
+  renderer().renderCamera(cameraAt(35, 50, 0), true, &fog);
+  const double near_clear = rowContrast(clear, 200, 256), near_fog = rowContrast(fog, 200, 256);
+  const double far_clear = rowContrast(clear, 130, 136), far_fog = rowContrast(fog, 130, 136);
+  EXPECT_GT(near_fog, 0.6 * near_clear);
+  EXPECT_LT(far_fog, 0.35 * far_clear);
+  EXPECT_LT(far_fog / far_clear, 0.6 * near_fog / near_clear);
+  // The sky is the fog's colour (grey-white), not blue.
+  EXPECT_LT(std::abs(int(fog.rgb.at(128, 5, 2)) - int(fog.rgb.at(128, 5, 0))), 20);
+  EXPECT_GT(int(clear.rgb.at(128, 5, 2)) - int(clear.rgb.at(128, 5, 0)), 50);
+  // The tree at 50 m: seen (labelled, counted) in clear air, not in the fog.
+  int tree_clear = 0, tree_fog = 0;
+  for (int v = 0; v < 256; ++v)
+    for (int u = 0; u < 256; ++u) {
+      tree_clear += clear.instances.at(u, v) == 1;
+      tree_fog += fog.instances.at(u, v) == 1 || fog.labels.at(u, v) == kNonTraversable;
+    }
+  EXPECT_GT(tree_clear, 20);
+  EXPECT_EQ(tree_fog, 0);
+  // Depth is a range sensor's: fog leaves it alone.
+  EXPECT_FLOAT_EQ(fog.depth.at(128, 200), clear.depth.at(128, 200));
+}
+
+TEST(Renderer, OvercastWeakensShadowsAndGreysTheSky) {
+  // The tree's shadow on the ground (as in TreeShadowDarkensTheGround): under a clear sky the
+  // shadowed ground is much darker than the lit ground beside it; overcast, much less so.
+  auto s = emptyScene();
+  addObstacle(&s, "juniper", 50.0, 50.0);
+  const int v = int(std::lround(127.5 + 128.0 * 1.4 / 8.5)), u = 128;
+  auto ratio = [&](double cover, CameraFrame* f) {
+    s.textural.cloud_cover = cover;
+    setScene(s);
+    renderer().renderCamera(cameraAt(35, 50, 0), true, f);
+    return double(brightness(*f, u, v)) / brightness(*f, 20, 250);
+  };
+  CameraFrame clear, overcast;
+  const double r_clear = ratio(0.0, &clear), r_overcast = ratio(1.0, &overcast);
+  EXPECT_LT(r_clear, 0.75);
+  EXPECT_GT(r_overcast, 0.85);
+  EXPECT_EQ(overcast.lit.at(u, v), clear.lit.at(u, v));  // the geometry of the shadow is the same
+  EXPECT_LT(std::abs(int(overcast.rgb.at(128, 5, 2)) - int(overcast.rgb.at(128, 5, 0))), 20);
+}
+
+TEST(Renderer, WeatherLeavesNoTraceOnTheNextClearScene) {
+  // A clear scene after a foggy, overcast one renders the same pixels as before it (the stored
+  // reference runs check that clear weather renders as it did before the weather existed).
+  auto s = emptyScene();
+  addObstacle(&s, "juniper", 50.0, 50.0);
+  CameraFrame a, b;
+  setScene(s);
+  renderer().renderCamera(cameraAt(35, 50, 0), true, &a);
+  s.textural.fog_visibility_m = 30.0;
+  s.textural.cloud_cover = 0.7;
+  setScene(s);
+  renderer().renderCamera(cameraAt(35, 50, 0), true, &b);
+  s.textural.fog_visibility_m = 0.0;
+  s.textural.cloud_cover = 0.0;
+  setScene(s);
+  renderer().renderCamera(cameraAt(35, 50, 0), true, &b);
+  EXPECT_EQ(a.rgb.data, b.rgb.data);
+  EXPECT_EQ(a.labels.data, b.labels.data);
+}
