@@ -156,3 +156,17 @@ def test_docs_list_every_field():
     for path, fields in SECTIONS:
         for f in fields:
             assert f"| `{f.key}` |" in doc, f"{path}.{f.key} is not documented"
+
+
+def test_a_request_stored_before_a_field_existed_converts_with_its_default():
+    # Issue #27 added textural.fog_visibility_m and cloud_cover; requests stored before (campaign
+    # rows, tests/reference) lack them and mean the defaults (no fog, clear sky).
+    from asg_scenario.convert import to_scene_msg
+
+    s = load_scenario(os.path.join(REPO, "scenarios", "exp1.yaml"))
+    old = dict(s, textural={k: v for k, v in s["textural"].items() if k not in ("fog_visibility_m", "cloud_cover")})
+    msg = to_scene_msg(old)
+    assert (msg.textural.fog_visibility_m, msg.textural.cloud_cover) == (0.0, 0.0)
+    assert msg.textural.sun_yaw_deg == s["textural"]["sun_yaw_deg"]
+    with pytest.raises(KeyError):
+        to_scene_msg(dict(s, textural={"sun_yaw_deg": 0.0}))  # a required field still is

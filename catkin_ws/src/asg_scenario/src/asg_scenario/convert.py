@@ -7,8 +7,10 @@ from .schema import INSTANCE_FIELDS, LANDSCAPE_FIELDS, OPERATIONAL_FIELDS, TEXTU
 
 
 def _fill(msg, data, fields):
+    # A field with a default may be missing: requests stored before it existed (a campaign's
+    # rows, the reference runs) mean its default, which is what they ran.
     for f in fields:
-        setattr(msg, f.key, data[f.key])
+        setattr(msg, f.key, data[f.key] if f.key in data or f.default is None else f.default)
     return msg
 
 
