@@ -1,7 +1,9 @@
 """Campaign loop with the in-process pool: determinism whatever the workers' order, exactly-once
 storage, retries, resume after an interruption and after kill -9 of the campaign process."""
 
+import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -583,3 +585,48 @@ def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsy
     )
     assert "NOT REPRODUCED" in capsys.readouterr().out
     assert check_reference_run(a, request, dict(ref, termination="COLLISION"), o) == 1
+
+
+def test_an_experiment_with_free_weather_sets_it_from_the_action(tmp_path):
+    # Issue #27: experiments/exp5.yaml frees the fog's visibility and the cloud cover; the action
+    # is the 16 position values and then one value per free attribute, scaled to its range.
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp5.yaml"))
+    assert (exp.position_dim, exp.action_dim) == (16, 18)
+    a = np.zeros(18, np.float32)
+    a[16], a[17] = -1.0, 1.0
+    req = exp.request(a, 3)
+    assert req["textural"]["fog_visibility_m"] == 25.0 and req["textural"]["cloud_cover"] == 1.0
+    assert req["textural"]["sun_inclination_deg"] == exp.scenario["textural"]["sun_inclination_deg"]
+    a[16] = 0.0
+    assert exp.request(a, 3)["textural"]["fog_visibility_m"] == 262.5
+    assert np.array_equal(exp.to_positions(a), load_experiment(EXP).to_positions(a[:16]))
+    # every search runs on it, deterministic whatever the workers' order
+    for method in ("random", "cmaes", "map-elites", "td3-per-asp"):
+        m = make_method(method, exp, 1, budget=40, td3_config=TD3Config(**SMALL))
+        c = Campaign(
+            method,
+            exp,
+            m,
+            Store(str(tmp_path / f"{method}.sqlite")),
+            FakePool(2, seed=1),
+            12,
+            1,
+            str(tmp_path / f"{method}.ckpt"),
+            slots=4,
+        )
+        c.start()
+        c.run()
+        rows = list(c.store.rows(method))
+        fog = [json.loads(r["request"])["textural"]["fog_visibility_m"] for r in rows]
+        assert len(rows) == 12 and all(25.0 <= f <= 500.0 for f in fog) and len(set(fog)) > 3
+    bad = tmp_path / "bad.yaml"
+    text = open(os.path.join(REPO, "experiments", "exp5.yaml")).read()
+    text = text.replace("../scenarios/exp1.yaml", os.path.join(REPO, "scenarios", "exp1.yaml"))
+    for broken, fixed, message in (
+        ("cloud_cover: [0.0, 1.0]", "cloud_cover: [0.0, 1.5]", "textural_free.cloud_cover: [0.0, 1.5] must satisfy"),
+        ("cloud_cover: [0.0, 1.0]", "cloud_cover: thick", "textural_free.cloud_cover: 'thick', must be [lo, hi]"),
+        ("fog_visibility_m: [25.0, 500.0]", "ground_texture_seed: [0, 9]", "textural_free.ground_texture_seed: not a"),
+    ):
+        bad.write_text(text.replace(broken, fixed))
+        with pytest.raises(ExperimentError, match=re.escape(message)):
+            load_experiment(str(bad))

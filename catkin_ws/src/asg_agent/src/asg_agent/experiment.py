@@ -3,7 +3,8 @@
 An experiment file (YAML, `experiments/expN.yaml`) names a scenario file holding every fixed
 attribute (landscape, sun, start, goal, speed, meshes and their counts, timeouts) and how the
 search varies it. The action is the x, y of every obstacle instance, each scaled from [-1, 1] to
-[0, landscape size]. Keys (docs/agent.md):
+[0, landscape size], then one value per free textural attribute (weather, light), each scaled
+from [-1, 1] to its range. Keys (docs/agent.md):
 
     name: exp1
     scenario: ../scenarios/exp1.yaml   # relative to this file
@@ -13,6 +14,9 @@ search varies it. The action is the x, y of every obstacle instance, each scaled
     planner_config: planner.yaml       # a file of asg_planner/config, or a path
     episode_steps: 5
     sim_timeout: 60.0                  # [s] overrides the scenario's
+    textural_free:                     # optional: textural attributes the search sets, [lo, hi]
+      fog_visibility_m: [25.0, 500.0]  #   in the field's unit (docs/scenario-format.md)
+      cloud_cover: [0.0, 1.0]
 """
 
 import math
@@ -23,7 +27,7 @@ import numpy as np
 import yaml
 
 from asg_scenario import ScenarioError, load_scenario
-from asg_scenario.schema import strict_yaml_load
+from asg_scenario.schema import TEXTURAL_FIELDS, strict_yaml_load
 from asg_scenario.layout import instance_count, with_positions
 
 
@@ -41,7 +45,10 @@ KEYS = {
     "episode_steps",
     "sim_timeout",
     "description",
+    "textural_free",
 }
+#: textural attributes a search may set (a number with a range; not the ground texture's seed)
+FREE_TEXTURAL = {f.key: f for f in TEXTURAL_FIELDS if f.kind is float}
 #: asg_perception.inference.BACKENDS (a test keeps the two equal; asg_agent does not import torch models)
 UNET_BACKENDS = ("eager", "channels_last", "frozen", "bf16")
 #: asg_perception.inference.DEFAULT_BACKEND: what a file without `unet_backend` means
@@ -61,25 +68,39 @@ class Experiment:
     unet_backend: str = DEFAULT_UNET_BACKEND  #: part of the stack's identity: labels differ by backend
     source: str = ""
     text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
+    #: (textural key, lo, hi) the search sets, in this order after the positions in the action
+    textural_free: list = field(default_factory=list)
 
     @property
     def size(self) -> float:
         return float(self.scenario["structural"]["landscape"]["size"])
 
     @property
-    def action_dim(self) -> int:
+    def position_dim(self) -> int:
         return 2 * instance_count(self.scenario)
 
+    @property
+    def action_dim(self) -> int:
+        return self.position_dim + len(self.textural_free)
+
     def to_positions(self, action) -> np.ndarray:
-        """[-1, 1]^(2n) -> (n, 2) positions [m], rounded to 1 mm."""
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1, 2), -1.0, 1.0)
+        """The action's first 2n values, [-1, 1] -> (n, 2) positions [m], rounded to 1 mm."""
+        a = np.asarray(action, dtype=np.float64).reshape(-1)[: self.position_dim]
+        a = np.clip(a.reshape(-1, 2), -1.0, 1.0)
         return np.round((a + 1.0) * 0.5 * self.size, 3)
+
+    def to_textural(self, action) -> dict:
+        """The action's values after the positions, [-1, 1] -> each free attribute's [lo, hi]
+        (in its unit), rounded to 1e-3."""
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1)[self.position_dim :], -1.0, 1.0)
+        return {k: round(float(lo + (v + 1.0) * 0.5 * (hi - lo)), 3) for (k, lo, hi), v in zip(self.textural_free, a)}
 
     def to_action(self, xy) -> np.ndarray:
         return (np.asarray(xy, dtype=np.float64).reshape(-1) / self.size * 2.0 - 1.0).astype(np.float32)
 
     def request(self, action, scenario_id: int) -> dict:
         s = with_positions(self.scenario, self.to_positions(action))
+        s["textural"].update(self.to_textural(action))
         s["scenario_id"] = int(scenario_id)
         s["name"] = f"{self.name}-{scenario_id}"
         return s
@@ -123,6 +144,29 @@ def load_experiment(path: str) -> Experiment:
     for key in ("model", "planner_config", "description"):
         if key in data and not isinstance(data[key], str):
             problems.append(f"{key}: must be a string")
+    free = []
+    tf = data.get("textural_free", {})
+    if not isinstance(tf, dict):
+        problems.append("textural_free: must be a mapping of textural attribute to [lo, hi]")
+        tf = {}
+    for k, r in tf.items():
+        f = FREE_TEXTURAL.get(k)
+        if f is None:
+            problems.append(
+                f"textural_free.{k}: not a textural attribute a search can set (one of {', '.join(FREE_TEXTURAL)})"
+            )
+        elif (
+            not isinstance(r, list)
+            or len(r) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in r)
+        ):
+            problems.append(f"textural_free.{k}: {r!r}, must be [lo, hi], two numbers in {f.unit}")
+        elif not f.lo <= r[0] < r[1] <= f.hi:
+            problems.append(
+                f"textural_free.{k}: [{r[0]}, {r[1]}] must satisfy {f.lo:g} <= lo < hi <= {f.hi:g} ({f.unit})"
+            )
+        else:
+            free.append((k, float(r[0]), float(r[1])))
     if problems:
         raise ExperimentError(f"{path}: " + "; ".join(problems))
     spath = data["scenario"]
@@ -146,4 +190,5 @@ def load_experiment(path: str) -> Experiment:
         source=os.path.abspath(path),
         text=text,
         unet_backend=data.get("unet_backend", DEFAULT_UNET_BACKEND),
+        textural_free=free,
     )

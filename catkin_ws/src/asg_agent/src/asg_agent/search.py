@@ -294,7 +294,7 @@ class MapElites(SearchMethod):
 
         self.init_random, self.iso_sigma, self.line_sigma = init_random, iso_sigma, line_sigma
         self.route_band, self.max_deviation, self.deviation_bins = route_band, max_deviation, deviation_bins
-        n = experiment.action_dim // 2
+        n = experiment.position_dim // 2
         self.archive = GridArchive(
             solution_dim=experiment.action_dim,
             dims=[n + 1, deviation_bins],
