@@ -19,6 +19,12 @@ EXPECTED = [
     "share/asg_sim/config/scene_worker.yaml",
     "share/asg_planner/config/planner.yaml",
     "share/asg_msgs/msg/ScenarioInfo.msg",
+    "lib/asg_agent/campaign",
+    "share/asg_bringup/launch/train.launch",
+    "share/asg_bringup/launch/worker.launch",
+    "share/asg_bringup/rviz/replay.rviz",
+    "share/asg_bringup/experiments/exp1.yaml",
+    "share/asg_bringup/scenarios/exp1.yaml",
 ]
 
 

@@ -211,7 +211,11 @@ def main(argv=None):
             return 2
     slots = a.slots or 2 * len(workers)
     try:
+        os.makedirs(os.path.dirname(os.path.abspath(a.store)), exist_ok=True)
         store = Store(a.store)
+    except OSError as e:
+        print(f"campaign: --store {a.store}: cannot create its folder ({e.strerror})", file=sys.stderr)
+        return 2
     except StoreError as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2

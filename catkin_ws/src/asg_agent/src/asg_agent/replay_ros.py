@@ -242,20 +242,21 @@ def main(argv=None):
 
 
 def bring_up_worker(stack: dict, port: int):
-    """roslaunch launch/worker.launch with the stack of the stored run, on a private master."""
-    repo = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", ".."))
+    """roslaunch asg_bringup's worker.launch with the stack of the stored run, on a private master."""
+    import rospkg
+
+    packages = rospkg.RosPack()
+    worker_launch = os.path.join(packages.get_path("asg_bringup"), "launch", "worker.launch")
     planner = stack["planner_config"]
     if os.sep not in planner:
-        import rospkg
-
-        planner = os.path.join(rospkg.RosPack().get_path("asg_planner"), "config", planner)
+        planner = os.path.join(packages.get_path("asg_planner"), "config", planner)
     os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     os.environ.setdefault("ROS_HOSTNAME", "127.0.0.1")
     cmd = [
         "roslaunch",
         "-p",
         str(port),
-        os.path.join(repo, "launch", "worker.launch"),
+        worker_launch,
         "ns:=replay_worker",
         f"perception:={stack['perception']}",
         f"model:={stack['model']}",

@@ -16,9 +16,12 @@ import time
 
 import numpy as np
 
-RVIZ_CONFIG = os.path.abspath(
-    os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "rviz", "replay.rviz")
-)
+
+def rviz_config() -> str:
+    """asg_bringup's rviz/replay.rviz (the repository's rviz/ folder, or its installed copy)."""
+    import rospkg
+
+    return os.path.join(rospkg.RosPack().get_path("asg_bringup"), "rviz", "replay.rviz")
 
 
 def colour_counts(png: str) -> dict:
@@ -54,7 +57,7 @@ def screenshot(
         time.sleep(1.5)
         env = dict(os.environ, DISPLAY=display, LIBGL_ALWAYS_SOFTWARE="1")
         rviz = subprocess.Popen(
-            ["rosrun", "rviz", "rviz", "-d", RVIZ_CONFIG, f"/tf:=/{ns}/tf", "__name:=replay_view_rviz"],
+            ["rosrun", "rviz", "rviz", "-d", rviz_config(), f"/tf:=/{ns}/tf", "__name:=replay_view_rviz"],
             env=env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
