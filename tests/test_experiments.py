@@ -184,3 +184,30 @@ def test_attributed_comparison_counts_known_findings(tmp_path):
     assert abs(s["hours"] * 3600 - 20 * 25.0) < 1e-6  # the pause left out
     for measure in ("scenarios", "hours"):
         assert os.path.getsize(tmp_path / "out" / f"attributed_{measure}.png") > 10000
+
+
+def test_weather_tables_bin_findings_by_attribute(tmp_path):
+    """Issue #27: an attributed export whose rows carry their weather, binned by fog visibility:
+    the perception collisions and differential findings land in the bins of their rows."""
+    import gzip
+    import json
+
+    camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
+    rows = sorted(rows, key=lambda r: r["job"])[:8]
+    for k, r in enumerate(rows):
+        r.update(proxy=1.1, termination="SUCCESS", textural={"fog_visibility_m": 25.0 + 50.0 * k, "cloud_cover": 0.5})
+        r["reference"] = {"proxy": 1.0, "termination": "SUCCESS"}
+    rows[0].update(termination="COLLISION")  # fog 25 m: a perception collision
+    rows[1].update(proxy=2.5)  # fog 75 m: differential
+    rows[7].update(termination="COLLISION")
+    rows[7]["reference"]["termination"] = "COLLISION"  # 375 m: both collided
+    with gzip.open(tmp_path / "w.jsonl.gz", "wt") as f:
+        f.write(json.dumps({"campaign": dict(camp, name="synthetic-weather")}) + "\n")
+        for r in rows:
+            f.write(json.dumps(r) + "\n")
+    (tmp_path / "m.yaml").write_text("weather: {exports: [w.jsonl.gz], attributes: [fog_visibility_m], bins: 2}\n")
+    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["weather"]["fog_visibility_m"]
+    assert [b["scenarios"] for b in s] == [4, 4]
+    assert [b["collisions"] for b in s] == [1, 0] and [b["differential"] for b in s] == [1, 0]
+    assert [b["reference_collisions"] for b in s] == [0, 1]
+    assert os.path.getsize(tmp_path / "out" / "weather.png") > 10000

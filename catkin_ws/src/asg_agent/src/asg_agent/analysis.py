@@ -91,6 +91,7 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
                             for i in l["instances"]
                         ],
                         "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
+                        "textural": req["textural"],
                         "visibility": json.loads(r["visibility"]),
                         "wall_time": round(r["wall_time"], 3),
                         "removed": json.loads(r["removed"]),

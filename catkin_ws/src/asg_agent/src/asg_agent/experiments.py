@@ -8,6 +8,8 @@ The manifest names which export serves which table (paths relative to the manife
     attributed: {budget: 1000, threshold_m: 5.0, arms: {td3-per-asp: [A, B], random: [...], ...}}
                                                          # round 3: searches on the fixed stack, every
                                                          # scenario attributed (scored by ATTRIBUTED_SCORES)
+    weather: {exports: [W.jsonl.gz], attributes: [fog_visibility_m, cloud_cover], bins: 4}
+                                                         # issue #27: findings by textural attribute
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
     diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0, all_thresholds_m: [2, 5, 10]}
@@ -305,6 +307,76 @@ def attributed_figure(runs, budget, thr, measure, xlabel, out):
     fig.tight_layout()
     fig.savefig(out, dpi=100)
     plt.close(fig)
+
+
+def weather_tables(load, section: dict, out: str):
+    """Issue #27: attributed campaigns whose experiment frees textural attributes, their
+    scenarios binned by each attribute (equal-width bins over the values searched): scenarios,
+    ATTRIBUTED_SCORES, collisions of the reference stack, and the median proxy of both stacks;
+    and a figure of the proxy difference against each attribute."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    attrs, nbins = list(section.get("attributes") or []), int(section.get("bins", 4))
+    summary, md = {}, []
+    rows = []
+    for rel in section["exports"]:
+        camp, rs = load(rel)
+        rows += [r for r in rs if r.get("textural") and r["proxy"] is not None]
+    if not rows or not attrs:
+        return summary, md
+    md += ["", f"### Findings by weather (issue #27: {', '.join(section['exports'])}, {len(rows)} scenarios)", ""]
+    fig, axes = plt.subplots(1, len(attrs), figsize=(5.0 * len(attrs), 3.8), squeeze=False)
+    for ax, attr in zip(axes[0], attrs):
+        v = np.array([r["textural"][attr] for r in rows], float)
+        edges = np.linspace(v.min(), v.max(), nbins + 1)
+        idx = np.clip(np.digitize(v, edges[1:-1]), 0, nbins - 1)
+        md += [
+            f"| {attr} | scenarios | "
+            + " | ".join(lab for _, lab, _ in ATTRIBUTED_SCORES)
+            + " | reference collisions | median proxy: under test / reference |",
+            "|---|---|" + "---|" * (len(ATTRIBUTED_SCORES) + 2),
+        ]
+        summary[attr] = []
+        for b in range(nbins):
+            sel = [r for r, k in zip(rows, idx) if k == b]
+            cell = {
+                "from": float(edges[b]),
+                "to": float(edges[b + 1]),
+                "scenarios": len(sel),
+                **{key: int(sum(pred(r) for r in sel)) for key, _, pred in ATTRIBUTED_SCORES},
+                "reference_collisions": int(sum(_ref(r).get("termination") == "COLLISION" for r in sel)),
+            }
+            refs = [_ref(r)["proxy"] for r in sel if _ref(r).get("proxy") is not None]
+            cell["median_proxy"] = float(np.median([r["proxy"] for r in sel])) if sel else None
+            cell["median_reference_proxy"] = float(np.median(refs)) if refs else None
+            summary[attr].append(cell)
+            md.append(
+                f"| {edges[b]:.3g}-{edges[b + 1]:.3g} | {len(sel)} | "
+                + " | ".join(str(cell[key]) for key, _, _ in ATTRIBUTED_SCORES)
+                + f" | {cell['reference_collisions']} | {fmt(cell['median_proxy'])} / {fmt(cell['median_reference_proxy'])} |"
+            )
+        md.append("")
+        d = np.array(
+            [r["proxy"] - (_ref(r).get("proxy") if _ref(r).get("proxy") is not None else np.nan) for r in rows]
+        )
+        coll = np.array([_perception_collision(r) for r in rows])
+        ax.scatter(v[~coll], d[~coll], s=6, alpha=0.5, label="proxy - reference proxy")
+        ax.scatter(v[coll], d[coll], s=14, color="tab:red", label="perception collision")
+        ax.axhline(1.0, color="grey", lw=0.8, ls="--")
+        ax.set_xlabel(attr)
+        ax.set_ylabel("proxy under test - reference")
+        ax.grid(alpha=0.3)
+    axes[0][0].legend(fontsize=7)
+    fig.suptitle(
+        "Weather: what the flawed U-Net stack does worse than the ground-truth stack, by attribute", fontsize=9
+    )
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "weather.png"), dpi=100)
+    plt.close(fig)
+    return summary, md
 
 
 def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]:
@@ -611,7 +683,12 @@ def run(manifest_path: str, out: str) -> dict:
     # -- round 3: searches on the fixed stack, attributed ------------------------------------------
     if (man.get("attributed") or {}).get("arms"):
         summary["attributed"], lines = attributed_comparison(load, man["attributed"], out)
-        md += lines[1:] + ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
+        md += lines[1:]
+    if (man.get("weather") or {}).get("exports"):
+        summary["weather"], lines = weather_tables(load, man["weather"], out)
+        md += lines[1:]
+    if man.get("attributed") or man.get("weather"):
+        md += ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
     # -- Table 2 ---------------------------------------------------------------------------------
     if man.get("table2"):
         md += [
