@@ -12,6 +12,8 @@ import threading
 
 import numpy as np
 import rospy
+from asg_lockstep import StackProtocol
+from asg_lockstep.stack_protocol import Run
 from asg_msgs.msg import ScenarioInfo, StackAck, StackError, StageTimes
 from sensor_msgs.msg import Image
 
@@ -50,15 +52,14 @@ class SegmenterNode:
         rospy.loginfo("segmenter: %s (%s backend, %d thread(s))", path, backend, threads)
         self.width, self.height = width, height
         self.lock = threading.Lock()
-        self.info = None  # the current run's announcement
+        # Which run is current and which images belong to it: the protocol core (asg_lockstep).
+        self.protocol = StackProtocol(int(round(ScenarioInfo.RUN_WINDOW * 1e9)))
         self.failed = None  # the StackError sent for the current run, if any
-        self.stale_dropped = 0  # images of another run dropped (whole node life)
         self.pub = rospy.Publisher("labels", Image, queue_size=32, tcp_nodelay=True)
         self.ack_pub = rospy.Publisher("stack_ack", StackAck, queue_size=4)
         self.error_pub = rospy.Publisher("stack_error", StackError, queue_size=4)
         # Where the time goes (docs/benchmarks.md): decode the image, infer, publish the labels.
         self.clock = StageClock(["decode", "inference", "publish"])
-        self.runs = 0
         self.stage_pub = rospy.Publisher("stage_times", StageTimes, queue_size=1, latch=True)
         self._last_reading = None
         self.publish_stage_times()
@@ -68,9 +69,9 @@ class SegmenterNode:
 
     def on_scenario(self, info):
         with self.lock:
-            if self.info is None or self.info.run != info.run:
-                self.info, self.failed = info, None
-                self.runs += 1
+            run = Run(info.scenario_id, info.run, info.base_stamp.to_nsec(), info.camera_width, info.camera_height)
+            if self.protocol.announce(run):
+                self.failed = None
                 if (info.camera_width, info.camera_height) != (self.width, self.height):
                     self.fail(
                         f"camera frames are {info.camera_width}x{info.camera_height}, this "
@@ -83,7 +84,7 @@ class SegmenterNode:
 
     def publish_stage_times(self):
         stages, seconds, calls, cpu = self.clock.read()
-        key = (self.runs, sum(calls))
+        key = (self.protocol.runs, sum(calls))
         if key == self._last_reading:
             return
         self._last_reading = key
@@ -91,7 +92,7 @@ class SegmenterNode:
             StageTimes(
                 stamp=rospy.Time.now(),
                 node=self.ack_name,
-                runs=self.runs,
+                runs=self.protocol.runs,
                 cpu_seconds=cpu,
                 stages=stages,
                 seconds=seconds,
@@ -101,33 +102,24 @@ class SegmenterNode:
 
     def fail(self, reason):
         """Ends the current run (the caller holds the lock)."""
-        rospy.logerr(f"segmenter: scenario {self.info.scenario_id}: {reason}")
-        self.failed = StackError(
-            node=self.ack_name, scenario_id=self.info.scenario_id, run=self.info.run, reason=reason
-        )
+        run = self.protocol.fail(reason)
+        rospy.logerr(f"segmenter: scenario {run.scenario_id}: {reason}")
+        self.failed = StackError(node=self.ack_name, scenario_id=run.scenario_id, run=run.run, reason=reason)
         self.error_pub.publish(self.failed)
-
-    def current(self, stamp) -> bool:
-        info = self.info
-        if info is None:
-            return False
-        base = info.base_stamp
-        return base <= stamp < base + rospy.Duration(ScenarioInfo.RUN_WINDOW)
 
     def on_image(self, msg):
         with self.lock:
-            if not self.current(msg.header.stamp):
-                self.stale_dropped += 1
-                # Normal after a run ends early (late frames of the last run): counted, not a warning.
-                rospy.logdebug_throttle(
-                    5.0,
-                    f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
-                    f"is not of the current run: dropped ({self.stale_dropped} so far)",
-                )
+            stamp = msg.header.stamp.to_nsec()
+            if not self.protocol.accept(stamp):
+                if not self.protocol.current(stamp):
+                    # Normal after a run ends early (late frames of the last run): counted, not a warning.
+                    rospy.logdebug_throttle(
+                        5.0,
+                        f"segmenter: image stamped {msg.header.stamp.to_sec():.3f} s "
+                        f"is not of the current run: dropped ({self.protocol.stale} so far)",
+                    )
                 return
-            if self.failed:
-                return
-            t = (msg.header.stamp - self.info.base_stamp).to_sec()
+            t = self.protocol.seconds(stamp)
             with self.clock.time("decode"):
                 ok = msg.encoding == "rgb8" and msg.step == msg.width * 3 and len(msg.data) == msg.step * msg.height
                 if ok:

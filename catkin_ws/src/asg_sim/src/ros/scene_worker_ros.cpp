@@ -113,6 +113,8 @@ std::string formatSeconds(double s) {
 
 SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh) {
   readParameters();
+  protocol_ = std::make_unique<asg_lockstep::WorkerProtocol>(
+      asg_lockstep::WorkerProtocol::Config{params_.stack_nodes, params_.labels_node, params_.lockstep});
   // Run tokens differ across worker restarts too, so a stack that outlives its worker resets.
   current_run_ = uint32_t(std::chrono::system_clock::now().time_since_epoch().count() / 1000000) << 8;
   // llvmpipe reads LP_NUM_THREADS when the first context is made; an explicit environment wins.
@@ -194,54 +196,27 @@ void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
   status_pub_.publish(s);
 }
 
+// The callbacks only translate: the protocol core decides what counts (asg_lockstep).
 void SceneWorkerROS::onCommand(const asg_msgs::VehicleCommandConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (msg->scenario_id != current_id_) return;  // a late answer from an earlier scenario
-  // Outside this run's stamp window: from an earlier run of the same scenario id.
-  if (msg->header.stamp < base_ || msg->header.stamp >= base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
-    return;
-  if (params_.lockstep && msg->header.stamp != awaited_) return;
+  if (!protocol_->command(msg->scenario_id, nanos(msg->header.stamp))) return;
   latest_ = *msg;
-  have_command_ = true;
   cv_.notify_all();
 }
 
 void SceneWorkerROS::onAck(const asg_msgs::StackAckConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (msg->scenario_id != current_id_ || msg->run != current_run_) return;
-  acks_.insert(msg->node);
-  cv_.notify_all();
+  if (protocol_->ack(msg->scenario_id, msg->run, msg->node)) cv_.notify_all();
 }
 
 void SceneWorkerROS::onStackError(const asg_msgs::StackErrorConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (msg->scenario_id != current_id_ || msg->run != current_run_ || !stack_error_.empty()) return;
-  stack_error_ = msg->node + ": " + msg->reason;
-  cv_.notify_all();
+  if (protocol_->stackError(msg->scenario_id, msg->run, msg->node, msg->reason)) cv_.notify_all();
 }
 
 void SceneWorkerROS::onLabels(const sensor_msgs::ImageConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (current_id_ == 0 || msg->header.stamp < base_ ||
-      msg->header.stamp >= base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
-    return;
-  last_labels_stamp_ = std::max(last_labels_stamp_, msg->header.stamp);
-}
-
-std::string SceneWorkerROS::silentNode(const ros::Time& tick_stamp) const {
-  // The labels node is the one to blame when a frame it had to label is still unlabelled; the
-  // planner otherwise (every stack has a node answering ticks, named "planner" by default).
-  if (!params_.labels_node.empty() && camera_frames_ > 0 && last_labels_stamp_ < last_camera_stamp_) {
-    char buf[160];
-    std::snprintf(buf, sizeof(buf), "%s: no labels for the camera frame at t = %.3f s",
-                  params_.labels_node.c_str(), (last_camera_stamp_ - base_).toSec());
-    return buf;
-  }
-  char buf[80];
-  std::snprintf(buf, sizeof(buf), ": no command for control tick t = %.3f s", (tick_stamp - base_).toSec());
-  for (const auto& n : params_.stack_nodes)
-    if (n != params_.labels_node) return n + buf;
-  return "stack" + std::string(buf);
+  protocol_->labels(nanos(msg->header.stamp));
 }
 
 bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
@@ -249,14 +224,9 @@ bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                             std::chrono::duration<double>(params_.ack_timeout));
-  auto all = [&] {
-    for (const auto& n : params_.stack_nodes)
-      if (!acks_.count(n)) return false;
-    return true;
-  };
   auto next_announce = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
-  while (!all() && std::chrono::steady_clock::now() < deadline) {
-    if (!ros::ok() || server_->isPreemptRequested() || !stack_error_.empty()) return false;
+  while (!protocol_->acknowledged() && std::chrono::steady_clock::now() < deadline) {
+    if (!ros::ok() || server_->isPreemptRequested() || !protocol_->error().empty()) return false;
     cv_.wait_for(lock, std::chrono::milliseconds(50));
     if (std::chrono::steady_clock::now() >= next_announce) {
       // A stack node that came up late, or whose ack went out before our subscription was
@@ -265,13 +235,11 @@ bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
       next_announce += std::chrono::milliseconds(500);
     }
   }
-  missing->clear();
-  if (!stack_error_.empty()) {
-    *missing = stack_error_;
+  if (!protocol_->error().empty()) {
+    *missing = protocol_->error();
     return false;
   }
-  for (const auto& n : params_.stack_nodes)
-    if (!acks_.count(n)) *missing += (missing->empty() ? "" : ", ") + n;
+  *missing = protocol_->missingAcks();
   (void)scenario_id;
   return missing->empty();
 }
@@ -281,7 +249,7 @@ bool SceneWorkerROS::waitForCommand(uint32_t /*scenario_id*/, const ros::Time& s
   std::unique_lock<std::mutex> lock(mutex_);
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.command_timeout);
-  while (!(have_command_ && latest_.header.stamp == stamp)) {
+  while (!(protocol_->answered() && latest_.header.stamp == stamp)) {
     if (!ros::ok()) {
       *why = "ROS is shutting down";
       return false;
@@ -290,15 +258,15 @@ bool SceneWorkerROS::waitForCommand(uint32_t /*scenario_id*/, const ros::Time& s
       *why = "preempted";
       return false;
     }
-    if (!stack_error_.empty()) {
-      *why = stack_error_;
+    if (!protocol_->error().empty()) {
+      *why = protocol_->error();
       return false;
     }
     if (std::chrono::steady_clock::now() >= deadline) {
       char buf[120];
       std::snprintf(buf, sizeof(buf), " within %.1f s (wall clock); has it died or hung?",
                     params_.command_timeout);
-      *why = silentNode(stamp) + buf;
+      *why = protocol_->blame(nanos(stamp)) + buf;
       return false;
     }
     cv_.wait_for(lock, std::chrono::milliseconds(50));
@@ -357,8 +325,8 @@ void SceneWorkerROS::publishCamera(const ros::Time& stamp, bool labels) {
   info_pub_.publish(info);
   depth_pub_.publish(depth);
   image_pub_.publish(img);
-  ++camera_frames_;
-  last_camera_stamp_ = stamp;
+  std::lock_guard<std::mutex> lock(mutex_);
+  protocol_->cameraFrame(nanos(stamp));
 }
 
 void SceneWorkerROS::finish(asg_msgs::RunScenarioResult* r, Termination t, const std::string& error) {
@@ -374,7 +342,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   auto fail = [&](const std::string& why) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      current_id_ = 0;
+      protocol_->end();
     }
     publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
     if (server_->isPreemptRequested()) {  // a cancel before the run started is still a cancel
@@ -400,18 +368,12 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_RUNNING, goal->scenario_id);
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    current_id_ = goal->scenario_id;
     ++current_run_;
     // Disjoint stamp windows per run (ScenarioInfo.RUN_WINDOW); 2^19 windows fit in ros::Time.
     base_ = ros::Time(double(current_run_ % 524287u + 1u) * asg_msgs::ScenarioInfo::RUN_WINDOW);
-    acks_.clear();
-    stack_error_.clear();
-    last_labels_stamp_ = ros::Time();
-    have_command_ = false;
-    awaited_ = ros::Time();
+    protocol_->begin(goal->scenario_id, current_run_,
+                     {nanos(base_), nanos(ros::Time(asg_msgs::ScenarioInfo::RUN_WINDOW))});
   }
-  camera_frames_ = 0;
-  last_camera_stamp_ = ros::Time();
   const auto& op = goal->scene.operational;
   asg_msgs::ScenarioInfo info;
   info.scenario_id = goal->scenario_id;
@@ -437,7 +399,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     acked = waitForAcks(goal->scenario_id, &missing);
   }
   if (!acked)
-    return fail(!stack_error_.empty() ? stack_error_
+    return fail(!protocol_->error().empty() ? protocol_->error()
                                       : "stack node(s) did not acknowledge the scenario within " +
                                             formatSeconds(params_.ack_timeout) + ": " + missing);
 
@@ -457,8 +419,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     if (runner_->controlDue()) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
-        awaited_ = now;
-        if (params_.lockstep && latest_.header.stamp != now) have_command_ = false;
+        protocol_->await(nanos(now));
       }
       // Ticks go out in both modes: free-running stacks answer them too, the worker just does
       // not wait for the answer and applies the latest command it has.
@@ -467,8 +428,11 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
       tick.header.frame_id = "map";
       tick.scenario_id = goal->scenario_id;
       tick.tick = runner_->tick() / runner_->config().control_every;
-      tick.last_camera_stamp = last_camera_stamp_;
-      tick.camera_frames = camera_frames_;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        tick.last_camera_stamp.fromNSec(uint64_t(protocol_->lastCameraStamp()));
+        tick.camera_frames = protocol_->cameraFrames();
+      }
       {
         auto t = clock_.time(kPublish);
         tick_pub_.publish(tick);
@@ -487,12 +451,12 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
         runner_->applyCommand(cmd);
       } else {
         std::lock_guard<std::mutex> lock(mutex_);
-        if (have_command_) {
+        if (protocol_->answered()) {
           cmd.throttle = latest_.throttle;
           cmd.steering = latest_.steering;
           cmd.brake = latest_.brake;
           cmd.target_speed = latest_.target_speed;
-          have_command_ = false;
+          protocol_->consume();
           runner_->applyCommand(cmd);
         }
       }
@@ -514,9 +478,9 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
       if (server_->isPreemptRequested()) {
         term = Termination::kError;
         error = "preempted";
-      } else if (!stack_error_.empty()) {
+      } else if (!protocol_->error().empty()) {
         term = Termination::kError;
-        error = stack_error_;
+        error = protocol_->error();
       }
     }
     if (!ros::ok()) {
@@ -556,7 +520,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   result_time.reset();
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    current_id_ = 0;
+    protocol_->end();
   }
   publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "asg_lockstep/worker_protocol.hpp"
 #include "asg_sim/renderer.hpp"
 #include "asg_sim/ros/stage_times.hpp"
 #include "asg_sim/scenario_runner.hpp"
@@ -56,8 +57,7 @@ class SceneWorkerROS {
   void onLabels(const sensor_msgs::ImageConstPtr& msg);
   /// The run's stamp of simulated time t [s].
   ros::Time stamp(double t) const { return base_ + ros::Duration(t); }
-  /// Names the stack node a command timeout is due to.
-  std::string silentNode(const ros::Time& tick_stamp) const;
+  static asg_lockstep::Nanos nanos(const ros::Time& t) { return asg_lockstep::Nanos(t.toNSec()); }
   void publishStatus(uint8_t status, uint32_t scenario_id);
   void publishState(const ros::Time& stamp);
   void publishCamera(const ros::Time& stamp, bool labels);
@@ -75,21 +75,15 @@ class SceneWorkerROS {
   ros::Subscriber cmd_sub_, ack_sub_, error_sub_, labels_sub_;
   std::unique_ptr<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>> server_;
 
-  std::mutex mutex_;
+  std::mutex mutex_;  // guards protocol_ and latest_ (callbacks run on other threads)
   std::condition_variable cv_;
-  uint32_t current_id_ = 0;
+  // What counts for the current run, and whom to blame: the ROS-free protocol core.
+  std::unique_ptr<asg_lockstep::WorkerProtocol> protocol_;
   uint32_t current_run_ = 0;  // goals served so far
-  std::set<std::string> acks_;
-  bool have_command_ = false;
-  asg_msgs::VehicleCommand latest_;  // lockstep: the one matching the awaited stamp
-  ros::Time awaited_;
-  uint32_t camera_frames_ = 0;
-  ros::Time last_camera_stamp_;
+  asg_msgs::VehicleCommand latest_;  // the command the protocol accepted last
   CameraFrame frame_;
   asg_msgs::ScenarioInfo announcement_;
-  ros::Time base_;              // stamp of simulated time 0 in the current run
-  std::string stack_error_;     // "node: reason" from a StackError of the current run
-  ros::Time last_labels_stamp_; // newest `labels` frame of the current run (labels_node only)
+  ros::Time base_;  // stamp of simulated time 0 in the current run
   // Where the worker's time goes (docs/benchmarks.md); the stage order is StageTimes' order.
   enum Stage { kBuild, kAcks, kRender, kPublish, kWait, kPhysics, kResult };
   StageClock clock_{{"build", "acks", "render", "publish", "wait", "physics", "result"}};
