@@ -255,6 +255,12 @@ def attributed_comparison(load, section: dict, out: str):
             md.append(f"| {arm} | {len(rs)} | " + " | ".join(cells) + " |")
     for measure, xlabel in (("scenarios", "scenarios spent"), ("hours", "wall time [h]")):
         attributed_figure(runs, budget, thr, measure, xlabel, os.path.join(out, f"attributed_{measure}.png"))
+    # The first arm's first run: its top two perception-attributable scenarios, as Figures 5-8.
+    first = next(iter(section["arms"].values()))[0]
+    camp, rows = load(first)
+    summary["_ranks"] = rank_figures(
+        camp, sorted(rows, key=lambda r: r["job"])[:budget], os.path.join(out, "attributed_rank")
+    )
     return summary, md
 
 
@@ -410,12 +416,74 @@ def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]
 
 
 def scenario_of(campaign: dict, row: dict) -> dict:
-    """The request of an exported row: the experiment's fixed attributes with its positions."""
+    """The request of an exported row: the experiment's fixed attributes with its positions (and
+    its textural attributes, where the export has them)."""
     from asg_scenario.layout import with_positions
     from .experiment import load_experiment
 
     exp = load_experiment(os.path.join(REPO, "experiments", campaign["experiment"] + ".yaml"))
-    return with_positions(exp.scenario, row["positions"])
+    s = with_positions(exp.scenario, row["positions"])
+    s["textural"].update(row.get("textural") or {})
+    return s
+
+
+def rank_figures(campaign: dict, rows, out_prefix: str, ranks: int = 2) -> List[dict]:
+    """The paper's Figures 5-8 for an attributed campaign: its top perception-attributable
+    scenarios (perception findings first, then differential ones, then perception collisions,
+    each by proxy difference) from above, the flawed stack's path beside the ground-truth
+    reference's on the same scene. Writes OUT_PREFIX1.png, OUT_PREFIX2.png, ..."""
+    from asg_scenario.report import plot_run
+    from .proxy import optimal_path, placed_mask
+
+    def diff(r):
+        return r["proxy"] - _ref(r)["proxy"]
+
+    ranked, seen = [], set()
+    for pred in (_perception_finding, _differential, _perception_collision):
+        for r in sorted(
+            (r for r in rows if pred(r) and r["job"] not in seen and _ref(r).get("proxy") is not None),
+            key=lambda r: -diff(r),
+        ):
+            ranked.append(r)
+            seen.add(r["job"])
+    out = []
+    for k, r in enumerate(ranked[:ranks], start=1):
+        f = _ref(r)
+        req = scenario_of(campaign, r)
+        removed = r.get("removed") or []
+        opt = optimal_path(req, placed_mask(req, removed))
+        kind = (
+            "perception finding"
+            if _perception_finding(r)
+            else ("differential finding" if _differential(r) else "perception collision")
+        )
+        title = (
+            f"{campaign['name']}, rank {k}: {kind} (job {r['job']})\nflawed U-Net: proxy {r['proxy']:.2f} "
+            f"(yaw {r['yaw_term']:.2f}, PLR {r['plr']:.3f}), {r['termination']}\nground truth: proxy "
+            f"{f['proxy']:.2f} (yaw {f.get('yaw_term') or 0:.2f}, PLR {f.get('plr') or 0:.3f}), {f['termination']}"
+        )
+        path = f"{out_prefix}{k}.png"
+        plot_run(
+            path,
+            req,
+            r["trajectory_xy"],
+            title=title,
+            optimal=opt.points,
+            label="flawed U-Net (under test)",
+            removed={(l, i) for l, i, *_ in removed},
+            others=[("ground-truth labels (reference)", f.get("trajectory_xy") or [], "tab:green")],
+        )
+        out.append(
+            {
+                "rank": k,
+                "job": r["job"],
+                "kind": kind,
+                "proxy": r["proxy"],
+                "reference_proxy": f["proxy"],
+                "figure": os.path.basename(path),
+            }
+        )
+    return out
 
 
 def top_figure(campaign: dict, rows, out: str) -> dict:
