@@ -2,6 +2,7 @@
 // duplicated, out-of-window and missing messages.
 #include <gtest/gtest.h>
 
+#include "asg_lockstep/stack_protocol.hpp"
 #include "asg_lockstep/worker_protocol.hpp"
 
 using asg_lockstep::Nanos;
@@ -124,6 +125,41 @@ TEST(WorkerProtocol, TheSilentNodeIsBlamed) {
   gt.begin(1, 1, windowOf(1));
   gt.cameraFrame(windowOf(1).base);
   EXPECT_EQ(gt.blame(windowOf(1).base), "planner: no command for control tick t = 0.000 s");
+}
+
+// The stack node's side (the planner's): repeated announcements, late and early messages, ticks
+// of another scenario, failure.
+TEST(StackProtocol, RepeatedAnnouncementsAreOneRun) {
+  asg_lockstep::StackProtocol p(kWindow);
+  EXPECT_FALSE(p.active());
+  EXPECT_TRUE(p.announce(7, 3, windowOf(3).base));
+  EXPECT_FALSE(p.announce(7, 3, windowOf(3).base));  // repeated until every node acked
+  EXPECT_TRUE(p.active());
+  p.fail();
+  EXPECT_FALSE(p.active());
+  EXPECT_FALSE(p.announce(7, 3, windowOf(3).base));  // still failed: the node says so again
+  EXPECT_TRUE(p.failed());
+  EXPECT_TRUE(p.announce(7, 4, windowOf(4).base));  // the same scenario again: a new run
+  EXPECT_FALSE(p.failed());
+  EXPECT_EQ(p.run(), 4u);
+}
+
+TEST(StackProtocol, MessagesOfOtherRunsAreDroppedAndCounted) {
+  asg_lockstep::StackProtocol p(kWindow);
+  EXPECT_FALSE(p.current(kS));  // before any run
+  const RunWindow w = windowOf(2);
+  p.announce(5, 2, w.base);
+  EXPECT_EQ(p.staleInRun(), 0u);
+  EXPECT_FALSE(p.current(windowOf(1).base + kS));  // late: the run before
+  EXPECT_TRUE(p.current(w.base));
+  EXPECT_TRUE(p.current(w.base + kWindow - 1));
+  EXPECT_FALSE(p.current(w.base + kWindow));  // past the window
+  EXPECT_FALSE(p.tick(4, w.base + kS));         // another scenario's tick
+  EXPECT_TRUE(p.tick(5, w.base + kS));
+  EXPECT_EQ(p.staleInRun(), 2u);
+  p.announce(5, 3, windowOf(3).base);
+  EXPECT_EQ(p.staleInRun(), 0u);
+  EXPECT_FALSE(p.tick(5, w.base + kS));  // the previous run's tick, late
 }
 
 int main(int argc, char** argv) {

@@ -62,7 +62,7 @@ PlannerROS::PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   odom_sub_ = nh_.subscribe("odom", 64, &PlannerROS::onOdom, this, nodelay);
   tf_sub_ = nh_.subscribe("tf", 16, &PlannerROS::onTf, this, nodelay);
   tick_sub_ = nh_.subscribe("tick", 16, &PlannerROS::onTick, this, nodelay);
-  stage_pub_ = std::make_unique<asg_sim::StageTimesPublisher>(nh_, "planner", &clock_);
+  stage_pub_ = std::make_unique<asg_lockstep::StageTimesPublisher>(nh_, "planner", &clock_);
   ROS_INFO("planner ready in %s (vote grid %.1f m, vehicle grid %.1f m, labels from %s)",
            nh_.getNamespace().c_str(), params_.vote_spacing, params_.astar.vehicle_spacing,
            labels_sub_.getTopic().c_str());
@@ -116,8 +116,8 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   ack.scenario_id = msg->scenario_id;
   ack.run = msg->run;
   // The worker repeats the announcement until every stack node has acked: reset once, ack always.
-  if (have_run_ && msg->run == run_) {
-    if (failed_) {  // say it again: the first one may have gone out before the worker listened
+  if (!protocol_.announce(msg->scenario_id, msg->run, asg_lockstep::Nanos(msg->base_stamp.toNSec()))) {
+    if (protocol_.failed()) {  // say it again: the first one may have gone out before the worker listened
       error_pub_.publish(last_error_);
       return;
     }
@@ -126,12 +126,7 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   }
   auto reset_time = clock_.time(kReset);
   stage_pub_->countRun();
-  scenario_id_ = msg->scenario_id;
-  run_ = msg->run;
   base_ = msg->base_stamp;
-  have_run_ = true;
-  failed_ = false;
-  stale_dropped_ = 0;
   depth_.clear();
   labels_.clear();
   odom_.clear();
@@ -177,9 +172,7 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
 }
 
 bool PlannerROS::current(const ros::Time& stamp, const char* what) {
-  if (have_run_ && stamp >= base_ && stamp < base_ + ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW))
-    return true;
-  ++stale_dropped_;
+  if (protocol_.current(asg_lockstep::Nanos(stamp.toNSec()))) return true;
   // Normal after a run ends early (late frames of the last run): counted in PlannerState, not a warning.
   ROS_DEBUG_THROTTLE(5.0, "planner: %s stamped %.3f s is not of the current run (window from %.0f s): dropped",
                     what, stamp.toSec(), base_.toSec());
@@ -187,15 +180,15 @@ bool PlannerROS::current(const ros::Time& stamp, const char* what) {
 }
 
 void PlannerROS::reportError(const std::string& reason) {
-  failed_ = true;
+  protocol_.fail();
   asg_msgs::StackError e;
   e.node = ack_name_;
-  e.scenario_id = scenario_id_;
-  e.run = run_;
+  e.scenario_id = protocol_.scenarioId();
+  e.run = protocol_.run();
   e.reason = reason;
   last_error_ = e;
   error_pub_.publish(e);
-  ROS_ERROR("planner: scenario %u: %s", scenario_id_, reason.c_str());
+  ROS_ERROR("planner: scenario %u: %s", protocol_.scenarioId(), reason.c_str());
 }
 
 void PlannerROS::onDepth(const sensor_msgs::ImageConstPtr& msg) {
@@ -214,7 +207,7 @@ void PlannerROS::onOdom(const nav_msgs::OdometryConstPtr& msg) {
   process();
 }
 void PlannerROS::onTick(const asg_msgs::TickConstPtr& msg) {
-  if (msg->scenario_id != scenario_id_ || !current(msg->header.stamp, "tick")) return;
+  if (msg->scenario_id != protocol_.scenarioId() || !current(msg->header.stamp, "tick")) return;
   ticks_.push_back(msg);
   process();
 }
@@ -250,7 +243,7 @@ bool PlannerROS::frameValid(const sensor_msgs::Image& d, const sensor_msgs::Imag
 }
 
 void PlannerROS::process() {
-  if (scenario_id_ == 0 || failed_) return;
+  if (!protocol_.active()) return;
   // 1. Vote every frame whose depth, labels and odometry (same stamp) are all here.
   while (have_mount_ && have_info_) {
     bool progressed = false;
@@ -301,7 +294,7 @@ void PlannerROS::process() {
     auto publish_time = clock_.time(kPublish);
     asg_msgs::VehicleCommand cmd;
     cmd.header.stamp = tick.header.stamp;
-    cmd.scenario_id = scenario_id_;
+    cmd.scenario_id = protocol_.scenarioId();
     cmd.throttle = c.throttle;
     cmd.steering = c.steering;
     cmd.brake = c.brake;
@@ -311,7 +304,7 @@ void PlannerROS::process() {
     asg_msgs::PlannerState st;
     st.header.stamp = tick.header.stamp;
     st.header.frame_id = "map";
-    st.scenario_id = scenario_id_;
+    st.scenario_id = protocol_.scenarioId();
     st.frames = planner_->frames();
     st.plan_count = planner_->plans();
     st.replanned = replanned;
@@ -329,7 +322,7 @@ void PlannerROS::process() {
     st.steering = c.steering;
     st.brake = c.brake;
     st.target_speed = c.target_speed;
-    st.stale_dropped = stale_dropped_;
+    st.stale_dropped = protocol_.staleInRun();
     state_pub_.publish(st);
     if (publish_markers_) {
       geometry_msgs::PointStamped lp;

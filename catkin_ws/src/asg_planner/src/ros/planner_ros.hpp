@@ -18,8 +18,9 @@
 #include <string>
 
 #include "asg_planner/voting_planner.hpp"
-#include "asg_sim/ros/stage_times.hpp"
-#include "asg_sim/stage_clock.hpp"
+#include "asg_lockstep/ros/stage_times.hpp"
+#include "asg_lockstep/stack_protocol.hpp"
+#include "asg_lockstep/stage_clock.hpp"
 
 namespace asg_planner {
 
@@ -53,9 +54,9 @@ class PlannerROS {
   ros::Publisher cmd_pub_, ack_pub_, error_pub_, state_pub_, path_pub_, votes_pub_, lookahead_pub_, grid_pub_;
   ros::Subscriber scenario_sub_, depth_sub_, labels_sub_, info_sub_, odom_sub_, tf_sub_, tick_sub_;
 
-  uint32_t scenario_id_ = 0;
-  uint32_t run_ = 0;
-  bool have_run_ = false;
+  // Which run is current, which messages belong to it, whether this node failed it: the
+  // protocol core (asg_lockstep), with stamps in ns.
+  asg_lockstep::StackProtocol protocol_{asg_lockstep::Nanos(ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW).toNSec())};
   bool have_mount_ = false, have_info_ = false;
   Eigen::Isometry3d T_base_optical_ = Eigen::Isometry3d::Identity();
   Intrinsics K_;
@@ -63,14 +64,12 @@ class PlannerROS {
   std::map<ros::Time, nav_msgs::OdometryConstPtr> odom_;
   std::deque<asg_msgs::TickConstPtr> ticks_;
   uint32_t frames_done_ = 0;
-  ros::Time base_;              // stamp of simulated time 0 in the current run
-  uint32_t stale_dropped_ = 0;  // messages of another run dropped during this run
-  bool failed_ = false;         // a StackError went out for this run: answer nothing more
+  ros::Time base_;  // stamp of simulated time 0 in the current run
   asg_msgs::StackError last_error_;
   // Where the planner's time goes (docs/benchmarks.md).
   enum Stage { kReset, kVotes, kPlan, kPublish };
-  asg_sim::StageClock clock_{{"reset", "votes", "plan", "publish"}};
-  std::unique_ptr<asg_sim::StageTimesPublisher> stage_pub_;
+  asg_lockstep::StageClock clock_{{"reset", "votes", "plan", "publish"}};
+  std::unique_ptr<asg_lockstep::StageTimesPublisher> stage_pub_;
 };
 
 }  // namespace asg_planner

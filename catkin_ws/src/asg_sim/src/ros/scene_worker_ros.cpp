@@ -146,7 +146,7 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
     labels_sub_ = nh_.subscribe("labels", 16, &SceneWorkerROS::onLabels, this, ros::TransportHints().tcpNoDelay());
   server_ = std::make_unique<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>>(
       nh_, "run_scenario", [this](const asg_msgs::RunScenarioGoalConstPtr& g) { execute(g); }, false);
-  stage_pub_ = std::make_unique<StageTimesPublisher>(nh_, "scene_worker", &clock_);
+  stage_pub_ = std::make_unique<asg_lockstep::StageTimesPublisher>(nh_, "scene_worker", &clock_);
   server_->start();
   publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
   ROS_INFO("scene_worker ready in %s (stack: %zu node(s), lockstep %s)", nh_.getNamespace().c_str(),
@@ -357,7 +357,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   if (goal->scenario_id == 0) return fail("scenario_id must be > 0");
   if (goal->top_down_px > 4096) return fail("top_down_px = " + std::to_string(goal->top_down_px) + ": must be <= 4096");
   stage_pub_->countRun();
-  auto build_time = std::make_unique<StageClock::Section>(&clock_, kBuild);
+  auto build_time = std::make_unique<asg_lockstep::StageClock::Section>(&clock_, kBuild);
   try {
     runner_->reset(toSpec(goal->scene));
   } catch (const SceneError& e) {
@@ -491,7 +491,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   if (term != Termination::kError || error != "preempted")
     publishState(stamp(runner_->time()));
 
-  auto result_time = std::make_unique<StageClock::Section>(&clock_, kResult);
+  auto result_time = std::make_unique<asg_lockstep::StageClock::Section>(&clock_, kResult);
   result.sim_time = runner_->time();
   result.num_control_msgs = runner_->commandsReceived();
   result.trajectory.reserve(runner_->trajectory().size());

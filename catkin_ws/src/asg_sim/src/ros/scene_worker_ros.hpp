@@ -23,9 +23,9 @@
 
 #include "asg_lockstep/worker_protocol.hpp"
 #include "asg_sim/renderer.hpp"
-#include "asg_sim/ros/stage_times.hpp"
+#include "asg_lockstep/ros/stage_times.hpp"
 #include "asg_sim/scenario_runner.hpp"
-#include "asg_sim/stage_clock.hpp"
+#include "asg_lockstep/stage_clock.hpp"
 
 namespace asg_sim {
 
@@ -86,8 +86,8 @@ class SceneWorkerROS {
   ros::Time base_;  // stamp of simulated time 0 in the current run
   // Where the worker's time goes (docs/benchmarks.md); the stage order is StageTimes' order.
   enum Stage { kBuild, kAcks, kRender, kPublish, kWait, kPhysics, kResult };
-  StageClock clock_{{"build", "acks", "render", "publish", "wait", "physics", "result"}};
-  std::unique_ptr<StageTimesPublisher> stage_pub_;
+  asg_lockstep::StageClock clock_{{"build", "acks", "render", "publish", "wait", "physics", "result"}};
+  std::unique_ptr<asg_lockstep::StageTimesPublisher> stage_pub_;
 };
 
 }  // namespace asg_sim

@@ -1,4 +1,5 @@
-// ROS layer: publishes a StageClock as asg_msgs/StageTimes on `stage_times` (latched), at most
+// ROS layer (the one ROS header of asg_lockstep, header-only, for the nodes' adapters; the
+// library itself uses no ROS): publishes a StageClock as asg_msgs/StageTimes on `stage_times` (latched), at most
 // once a second and only when something changed (used by the scene worker and the planner).
 #pragma once
 
@@ -8,9 +9,9 @@
 #include <atomic>
 #include <string>
 
-#include "asg_sim/stage_clock.hpp"
+#include "asg_lockstep/stage_clock.hpp"
 
-namespace asg_sim {
+namespace asg_lockstep {
 
 class StageTimesPublisher {
  public:
@@ -50,4 +51,4 @@ class StageTimesPublisher {
   uint32_t last_runs_ = 0;
 };
 
-}  // namespace asg_sim
+}  // namespace asg_lockstep

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace asg_sim {
+namespace asg_lockstep {
 
 class StageClock {
  public:
@@ -60,4 +60,4 @@ class StageClock {
   mutable std::mutex mutex_;
 };
 
-}  // namespace asg_sim
+}  // namespace asg_lockstep
