@@ -30,3 +30,13 @@ def test_frames_outside_the_current_window_are_dropped_and_counted():
     assert not p.accept(3 * WINDOW)  # just past the window
     assert p.stale == 3
     assert abs(p.seconds(2 * WINDOW + 1500 * 10**6) - 1.5) < 1e-12
+
+
+def test_ticks_of_another_scenario_or_run_are_not_answered():
+    p = StackProtocol(WINDOW)
+    assert not p.tick(1, 2 * WINDOW)  # before any run
+    p.announce(Run(1, 1, 2 * WINDOW))
+    assert p.tick(1, 2 * WINDOW + S)
+    assert not p.tick(2, 2 * WINDOW + S)  # another scenario's
+    assert not p.tick(1, WINDOW + S)  # the run before's, late
+    assert p.stale == 1

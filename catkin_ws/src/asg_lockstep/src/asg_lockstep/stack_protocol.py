@@ -45,6 +45,11 @@ class StackProtocol:
             return False
         return self.failed is None
 
+    def tick(self, scenario_id: int, stamp: int) -> bool:
+        """Whether a control tick is of the current run (its scenario, in its window); a tick of
+        the current scenario outside the window is counted in `stale`."""
+        return self.run is not None and scenario_id == self.run.scenario_id and self.accept(stamp)
+
     def fail(self, reason: str) -> Run:
         """This node cannot go on with the current run; returns it (for the error message)."""
         self.failed = reason
