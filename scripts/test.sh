@@ -16,7 +16,7 @@ unset ROS_MASTER_URI
 
 log "style: ruff format --check and ruff check (ruff.toml)"
 mkdir -p "$RESULTS/style"
-/usr/bin/python3 "$REPO/scripts/check_style.py" "$REPO" "$RESULTS/style/ruff.xml"
+/usr/bin/python3 "$REPO/scripts/ci/check_style.py" "$REPO" "$RESULTS/style/ruff.xml"
 
 log "gtest + rostest (catkin_make run_tests)"
 export LP_NUM_THREADS=1
@@ -26,7 +26,7 @@ export LP_NUM_THREADS=1
 (cd "$WS" && catkin_make run_tests -j1 2>&1 | grep -vE '^(\[ *[0-9]+%\]|-- )' ) || true
 
 log "catkin_make install (into build/install_check)"
-/usr/bin/python3 "$REPO/scripts/check_install.py" "$WS" "$RESULTS/install/install.xml"
+/usr/bin/python3 "$REPO/scripts/ci/check_install.py" "$WS" "$RESULTS/install/install.xml"
 
 log "pytest (Python cores)"
 for t in "$WS"/src/*/test; do
@@ -39,4 +39,4 @@ done
 log "pytest (end-to-end tests in tests/: scale-out over two hosts, ...)"
 /usr/bin/python3 -m pytest -q -p no:cacheprovider --junitxml="$RESULTS/pytest/tests.xml" "$REPO"/tests/test_*.py || true
 
-/usr/bin/python3 "$REPO/scripts/summarize_tests.py" "$RESULTS"
+/usr/bin/python3 "$REPO/scripts/ci/summarize_tests.py" "$RESULTS"

@@ -1,5 +1,5 @@
 """Issue #26: an installed workspace runs a campaign and replays its top scenario, with nothing
-from the source tree. Uses the install prefix that scripts/check_install.py made
+from the source tree. Uses the install prefix that scripts/ci/check_install.py made
 (catkin_ws/build/install_check; made here if missing), sources only its setup.bash in a clean
 environment, works in an empty folder: `roslaunch asg_bringup train.launch` brings up two
 workers with the flawed U-Net (no attribution, to save time), the campaign runs 20 scenarios

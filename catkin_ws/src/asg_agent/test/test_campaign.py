@@ -256,7 +256,7 @@ def test_export_summary_and_report_agree_with_the_store(tmp_path):
 
 
 def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input(tmp_path, capsys):
-    """What scripts/campaigns.sh asks before running a plan line: `complete` exits 0 only for the
+    """What scripts/repro/campaigns.sh asks before running a plan line: `complete` exits 0 only for the
     export of a finished campaign holding at least the budget; `park` and `unpark` exit 2 naming
     what is wrong."""
     from asg_agent.analysis import export, main

@@ -144,7 +144,7 @@ def test_shipped_models_figures(test_dataset):
     far less of the non-traversable class and calls at least 3x as much shadowed ground an
     obstacle, 5x under a low sun. Those are the claims that hold on every held-apart set
     measured (seeds 3-8: 3.6x to 5.5x overall, 6.2x to 12.0x under a low sun;
-    scripts/perception_spread.sh); this set (seed 3) gives 5.2x and 8.9x."""
+    scripts/repro/perception_spread.sh); this set (seed 3) gives 5.2x and 8.9x."""
     frames = load_frames(test_dataset)
     full = evaluate(load_model(os.path.join(MODELS, "full.pt")), frames)
     flawed = evaluate(load_model(os.path.join(MODELS, "flawed.pt")), frames)

@@ -11,7 +11,7 @@ layout k), so a baseline of N layouts is the first N scenarios of that campaign.
     python3 -m asg_agent.baseline offline EXPERIMENT.yaml --label reference \
         --planner catkin_ws/src/asg_planner/config/planner_reference.yaml   # a planner variant, no ROS
 
-`run` talks to running workers (scripts/baseline.sh launches them per stack) and appends one JSON
+`run` talks to running workers (scripts/repro/baseline.sh launches them per stack) and appends one JSON
 line per layout to results/baseline/<exp>/<stack>.jsonl as each run ends, so an interrupted run
 resumes where it stopped. `summary` needs no ROS. `offline` runs the ground-truth stack on the
 same layouts without ROS, through asg_planner's `asg_closed_loop` (the same cores in the lockstep

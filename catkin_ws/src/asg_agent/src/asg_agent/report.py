@@ -237,7 +237,7 @@ def _baseline_html(experiment: str) -> str:
     if not os.path.isfile(path):
         return (
             f"<h2>Baseline</h2><p>No baseline of {html.escape(experiment)} yet: "
-            f"<code>bash scripts/baseline.sh {html.escape(experiment)}</code> measures it.</p>"
+            f"<code>bash scripts/repro/baseline.sh {html.escape(experiment)}</code> measures it.</p>"
         )
     with open(path) as f:
         b = json.load(f)

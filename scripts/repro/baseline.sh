@@ -3,14 +3,14 @@
 # the same seeded random layouts of an experiment (uniform random search, seed 0), two workers
 # per stack. Resumable: each stack appends to results/baseline/<exp>/<stack>.jsonl as runs end.
 # Writes results/baseline/<exp>.json and prints the table of docs/baseline.md.
-#   bash scripts/baseline.sh EXPERIMENT [N_GROUND_TRUTH=500] [N_UNET=300]
-#   e.g. bash scripts/baseline.sh exp1      (experiments/exp1.yaml)
+#   bash scripts/repro/baseline.sh EXPERIMENT [N_GROUND_TRUTH=500] [N_UNET=300]
+#   e.g. bash scripts/repro/baseline.sh exp1      (experiments/exp1.yaml)
 # ASG_PLANNER_CONFIG=FILE: another planner configuration. ASG_UNET_BACKEND: the U-Net stacks'
 # inference backend, default bf16 (the shipped one since issue #24); channels_last rows (every
 # baseline before it) are in results/baseline/<exp>/, another backend's in
 # results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
 # with python3 -m asg_agent.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks.
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
 [ -f "$EXP" ] || { echo "baseline.sh: no experiment file $1 (nor $EXP)" >&2; exit 2; }

@@ -3,8 +3,8 @@
 # their figures in docs/perception.md: renders the datasets with the simulator's ground-truth
 # labeler, trains both models (in parallel, one core each) and evaluates them on a held-apart
 # set. About 15 minutes on 2 cores (REFERENCE.md recipe: whole frames, 4 epochs, Adam 1e-4, batch 16).
-#   bash scripts/make_models.sh [WORK_DIR] [EPOCHS]
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+#   bash scripts/repro/make_models.sh [WORK_DIR] [EPOCHS]
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 WORK="$(realpath -m "${1:-$REPO/runs/models}")"
 EPOCHS="${2:-4}"
 install_packages

@@ -2,8 +2,8 @@
 # The weather pictures of docs/simulator.md (issue #27): scenarios/shadows.yaml rendered clear,
 # in fog (40 m visibility), overcast (cloud cover 1) and both, from the same camera pose; camera
 # RGB above, ground-truth labels below. Writes docs/images/weather_panel.png.
-#   bash scripts/weather_pictures.sh [OUT=docs/images/weather_panel.png]
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+#   bash scripts/repro/weather_pictures.sh [OUT=docs/images/weather_panel.png]
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 OUT="${1:-$REPO/docs/images/weather_panel.png}"
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT

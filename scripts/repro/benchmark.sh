@@ -2,8 +2,8 @@
 # Prints the benchmark figures recorded in docs/benchmarks.md. One core per process
 # (LP_NUM_THREADS=1, taskset), medians over repeats inside each tool; ROS round trips run
 # REPEATS times and print each. Builds first if needed.
-#   bash scripts/benchmark.sh [REPEATS]
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+#   bash scripts/repro/benchmark.sh [REPEATS]
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 REPEATS="${1:-3}"
 install_packages
 build_workspace ON

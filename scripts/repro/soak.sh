@@ -6,11 +6,11 @@
 # campaign drains and finishes. Then every scenario 0..N-1 must be stored exactly once.
 # Writes results/reliability/soak.json (scenarios, kills by kind, retries, lost, duplicates) and
 # prints it; docs/reliability.md quotes the last result.
-#   [SOAK_EXTRA="--bc-weight 1.0"] bash scripts/soak.sh [HOURS=2] [MIN_GAP_S=60] [MAX_GAP_S=240] \
+#   [SOAK_EXTRA="--bc-weight 1.0"] bash scripts/repro/soak.sh [HOURS=2] [MIN_GAP_S=60] [MAX_GAP_S=240] \
 #       [METHOD=random] [SEED=1] [EXP=exp1]        (SOAK_EXTRA: more campaign options)
 # The campaign is a valid campaign of METHOD on experiments/EXP.yaml (kills change nothing in what is stored), so
 # its export can serve as a search-comparison arm (docs/experiments.md).
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 HOURS="${1:-2}"
 MIN_GAP="${2:-60}"
 MAX_GAP="${3:-240}"
@@ -85,5 +85,5 @@ echo "$(date +%s) draining: budget cut to $N scenarios" >> "$REPO/runs/soak/agen
 until agent "$N" --resume; do sleep 1; done
 end=$(date +%s)
 kill "$killer" 2>/dev/null || true
-/usr/bin/python3 "$REPO/scripts/soak_report.py" "$STORE" "$NAME" "$N" "$KILLS" "$REPO/runs/soak/agent.log" \
+/usr/bin/python3 "$REPO/scripts/repro/soak_report.py" "$STORE" "$NAME" "$N" "$KILLS" "$REPO/runs/soak/agent.log" \
     "$start" "$end" "$OUT/soak.json"

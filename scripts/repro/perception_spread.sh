@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The shipped models' shadow false-obstacle figures over several held-apart 600-frame sets
 # (dataset seeds other than the training seeds 1 and 2): the spread quoted in docs/perception.md.
-#   bash scripts/perception_spread.sh [SEED ...]     (default: 3 4 5 6 7 8)
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+#   bash scripts/repro/perception_spread.sh [SEED ...]     (default: 3 4 5 6 7 8)
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 source_ros
 SEEDS=("${@:-3 4 5 6 7 8}")
 [ $# -gt 0 ] || SEEDS=(3 4 5 6 7 8)

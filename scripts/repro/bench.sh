@@ -5,13 +5,13 @@
 # read at the start and the end. Prints scenarios an hour, simulated seconds per wall second per
 # worker, the per-scenario stage breakdown, the U-Net's inference-only bound and the ratio to the
 # paper's 625 an hour; keeps the JSON of each run under results/bench/TAG-wN.json.
-#   bash scripts/bench.sh [SCENARIOS=160] [TAG=now] [WORKER_COUNTS="1 2"]
+#   bash scripts/repro/bench.sh [SCENARIOS=160] [TAG=now] [WORKER_COUNTS="1 2"]
 # BENCH_BASELINE=1: the pipeline as it was before issue #13's changes (odom and tf at every tick,
 # planner markers on, freed workers wait for the agent's update) - the "before" column.
 # BENCH_ATTRIBUTION=true: every scenario also runs on the ground-truth reference stack (2 more
 # workers). BENCH_EXPERIMENT=exp1-bf16: another experiment file (its unet_backend is passed on).
 # Run it on an otherwise idle machine: it measures the machine. docs/benchmarks.md.
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 SCENARIOS="${1:-160}"
 TAG="${2:-now}"
 COUNTS="${3:-1 2}"

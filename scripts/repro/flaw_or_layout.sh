@@ -4,8 +4,8 @@
 # paper's 5 m planner grids (planner.yaml, the campaign's) and with the fine grids
 # (planner_fine.yaml, where the flawed stack is re-run too). Two workers per stack; results under
 # results/flaw_or_layout/, the table in docs/experiments.md (python3 -m asg_agent.experiments).
-#   bash scripts/flaw_or_layout.sh [EXPORT=results/campaigns/exp1-td3-per-asp-s0.jsonl.gz] [TOP=50]
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+#   bash scripts/repro/flaw_or_layout.sh [EXPORT=results/campaigns/exp1-td3-per-asp-s0.jsonl.gz] [TOP=50]
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXPORT="${1:-$REPO/results/campaigns/exp1-td3-per-asp-s0.jsonl.gz}"
 TOP="${2:-50}"
 install_packages

@@ -2,8 +2,8 @@
 # The screenshot of docs/agent.md: the real TensorBoard page of a campaign's event files, taken
 # headless. TensorBoard is not a dependency of the project: this puts it (pinned, with numpy < 2)
 # in a virtual environment of its own under runs/, and Chromium from Debian.
-#   bash scripts/tensorboard_shot.sh LOGDIR OUT.png [URL_FRAGMENT=timeseries]
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+#   bash scripts/repro/tensorboard_shot.sh LOGDIR OUT.png [URL_FRAGMENT=timeseries]
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 LOGDIR="$(realpath "${1:?usage: tensorboard_shot.sh LOGDIR OUT.png}")"
 OUT="$(realpath -m "${2:?usage: tensorboard_shot.sh LOGDIR OUT.png}")"
 VENV="$REPO/runs/tensorboard-venv"

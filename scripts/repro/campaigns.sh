@@ -2,10 +2,10 @@
 # Issue #11's campaigns, back to back, resumable: for each line of the plan, run the campaign (or
 # resume it where it stopped; a finished one returns at once), then export it to
 # results/campaigns/NAME.jsonl.gz. Stop it at any moment (Ctrl-C, kill); run it again to go on.
-#   bash scripts/campaigns.sh [PLAN=results/campaign_plan.txt] [ONLY=regex on names]
-#   ASG_DRY=1 bash scripts/campaigns.sh     # only list what would run
-#   ASG_PARK=1 bash scripts/campaigns.sh    # park the unfinished ones (to commit; see below)
-#   ASG_EXPORTS=results/comparison bash scripts/campaigns.sh results/comparison/plan.txt
+#   bash scripts/repro/campaigns.sh [PLAN=results/campaign_plan.txt] [ONLY=regex on names]
+#   ASG_DRY=1 bash scripts/repro/campaigns.sh     # only list what would run
+#   ASG_PARK=1 bash scripts/repro/campaigns.sh    # park the unfinished ones (to commit; see below)
+#   ASG_EXPORTS=results/comparison bash scripts/repro/campaigns.sh results/comparison/plan.txt
 #                                           # exports (and parked stores) in another folder
 # A campaign whose committed export is finished at its budget is skipped, also on a fresh clone
 # without the store. A campaign resumes only from its store rows and checkpoint, which a fresh
@@ -13,7 +13,7 @@
 # commit), and the next run here or on another clone unparks it first and goes on from there.
 # About 45 minutes per 1,000 Exp. 1 scenarios on a 2-core machine (annealing: about 55), about
 # 100 for Exp. 3 (docs/experiments.md, Table 2 wall times).
-source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 PLAN="${1:-$REPO/results/campaign_plan.txt}"
 ONLY="${2:-.}"
 EXPORTS="$REPO/${ASG_EXPORTS:-results/campaigns}"
