@@ -67,13 +67,13 @@ class WorkerPool(Pool):
         namespaces: List[str],
         answer_timeout: float = 300.0,
         connect_timeout: float = 120.0,
-        ack_timeout: float = 20.0,
+        accept_timeout: float = 20.0,
     ):
         self.answer_timeout = answer_timeout
         # A goal the worker's action server has not acknowledged this long after it went out was
         # dropped (sent to a scene worker that had just respawned): re-queued without waiting for
         # answer_timeout. The 2-hour soak lost 3 x 300 s of a worker that way.
-        self.ack_timeout = ack_timeout
+        self.accept_timeout = accept_timeout
         # The plain ActionClient: one handle per goal, so a late status of an earlier goal can never
         # be taken for the current one (SimpleActionClient tracks a single goal per client).
         self.clients: Dict[str, actionlib.ActionClient] = {}
@@ -197,7 +197,7 @@ class WorkerPool(Pool):
             waiting = [
                 (ns, state)
                 for ns, (job, state, t0) in self.busy.items()
-                if now - t0 > self.ack_timeout and state["handle"] is not None
+                if now - t0 > self.accept_timeout and state["handle"] is not None
             ]
         # Outside self.lock (see transition): goals the server never acknowledged.
         unacked = {ns for ns, state in waiting if state["handle"].get_comm_state() == CommState.WAITING_FOR_GOAL_ACK}
@@ -207,7 +207,7 @@ class WorkerPool(Pool):
                 if ns in dead:
                     why = "the scene worker died during the run"
                 elif ns in unacked:
-                    why = f"never acknowledged the goal within {self.ack_timeout:.0f} s"
+                    why = f"never acknowledged the goal within {self.accept_timeout:.0f} s"
                 elif now - t0 > self.answer_timeout:
                     why = f"did not answer within {self.answer_timeout:.0f} s"
                 else:
