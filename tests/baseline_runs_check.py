@@ -14,9 +14,9 @@ import rostest
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import stack_util as su  # noqa: E402
 
-from asg_agent.baseline import layouts, out_path, read_rows, row_of  # noqa: E402
-from asg_agent.experiment import load_experiment  # noqa: E402
-from asg_agent.pool_ros import result_to_outcome  # noqa: E402
+from asg_agent.cli.baseline import layouts, out_path, read_rows, row_of  # noqa: E402
+from asg_agent.campaign.experiment import load_experiment  # noqa: E402
+from asg_agent.ros.pool import result_to_outcome  # noqa: E402
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 LAYOUTS = range(10, 20)

@@ -10,7 +10,7 @@ import unittest
 import rospy
 import rostest
 
-from asg_agent.store import Store, unpack_trajectory
+from asg_agent.campaign.store import Store, unpack_trajectory
 
 import stack_util as su
 
@@ -22,7 +22,7 @@ class CampaignEndToEnd(unittest.TestCase):
         cmd = [
             "/usr/bin/python3",
             "-m",
-            "asg_agent.cli",
+            "asg_agent.cli.campaign",
             os.path.join(su.REPO, "experiments", "exp1.yaml"),
             "--workers",
             "2",
@@ -50,7 +50,7 @@ class CampaignEndToEnd(unittest.TestCase):
             [
                 "/usr/bin/python3",
                 "-m",
-                "asg_agent.cli",
+                "asg_agent.cli.campaign",
                 os.path.join(su.REPO, "experiments", "exp1-channels-last.yaml"),
                 "--workers",
                 "2",
@@ -93,7 +93,7 @@ class CampaignEndToEnd(unittest.TestCase):
             [
                 "/usr/bin/python3",
                 "-m",
-                "asg_agent.replay_ros",
+                "asg_agent.ros.replay",
                 path,
                 "first",
                 str(top["job"]),
@@ -129,7 +129,7 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertEqual(counts.get("/worker_0/replay/labels_rgb", 0), counts["/worker_0/labels"])
         # rviz with rviz/replay.rviz on that bag, under Xvfb: the vote grid, the plan and the
         # driven path are drawn (a blank view or an error panel has none of their colours).
-        from asg_agent.replay_view import screenshot
+        from asg_agent.ros.replay_view import screenshot
 
         shot = os.path.join(os.path.dirname(path), "replay.png")
         px = screenshot(bag, shot, "worker_0", at=0.7)
@@ -137,7 +137,7 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertGreater(px["plan"], 50, px)
         self.assertGreater(px["trajectory"], 100, px)
         # A planner snapshot from the bag and the campaign's HTML report.
-        from asg_agent.report import campaign_report, snapshot
+        from asg_agent.analysis.report import campaign_report, snapshot
 
         snap = os.path.join(os.path.dirname(path), "snapshot.png")
         snapshot(bag, snap, row["sim_time"] / 2)

@@ -15,7 +15,7 @@ import unittest
 import rospy
 import rostest
 
-from asg_agent.store import Store
+from asg_agent.campaign.store import Store
 
 import stack_util as su
 
@@ -39,7 +39,7 @@ class CampaignFaults(unittest.TestCase):
             [
                 "/usr/bin/python3",
                 "-m",
-                "asg_agent.cli",
+                "asg_agent.cli.campaign",
                 exp,
                 "--workers",
                 "2",

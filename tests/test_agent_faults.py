@@ -15,7 +15,7 @@ import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_agent.store import Store  # noqa: E402
+from asg_agent.campaign.store import Store  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
 ENV = dict(
@@ -31,7 +31,7 @@ def cmd(store, name, *extra):
     return [
         sys.executable,
         "-m",
-        "asg_agent.cli",
+        "asg_agent.cli.campaign",
         EXP,
         "--fake-workers",
         "2",
@@ -130,7 +130,7 @@ def test_replay_of_an_unknown_job_is_named(tmp_path):
     r = subprocess.run(cmd(path, "u", "--scenarios", "10"), env=ENV, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0
     r = subprocess.run(
-        [sys.executable, "-m", "asg_agent.replay_ros", path, "u", "999"],
+        [sys.executable, "-m", "asg_agent.ros.replay", path, "u", "999"],
         env=ENV,
         capture_output=True,
         text=True,

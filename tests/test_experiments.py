@@ -9,9 +9,9 @@ import time
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_agent import experiments  # noqa: E402
-from asg_agent.analysis import counts, read_export  # noqa: E402
-from asg_agent.store import Store  # noqa: E402
+from asg_agent.analysis import experiments  # noqa: E402
+from asg_agent.analysis.export import counts, read_export  # noqa: E402
+from asg_agent.campaign.store import Store  # noqa: E402
 
 MANIFEST = os.path.join(REPO, "results", "experiments.yaml")
 
@@ -44,7 +44,7 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
     with open(os.path.join(REPO, "docs", "experiments.md")) as f:
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")
-    assert quoted == generated, "docs/experiments.md is stale: run `python3 -m asg_agent.experiments`"
+    assert quoted == generated, "docs/experiments.md is stale: run `python3 -m asg_agent.analysis.experiments`"
     if "differential" in summary:
         d = summary["differential"]
         camp, rows = read_export(os.path.join(REPO, "results", d["export"]))

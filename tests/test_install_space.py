@@ -3,7 +3,7 @@ from the source tree. Uses the install prefix that scripts/ci/check_install.py m
 (catkin_ws/build/install_check; made here if missing), sources only its setup.bash in a clean
 environment, works in an empty folder: `roslaunch asg_bringup train.launch` brings up two
 workers with the flawed U-Net (no attribution, to save time), the campaign runs 20 scenarios
-with the command line the launch file gives it, and `asg_agent.replay_ros` replays the top one on
+with the command line the launch file gives it, and `asg_agent.ros.replay` replays the top one on
 a worker it brings up itself through asg_bringup's worker.launch."""
 
 import os
@@ -53,7 +53,7 @@ def test_an_installed_workspace_runs_a_campaign_and_replays_its_top_scenario(tmp
     replay = textwrap.dedent(f"""\
         source {PREFIX}/setup.bash
         export ROS_HOSTNAME=127.0.0.1 LP_NUM_THREADS=1 ROS_LOG_DIR={tmp_path}/log
-        /usr/bin/python3 -m asg_agent.replay_ros {store} installed {job} --port 11432
+        /usr/bin/python3 -m asg_agent.ros.replay {store} installed {job} --port 11432
         """)
     p = subprocess.run(["bash", "-c", replay], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]

@@ -81,7 +81,7 @@ def test_the_experiment_backends_are_the_segmenters():
 
     for pkg in ("asg_agent", "asg_perception", "asg_scenario"):
         sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
-    from asg_agent.experiment import DEFAULT_UNET_BACKEND, UNET_BACKENDS, ExperimentError, load_experiment
+    from asg_agent.campaign.experiment import DEFAULT_UNET_BACKEND, UNET_BACKENDS, ExperimentError, load_experiment
     from asg_perception.inference import BACKENDS, DEFAULT_BACKEND
 
     assert tuple(UNET_BACKENDS) == tuple(BACKENDS)

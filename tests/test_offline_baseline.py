@@ -12,7 +12,7 @@ import pytest
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 for pkg in ("asg_agent", "asg_scenario"):
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
-from asg_agent import baseline  # noqa: E402
+from asg_agent.cli import baseline  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
 STORED = os.path.join(REPO, "results", "baseline", "exp1", "ground_truth.jsonl")
@@ -27,7 +27,7 @@ def offline(root, *extra):
         [
             sys.executable,
             "-m",
-            "asg_agent.baseline",
+            "asg_agent.cli.baseline",
             "offline",
             EXP,
             "--root",

@@ -9,7 +9,7 @@
 # inference backend, default bf16 (the shipped one since issue #24); channels_last rows (every
 # baseline before it) are in results/baseline/<exp>/, another backend's in
 # results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
-# with python3 -m asg_agent.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks.
+# with python3 -m asg_agent.cli.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks.
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -35,8 +35,8 @@ for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET"; do
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"
   start_master
   start_workers 2 "${args[@]}" planner_config:="$CFG"
-  /usr/bin/python3 -m asg_agent.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 "${root[@]}"
+  /usr/bin/python3 -m asg_agent.cli.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 "${root[@]}"
   stop_workers
   stop_master
 done
-/usr/bin/python3 -m asg_agent.baseline summary "$EXP" "${ROOT[@]}" "${GT_ROOT[@]}"
+/usr/bin/python3 -m asg_agent.cli.baseline summary "$EXP" "${ROOT[@]}" "${GT_ROOT[@]}"

@@ -25,7 +25,7 @@ log "U-Net alone on one core (FLOP a frame, ms a frame, practical peak)"
 /usr/bin/python3 -m asg_perception.peak "$WS/src/asg_perception/models/flawed.pt" --json "$OUT/$TAG-peak.json"
 files=()
 EXPF="$REPO/experiments/${BENCH_EXPERIMENT:-exp1}.yaml"
-BACKEND="$(/usr/bin/python3 -c "import sys; sys.path.insert(0, '$WS/src/asg_agent/src'); from asg_agent.experiment import load_experiment; print(load_experiment('$EXPF').unet_backend)")"
+BACKEND="$(/usr/bin/python3 -c "import sys; sys.path.insert(0, '$WS/src/asg_agent/src'); from asg_agent.campaign.experiment import load_experiment; print(load_experiment('$EXPF').unet_backend)")"
 BASE_ARGS=(experiment:="$EXPF" unet_backend:="$BACKEND" attribution:="${BENCH_ATTRIBUTION:-false}")
 BASE_EXTRA=""
 if [ "${BENCH_BASELINE:-0}" = 1 ]; then
@@ -41,4 +41,4 @@ for w in $COUNTS; do
   grep -E "stage report|proxy >= 3" "$TMP/w$w.log" || true
   files+=("$OUT/$TAG-w$w.json")
 done
-/usr/bin/python3 -m asg_agent.bench table "${files[@]}"
+/usr/bin/python3 -m asg_agent.analysis.bench table "${files[@]}"

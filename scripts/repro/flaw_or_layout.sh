@@ -3,7 +3,7 @@
 # Exp. 1 campaign run again on the full-model stack and on the ground-truth-label stack, with the
 # paper's 5 m planner grids (planner.yaml, the campaign's) and with the fine grids
 # (planner_fine.yaml, where the flawed stack is re-run too). Two workers per stack; results under
-# results/flaw_or_layout/, the table in docs/experiments.md (python3 -m asg_agent.experiments).
+# results/flaw_or_layout/, the table in docs/experiments.md (python3 -m asg_agent.analysis.experiments).
 #   bash scripts/repro/flaw_or_layout.sh [EXPORT=results/campaigns/exp1-td3-per-asp-s0.jsonl.gz] [TOP=50]
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXPORT="${1:-$REPO/results/campaigns/exp1-td3-per-asp-s0.jsonl.gz}"
@@ -24,9 +24,9 @@ for spec in paper:full paper:ground_truth fine:flawed fine:full fine:ground_trut
   log "$grid grid, $stack stack: top $TOP of $(basename "$EXPORT")"
   start_master
   start_workers 2 "${args[@]}" planner_config:="$cfg"
-  /usr/bin/python3 -m asg_agent.rerun run "$EXPORT" --top "$TOP" --workers 2 --label "$grid/$stack" \
+  /usr/bin/python3 -m asg_agent.ros.rerun run "$EXPORT" --top "$TOP" --workers 2 --label "$grid/$stack" \
       --out "$OUT/$grid-$stack.jsonl.part" && mv "$OUT/$grid-$stack.jsonl.part" "$OUT/$grid-$stack.jsonl"
   stop_workers
   stop_master
 done
-/usr/bin/python3 -m asg_agent.rerun summary "$OUT"/*.jsonl --json "$REPO/results/flaw_or_layout.json"
+/usr/bin/python3 -m asg_agent.ros.rerun summary "$OUT"/*.jsonl --json "$REPO/results/flaw_or_layout.json"

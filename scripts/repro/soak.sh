@@ -44,7 +44,7 @@ trap cleanup EXIT
       3) victim="agent" ;;
     esac
     if [ "$victim" = agent ]; then
-      pid=$(pgrep -f "asg_agent.cli .*--name $NAME" | head -1)
+      pid=$(pgrep -f "asg_agent.cli.campaign .*--name $NAME" | head -1)
     else
       pid=$(/usr/bin/python3 -c "import rosgraph, xmlrpc.client, sys
 try:
@@ -58,12 +58,12 @@ except Exception:
 start=$(date +%s)
 deadline=$(( start + $(/usr/bin/python3 -c "print(int(float('$HOURS') * 3600))") ))
 agent() {  # agent BUDGET [--resume]
-  /usr/bin/python3 -m asg_agent.cli "$REPO/experiments/$EXP.yaml" --workers 2 --method "$METHOD" \
+  /usr/bin/python3 -m asg_agent.cli.campaign "$REPO/experiments/$EXP.yaml" --workers 2 --method "$METHOD" \
       --seed "$SEED" --scenarios "$1" --store "$STORE" --name "$NAME" --no-progress ${SOAK_EXTRA:-} "${@:2}" \
       >> "$REPO/runs/soak/agent.log" 2>&1
 }
 resume=()
-/usr/bin/python3 -c "import sys; from asg_agent.store import Store; sys.exit(Store('$STORE').campaign('$NAME') is None)" \
+/usr/bin/python3 -c "import sys; from asg_agent.campaign.store import Store; sys.exit(Store('$STORE').campaign('$NAME') is None)" \
     2>/dev/null && resume=(--resume)
 # Leg 1: kills until the deadline; the agent is restarted with --resume whenever it dies.
 while [ "$(date +%s)" -lt "$deadline" ]; do
@@ -71,7 +71,7 @@ while [ "$(date +%s)" -lt "$deadline" ]; do
   while kill -0 "$apid" 2>/dev/null && [ "$(date +%s)" -lt "$deadline" ]; do sleep 2; done
   if kill -0 "$apid" 2>/dev/null; then
     kill "$killer" 2>/dev/null || true
-    pkill -9 -f "asg_agent.cli .*--name $NAME" && echo "$(date +%s) agent-final $apid" >> "$KILLS"
+    pkill -9 -f "asg_agent.cli.campaign .*--name $NAME" && echo "$(date +%s) agent-final $apid" >> "$KILLS"
   fi
   wait "$apid" 2>/dev/null || true
   echo "$(date +%s) agent exited: restarting with --resume" >> "$REPO/runs/soak/agent.log"
@@ -80,7 +80,7 @@ while [ "$(date +%s)" -lt "$deadline" ]; do
 done
 kill "$killer" 2>/dev/null || true
 # Leg 2: no more kills; the budget is cut to the scenarios begun, and the campaign drains.
-N=$(/usr/bin/python3 -c "from asg_agent.store import Store; print(max(Store('$STORE').jobs('$NAME')) + 1)")
+N=$(/usr/bin/python3 -c "from asg_agent.campaign.store import Store; print(max(Store('$STORE').jobs('$NAME')) + 1)")
 echo "$(date +%s) draining: budget cut to $N scenarios" >> "$REPO/runs/soak/agent.log"
 until agent "$N" --resume; do sleep 1; done
 end=$(date +%s)

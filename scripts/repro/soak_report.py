@@ -13,7 +13,7 @@ import sys
 sys.path.insert(
     0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "catkin_ws", "src", "asg_agent", "src")
 )
-from asg_agent.store import Store  # noqa: E402
+from asg_agent.campaign.store import Store  # noqa: E402
 
 REASONS = [
     ("scene worker died", r"scene worker died"),

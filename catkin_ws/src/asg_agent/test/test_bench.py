@@ -1,4 +1,4 @@
-"""bench: per-scenario breakdown from stage readings (asg_agent.bench) and the campaign's own
+"""bench: per-scenario breakdown from stage readings (asg_agent.analysis.bench) and the campaign's own
 stage timers."""
 
 import json
@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from asg_agent.bench import breakdown, table
+from asg_agent.analysis.bench import breakdown, table
 
 
 def reading(node, runs, cpu, **stages):
@@ -66,7 +66,7 @@ def test_campaign_times_its_own_stages(tmp_path):
         [
             sys.executable,
             "-m",
-            "asg_agent.cli",
+            "asg_agent.cli.campaign",
             exp,
             "--fake-workers",
             "2",

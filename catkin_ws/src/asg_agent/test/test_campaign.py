@@ -12,12 +12,12 @@ import time
 import numpy as np
 import pytest
 
-from asg_agent.campaign import Campaign
-from asg_agent.experiment import ExperimentError, load_experiment
-from asg_agent.fake_pool import FakePool
-from asg_agent.search import make_method
-from asg_agent.store import Store, StoreError, park, unpark
-from asg_agent.td3 import TD3Config
+from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.experiment import ExperimentError, load_experiment
+from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.search.methods import make_method
+from asg_agent.campaign.store import Store, StoreError, park, unpark
+from asg_agent.search.td3 import TD3Config
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
@@ -186,7 +186,7 @@ def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
     cmd = [
         sys.executable,
         "-m",
-        "asg_agent.cli",
+        "asg_agent.cli.campaign",
         EXP,
         "--fake-workers",
         "2",
@@ -232,8 +232,8 @@ def test_bad_experiment_files_are_named(tmp_path):
 
 
 def test_export_summary_and_report_agree_with_the_store(tmp_path):
-    from asg_agent.analysis import counts, export, read_export
-    from asg_agent.report import campaign_report
+    from asg_agent.analysis.export import counts, export, read_export
+    from asg_agent.analysis.report import campaign_report
 
     c = campaign(tmp_path, "rep", FakePool(2, seed=8), total=30, method="random")
     c.start()
@@ -259,7 +259,7 @@ def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input
     """What scripts/repro/campaigns.sh asks before running a plan line: `complete` exits 0 only for the
     export of a finished campaign holding at least the budget; `park` and `unpark` exit 2 naming
     what is wrong."""
-    from asg_agent.analysis import export, main
+    from asg_agent.analysis.export import export, main
 
     c = campaign(tmp_path, "done", FakePool(2, seed=8), total=12, method="random")
     c.start()
@@ -360,7 +360,7 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     assert (s["attributed"], s["perception_ge3"], s["stack_ge3"]) == (60, perception, stack)
     assert s["differential_ge1"] == sum(r["proxy"] - ref[r["job"]] >= 1 for r in rows)
     # The compact export keeps the reference runs, and its counts are the store's.
-    from asg_agent.analysis import counts, export, read_export
+    from asg_agent.analysis.export import counts, export, read_export
 
     export(store, "a", str(tmp_path / "a.jsonl.gz"))
     k = counts(read_export(str(tmp_path / "a.jsonl.gz"))[1])
@@ -465,7 +465,7 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     """Issue #25: per-scenario and per-update scalars as TensorBoard event files: one proxy per
     job equal to the store's, the attribution counts, and the agent's losses, PER beta (rising)
     and actor saturation once it learns."""
-    from asg_agent.tensorboard_log import TensorBoardLog
+    from asg_agent.campaign.tensorboard_log import TensorBoardLog
 
     store = Store(str(tmp_path / "t.sqlite"))
     exp = load_experiment(EXP)
@@ -559,9 +559,9 @@ def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsy
     # row's reference run; it counts as reproduced only when the termination, the proxy and the
     # kept positions (campaign.kept_xy) equal what attribution stored.
     import argparse
-    from asg_agent.campaign import Outcome, kept_xy
-    from asg_agent.proxy import compute, placed_mask
-    from asg_agent.replay_ros import check_reference_run
+    from asg_agent.campaign.loop import Outcome, kept_xy
+    from asg_agent.scoring.proxy import compute, placed_mask
+    from asg_agent.ros.replay import check_reference_run
 
     exp = load_experiment(EXP)
     request = exp.request(np.linspace(-0.9, 0.9, exp.action_dim), 5)

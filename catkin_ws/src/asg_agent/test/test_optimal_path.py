@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from asg_agent.optimal_path import Disc, shortest_path
+from asg_agent.scoring.optimal_path import Disc, shortest_path
 
 
 def detour_length(d, r):

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from asg_agent import proxy
+from asg_agent.scoring import proxy
 
 
 def scene(layouts=()):

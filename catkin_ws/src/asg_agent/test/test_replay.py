@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from asg_agent.replay import PrioritizedReplay, SumTree
+from asg_agent.search.per_buffer import PrioritizedReplay, SumTree
 
 
 def test_sum_tree_sums_and_find():

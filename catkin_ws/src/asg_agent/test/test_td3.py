@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch
 
-from asg_agent.td3 import TD3Agent, TD3Config
+from asg_agent.search.td3 import TD3Agent, TD3Config
 
 
 class Reach:

@@ -22,7 +22,7 @@ from .train import load_model
 
 BACKENDS = ("eager", "channels_last", "frozen", "bf16")
 #: The shipped backend (the segmenter node's ~backend default; launch files and
-#: asg_agent.experiment state it too, and a test keeps them equal).
+#: asg_agent.campaign.experiment state it too, and a test keeps them equal).
 DEFAULT_BACKEND = "bf16"
 
 

@@ -5,7 +5,7 @@ the campaign times its own loop (campaign.Stages). `breakdown` turns the reading
 start and the end of a campaign into per-scenario seconds per stage, the rate, and the bound the
 U-Net alone sets; `table` renders one or several breakdowns as Markdown.
 
-    python3 -m asg_agent.bench table results/bench/*.json
+    python3 -m asg_agent.analysis.bench table results/bench/*.json
 """
 
 import argparse

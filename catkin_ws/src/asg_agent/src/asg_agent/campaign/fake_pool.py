@@ -11,9 +11,9 @@ from typing import Dict, List
 
 import numpy as np
 
-from .campaign import Outcome, Pool
-from .optimal_path import obstacle_discs, shortest_path
-from .proxy import resample_path
+from asg_agent.campaign.loop import Outcome, Pool
+from asg_agent.scoring.optimal_path import obstacle_discs, shortest_path
+from asg_agent.scoring.proxy import resample_path
 
 
 def fake_run(request: dict, gain: float = 0.8) -> Outcome:

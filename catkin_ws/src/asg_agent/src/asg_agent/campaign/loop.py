@@ -24,11 +24,11 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 
 
-from .experiment import Experiment
-from .proxy import ProxyConfig, compute, placed_mask
-from .search import SearchMethod
-from .store import Store, attribute, pack_trajectory, unpack_trajectory
-from .td3 import load_checked, save_atomic
+from asg_agent.campaign.experiment import Experiment
+from asg_agent.scoring.proxy import ProxyConfig, compute, placed_mask
+from asg_agent.search.methods import SearchMethod
+from asg_agent.campaign.store import Store, attribute, pack_trajectory, unpack_trajectory
+from asg_agent.search.td3 import load_checked, save_atomic
 
 
 class Stages:

@@ -1,6 +1,6 @@
 """Screenshot of a replay bag in rviz without a display (Xvfb), and the pixel check the tests use.
 
-    python3 -m asg_agent.replay_view RUN.bag OUT.png [--ns worker_0] [--at 0.8]
+    python3 -m asg_agent.ros.replay_view RUN.bag OUT.png [--ns worker_0] [--at 0.8]
 
 Plays the bag into rviz with rviz/replay.rviz on a virtual display and grabs the screen when
 the given fraction of the bag has played (default: the end). Needs a ROS master (roscore).
@@ -94,7 +94,7 @@ def screenshot(
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="asg_agent.replay_view", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="asg_agent.ros.replay_view", description=__doc__.split("\n\n")[0])
     p.add_argument("bag")
     p.add_argument("out")
     p.add_argument("--ns", default="worker_0")

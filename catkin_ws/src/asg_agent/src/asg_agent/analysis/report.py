@@ -1,8 +1,8 @@
 """Figures and a report from campaigns and bags, without a display (no rospy node).
 
-    python3 -m asg_agent.report snapshot RUN.bag OUT.png --time 6.0 [--ns worker_0]
-    python3 -m asg_agent.report campaign STORE CAMPAIGN OUT_DIR [--top 10]
-    python3 -m asg_agent.report perception STORE CAMPAIGN JOB OUT.png [--work DIR]
+    python3 -m asg_agent.analysis.report snapshot RUN.bag OUT.png --time 6.0 [--ns worker_0]
+    python3 -m asg_agent.analysis.report campaign STORE CAMPAIGN OUT_DIR [--top 10]
+    python3 -m asg_agent.analysis.report perception STORE CAMPAIGN JOB OUT.png [--work DIR]
 
 `snapshot` draws what the planner believed at a simulated time: the vote grid (yellow to red by
 votes), the plan in force, earlier plans, the vehicle and its look-ahead point, the obstacles,
@@ -11,7 +11,7 @@ Table-2-style counts, the proxy over scenarios with its running best and the cou
 campaign went on, terminations, and the top-k table with each scenario's top-down figure and
 its replay command. `perception` replays a stored scenario on the campaign's stack and on the
 ground-truth reference stack and draws both side by side, as the paper's Figures 9-10 (ROS is
-needed for the replays: asg_agent.replay_ros brings up the workers).
+needed for the replays: asg_agent.ros.replay brings up the workers).
 """
 
 import argparse
@@ -181,7 +181,7 @@ def pair_figure(rows, times, out: str, title: str, ns: str = "replay_worker", ce
 
 def perception_replay(store: str, campaign: str, job: int, out: str, work: str = "", port: int = 11391) -> dict:
     """Replays a stored scenario on the campaign's stack and on the ground-truth reference stack
-    (asg_agent.replay_ros, each on a worker of its own, recording a bag), and draws pair_figure
+    (asg_agent.ros.replay, each on a worker of its own, recording a bag), and draws pair_figure
     at 5, 2.5 and 0.5 s before the end of the run under test (its collision, for a collision)."""
     import subprocess
     import tempfile
@@ -194,7 +194,7 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
         cmd = [
             sys.executable,
             "-m",
-            "asg_agent.replay_ros",
+            "asg_agent.ros.replay",
             store,
             campaign,
             str(job),
@@ -211,7 +211,7 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
         print(p.stdout.strip(), file=sys.stderr)
     end, where = bag_end(bags["test"], "replay_worker")
     times = [max(0.5, end - d) for d in (5.0, 2.5, 0.5)]
-    from .store import Store
+    from asg_agent.campaign.store import Store
 
     row = next(r for r in Store(store).rows(campaign, job - 1) if r["job"] == job)
     ref = json.loads(row["reference"]) if row["reference"] else {}
@@ -231,7 +231,7 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
 
 def _baseline_html(experiment: str) -> str:
     """The baseline of the campaign's experiment (results/baseline/<exp>.json), if measured."""
-    from .baseline import REPO
+    from asg_agent.cli.baseline import REPO
 
     path = os.path.join(REPO, "results", "baseline", f"{experiment}.json")
     if not os.path.isfile(path):
@@ -259,8 +259,8 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from .analysis import top_down
-    from .store import Store
+    from asg_agent.analysis.export import top_down
+    from asg_agent.campaign.store import Store
 
     store = Store(store_path)
     c = store.campaign(campaign)
@@ -348,7 +348,7 @@ workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="asg_agent.report", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="asg_agent.analysis.report", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     a = sub.add_parser("snapshot")
     a.add_argument("bag")

@@ -17,17 +17,17 @@ import os
 import sys
 import time
 
-from .campaign import Campaign
-from .experiment import ExperimentError, load_experiment
-from .search import METHODS, make_method
-from .store import Store, StoreError, checkpoint_path
-from .td3 import TD3Config
+from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.experiment import ExperimentError, load_experiment
+from asg_agent.search.methods import METHODS, make_method
+from asg_agent.campaign.store import Store, StoreError, checkpoint_path
+from asg_agent.search.td3 import TD3Config
 
 
 def open_tensorboard(a, store, name, c):
     """The campaign's TensorBoard log; a resumed one continues at its first job not yet learnt
     from, with the running counts of the jobs before it."""
-    from .tensorboard_log import TensorBoardLog
+    from asg_agent.campaign.tensorboard_log import TensorBoardLog
 
     logdir = a.tensorboard or os.path.join(os.path.dirname(os.path.abspath(a.store)), "tensorboard", name)
     prior = [dict(r) for r in store.rows(name) if r["job"] < c.next_apply]
@@ -158,7 +158,7 @@ def print_summary(store, name, out=sys.stdout):
 
 
 def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu):
-    from .bench import breakdown
+    from asg_agent.analysis.bench import breakdown
 
     wall, cpu = time.time() - t_wall, time.process_time() - t_cpu
     first, last = {}, {}
@@ -226,14 +226,14 @@ def main(argv=None):
         return 2
     reference = None
     if a.fake_workers:
-        from .fake_pool import FakePool
+        from asg_agent.campaign.fake_pool import FakePool
 
         pool = FakePool(a.fake_workers, seed=int(time.time()))
         if ref_workers:  # a stand-in reference stack that wiggles less
             reference = FakePool(len(ref_workers), seed=int(time.time()) + 1, gain=0.3, prefix="fake_ref")
     else:
         import rospy
-        from .pool_ros import WorkerPool
+        from asg_agent.ros.pool import WorkerPool
 
         rospy.init_node("campaign", anonymous=True, disable_signals=True)
         try:
@@ -285,7 +285,7 @@ def main(argv=None):
     if not a.fake_workers:
         # The stack identity stored with the campaign must be what the workers run (issue #24:
         # a backend left at another value than the experiment's would be recorded falsely).
-        from .replay_ros import stack_mismatch
+        from asg_agent.ros.replay import stack_mismatch
 
         wrong = [m for w in workers for m in stack_mismatch(w, settings)]
         if wrong:
@@ -296,7 +296,7 @@ def main(argv=None):
             return 2
     collector = None
     if a.stage_report and not a.fake_workers:
-        from .stages_ros import StageCollector
+        from asg_agent.ros.stages import StageCollector
 
         collector = StageCollector(workers)
         nodes = 3 if exp.perception == "unet" else 2

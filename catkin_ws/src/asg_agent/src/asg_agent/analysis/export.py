@@ -26,7 +26,7 @@ from typing import List
 
 import numpy as np
 
-from .store import Store, StoreError, attribute, checkpoint_path, park, unpack_trajectory, unpark
+from asg_agent.campaign.store import Store, StoreError, attribute, checkpoint_path, park, unpack_trajectory, unpark
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -113,7 +113,7 @@ def top_down(store: Store, campaign: str, job: int, out: str):
     (removed ones dashed), the driven path, the optimal path dashed, start and goal circles, the
     proxy and its terms in the title."""
     from asg_scenario.report import plot_run
-    from .proxy import optimal_path, placed_mask
+    from asg_agent.scoring.proxy import optimal_path, placed_mask
 
     row = next((r for r in store.rows(campaign, job - 1) if r["job"] == job), None)
     if row is None:
@@ -176,10 +176,10 @@ def counts(rows) -> dict:
 
 
 def asp_effect(scenarios: int, seeds: int, experiment: str):
-    from .campaign import Campaign
-    from .experiment import load_experiment
-    from .fake_pool import FakePool
-    from .search import make_method
+    from asg_agent.campaign.loop import Campaign
+    from asg_agent.campaign.experiment import load_experiment
+    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.search.methods import make_method
 
     exp = load_experiment(experiment)
     folder = tempfile.mkdtemp()
@@ -218,7 +218,7 @@ def main(argv=None):
     a.add_argument("--seeds", type=int, default=3)
     a.add_argument(
         "--experiment",
-        default=os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "experiments", "exp1.yaml"),
+        default=os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "..", "..", "experiments", "exp1.yaml"),
     )
     a.add_argument("--json", default="")
     a.add_argument("--out", default="", help="PNG of the curves")

@@ -24,9 +24,9 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from .experiment import Experiment
-from .proxy import resample_path
-from .td3 import TD3Agent, TD3Config
+from asg_agent.campaign.experiment import Experiment
+from asg_agent.scoring.proxy import resample_path
+from asg_agent.search.td3 import TD3Agent, TD3Config
 
 METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing", "cmaes", "map-elites")
 

@@ -27,10 +27,10 @@ import numpy as np
 
 from asg_scenario import ScenarioError, load_scenario
 
-from .campaign import Outcome, kept_xy
-from .experiment import LEGACY_UNET_BACKEND
-from .proxy import compute, placed_mask
-from .store import Store, unpack_trajectory
+from asg_agent.campaign.loop import Outcome, kept_xy
+from asg_agent.campaign.experiment import LEGACY_UNET_BACKEND
+from asg_agent.scoring.proxy import compute, placed_mask
+from asg_agent.campaign.store import Store, unpack_trajectory
 
 BAG_TOPICS = [
     "camera/image",
@@ -91,8 +91,8 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
     """Writes the scene, optimal path, driven trajectory and fading earlier plans into the bag."""
     import rosbag
     import rospy
-    from .bag_scene import plans_fading, scene_messages
-    from .proxy import optimal_path, placed_mask
+    from asg_agent.ros.bag_scene import plans_fading, scene_messages
+    from asg_agent.scoring.proxy import optimal_path, placed_mask
 
     removed = {(l, i) for l, i, _ in o.removed}
     opt = optimal_path(request, placed_mask(request, o.removed))
@@ -273,7 +273,7 @@ def run_replay(a, request, row, settings) -> int:
     import rospy
     from asg_msgs.msg import RunScenarioAction
     from asg_scenario.convert import to_goal_msg
-    from .pool_ros import result_to_outcome
+    from asg_agent.ros.pool import result_to_outcome
 
     rospy.init_node("replay", anonymous=True, disable_signals=True)
     worker = "/" + a.worker.strip("/")

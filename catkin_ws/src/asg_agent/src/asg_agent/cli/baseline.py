@@ -5,10 +5,10 @@ the optimal path, and what a flawed perception changes is measured on the same l
 layouts are those uniform random search proposes with seed 0 (job k of `random`, seed 0, is
 layout k), so a baseline of N layouts is the first N scenarios of that campaign.
 
-    python3 -m asg_agent.baseline run EXPERIMENT.yaml --stack ground_truth --layouts 500 --workers 2
-    python3 -m asg_agent.baseline summary EXPERIMENT.yaml      # results/baseline/<exp>.json + table
-    python3 -m asg_agent.baseline compare A.jsonl B.jsonl      # how many proxies move between two
-    python3 -m asg_agent.baseline offline EXPERIMENT.yaml --label reference \
+    python3 -m asg_agent.cli.baseline run EXPERIMENT.yaml --stack ground_truth --layouts 500 --workers 2
+    python3 -m asg_agent.cli.baseline summary EXPERIMENT.yaml      # results/baseline/<exp>.json + table
+    python3 -m asg_agent.cli.baseline compare A.jsonl B.jsonl      # how many proxies move between two
+    python3 -m asg_agent.cli.baseline offline EXPERIMENT.yaml --label reference \
         --planner catkin_ws/src/asg_planner/config/planner_reference.yaml   # a planner variant, no ROS
 
 `run` talks to running workers (scripts/repro/baseline.sh launches them per stack) and appends one JSON
@@ -27,12 +27,12 @@ from typing import Dict, List
 
 import numpy as np
 
-from .experiment import load_experiment
-from .proxy import compute, placed_mask
-from .search import RandomSearch
-from .store import attribute
+from asg_agent.campaign.experiment import load_experiment
+from asg_agent.scoring.proxy import compute, placed_mask
+from asg_agent.search.methods import RandomSearch
+from asg_agent.campaign.store import attribute
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 5))
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
 STACKS = ("ground_truth", "flawed", "full")
 BOUNDS = {"share_ge3": 0.01, "median_yaw_term": 0.2, "median_plr": 1.03, "collision_share": 0.005}  # issue #23
 
@@ -99,8 +99,8 @@ def run_requests(pool, requests: List[dict], todo: List[int], on_row, max_attemp
 
 def run(a) -> int:
     import rospy
-    from .cli import worker_names
-    from .pool_ros import WorkerPool
+    from asg_agent.cli.campaign import worker_names
+    from asg_agent.ros.pool import WorkerPool
     from tqdm import tqdm
 
     exp = load_experiment(a.experiment)

@@ -28,7 +28,7 @@ import numpy as np
 
 from asg_scenario.catalogue import MESHES, TRAVERSABLE_HEIGHT, VEHICLE_HALF_WIDTH
 
-from .optimal_path import obstacle_discs, shortest_path
+from asg_agent.scoring.optimal_path import obstacle_discs, shortest_path
 
 TERMINATIONS = (
     "SUCCESS",

@@ -31,7 +31,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from .replay import PrioritizedReplay
+from asg_agent.search.per_buffer import PrioritizedReplay
 
 
 @dataclass

@@ -23,7 +23,7 @@ from asg_msgs.msg import RunScenarioAction
 
 from asg_scenario.convert import to_goal_msg
 
-from .campaign import Outcome, Pool
+from asg_agent.campaign.loop import Outcome, Pool
 
 STATUS = {
     GoalStatus.PENDING: "PENDING",

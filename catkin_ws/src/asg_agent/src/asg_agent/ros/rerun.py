@@ -4,8 +4,8 @@ the repository), runs the top N through the scene workers named (any stack: the 
 ground-truth labels, another planner grid), and writes one JSON line per scenario with every
 proxy term. `summary` turns such files into the flaw-or-layout table of docs/experiments.md.
 
-    python3 -m asg_agent.rerun run EXPORT.jsonl.gz --top 50 --workers 2 --label full-paper --out OUT.jsonl
-    python3 -m asg_agent.rerun summary --campaign EXPORT.jsonl.gz OUT1.jsonl ... --json results/flaw_or_layout.json
+    python3 -m asg_agent.ros.rerun run EXPORT.jsonl.gz --top 50 --workers 2 --label full-paper --out OUT.jsonl
+    python3 -m asg_agent.ros.rerun summary --campaign EXPORT.jsonl.gz OUT1.jsonl ... --json results/flaw_or_layout.json
 """
 
 import argparse
@@ -16,12 +16,12 @@ import time
 
 import numpy as np
 
-from .analysis import read_export
-from .proxy import compute, placed_mask
+from asg_agent.analysis.export import read_export
+from asg_agent.scoring.proxy import compute, placed_mask
 
 
 def top_requests(export: str, top: int):
-    from .experiments import scenario_of
+    from asg_agent.analysis.experiments import scenario_of
 
     camp, rows = read_export(export)
     ranked = sorted((r for r in rows if r["proxy"] is not None), key=lambda r: -r["proxy"])[:top]
@@ -35,8 +35,8 @@ def top_requests(export: str, top: int):
 
 def run(a) -> int:
     import rospy
-    from .pool_ros import WorkerPool
-    from .cli import worker_names
+    from asg_agent.ros.pool import WorkerPool
+    from asg_agent.cli.campaign import worker_names
 
     camp, todo = top_requests(a.export, a.top)
     rospy.init_node("rerun", anonymous=True, disable_signals=True)

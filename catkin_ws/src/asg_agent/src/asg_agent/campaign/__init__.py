@@ -1,0 +1,1 @@
+"""Experiments, the campaign loop, its store, the in-process pool and TensorBoard files (no ROS)."""

@@ -1,0 +1,1 @@
+"""Commands: campaign (the search against running workers) and baseline (rospy)."""

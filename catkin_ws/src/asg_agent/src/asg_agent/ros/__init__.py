@@ -1,0 +1,1 @@
+"""The ROS layer of the agent: worker pool, replay, re-runs, stage timers, bag scenes (rospy)."""
