@@ -21,12 +21,14 @@ OUT="$REPO/results/bench"
 mkdir -p "$OUT"
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
-log "U-Net alone on one core (FLOP a frame, ms a frame, practical peak)"
-/usr/bin/python3 -m asg_perception.peak "$WS/src/asg_perception/models/flawed.pt" --json "$OUT/$TAG-peak.json"
 files=()
 EXPF="$REPO/experiments/${BENCH_EXPERIMENT:-exp1}.yaml"
-BACKEND="$(/usr/bin/python3 -c "import sys; sys.path.insert(0, '$WS/src/asg_agent/src'); from asg_agent.campaign.experiment import load_experiment; print(load_experiment('$EXPF').unet_backend)")"
-BASE_ARGS=(experiment:="$EXPF" unet_backend:="$BACKEND" attribution:="${BENCH_ATTRIBUTION:-false}")
+read -r BACKEND MODEL < <(/usr/bin/python3 -c "import sys; sys.path.insert(0, '$WS/src/asg_agent/src'); from asg_agent.campaign.experiment import load_experiment; e = load_experiment('$EXPF'); print(e.unet_backend, e.model)")
+BASE_ARGS=(experiment:="$EXPF" unet_backend:="$BACKEND" model:="$MODEL" attribution:="${BENCH_ATTRIBUTION:-false}")
+MODEL_PATH="$MODEL"
+[[ "$MODEL" == */* || "$MODEL" == *.pt ]] || MODEL_PATH="$WS/src/asg_perception/models/$MODEL.pt"
+log "U-Net ($MODEL) alone on one core (FLOP a frame, ms a frame, practical peak)"
+/usr/bin/python3 -m asg_perception.peak "$MODEL_PATH" --json "$OUT/$TAG-peak.json"
 BASE_EXTRA=""
 if [ "${BENCH_BASELINE:-0}" = 1 ]; then
   BASE_ARGS+=(odom_every_tick:=true markers:=true)

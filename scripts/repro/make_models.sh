@@ -3,10 +3,15 @@
 # their figures in docs/perception.md: renders the datasets with the simulator's ground-truth
 # labeler, trains both models (in parallel, one core each) and evaluates them on a held-apart
 # set. About 15 minutes on 2 cores (REFERENCE.md recipe: whole frames, 4 epochs, Adam 1e-4, batch 16).
-#   bash scripts/repro/make_models.sh [WORK_DIR] [EPOCHS]
+#   bash scripts/repro/make_models.sh [WORK_DIR] [EPOCHS] [WIDTH=1.0] [SUFFIX]
+# WIDTH scales the U-Net's channels (asg_perception.model.unet); the lite pair (issue #24) is
+#   bash scripts/repro/make_models.sh runs/models 4 0.5 _lite    # -> models/{full,flawed}_lite.pt
+# (the datasets are shared: a second call renders nothing).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 WORK="$(realpath -m "${1:-$REPO/runs/models}")"
 EPOCHS="${2:-4}"
+WIDTH="${3:-1.0}"
+SUFFIX="${4:-}"
 install_packages
 build_workspace ON
 export LP_NUM_THREADS=1
@@ -16,17 +21,17 @@ log "datasets in $WORK (seeded: the same files every time)"
 [ -f "$WORK/full/manifest.csv" ] || "$DATASET" --out "$WORK/full" --count 4000 --seed 1
 [ -f "$WORK/flawed/manifest.csv" ] || "$DATASET" --out "$WORK/flawed" --count 4000 --seed 2 --meshes barberry
 [ -f "$WORK/test/manifest.csv" ] || "$DATASET" --out "$WORK/test" --count 600 --seed 3
-log "training full (bushes and trees) and flawed (bushes only), $EPOCHS epochs each"
+log "training full$SUFFIX (bushes and trees) and flawed$SUFFIX (bushes only), width $WIDTH, $EPOCHS epochs each"
 for m in full flawed; do
-  rosrun asg_perception train_unet --data "$WORK/$m" --out "$WORK/train_$m" --epochs "$EPOCHS" \
-    --threads 1 --seed 0 --resume > "$WORK/train_$m.log" 2>&1 &
+  rosrun asg_perception train_unet --data "$WORK/$m" --out "$WORK/train_$m$SUFFIX" --epochs "$EPOCHS" \
+    --threads 1 --seed 0 --width "$WIDTH" --resume > "$WORK/train_$m$SUFFIX.log" 2>&1 &
 done
 wait
-grep -h "^epoch [0-9]*:" "$WORK"/train_*.log || true
+grep -h "^epoch [0-9]*:" "$WORK"/train_*"$SUFFIX".log || true
 MODELS="$WS/src/asg_perception/models"
-cp "$WORK/train_full/model.pt" "$MODELS/full.pt"
-cp "$WORK/train_flawed/model.pt" "$MODELS/flawed.pt"
+cp "$WORK/train_full$SUFFIX/model.pt" "$MODELS/full$SUFFIX.pt"
+cp "$WORK/train_flawed$SUFFIX/model.pt" "$MODELS/flawed$SUFFIX.pt"
 log "evaluating on the held-apart set"
-rosrun asg_perception evaluate_unet --data "$WORK/test" "full=$MODELS/full.pt" \
-  "flawed=$MODELS/flawed.pt" --json "$WORK/evaluation.json" --panels "$WORK/panels.png"
+rosrun asg_perception evaluate_unet --data "$WORK/test" "full$SUFFIX=$MODELS/full$SUFFIX.pt" \
+  "flawed$SUFFIX=$MODELS/flawed$SUFFIX.pt" --json "$WORK/evaluation$SUFFIX.json" --panels "$WORK/panels$SUFFIX.png"
 log "models in $MODELS; figures in $WORK/evaluation.json, examples in $WORK/panels.png"

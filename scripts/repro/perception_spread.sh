@@ -2,11 +2,13 @@
 # The shipped models' shadow false-obstacle figures over several held-apart 600-frame sets
 # (dataset seeds other than the training seeds 1 and 2): the spread quoted in docs/perception.md.
 #   bash scripts/repro/perception_spread.sh [SEED ...]     (default: 3 4 5 6 7 8)
+#   ASG_MODEL_SUFFIX=_lite bash scripts/repro/perception_spread.sh   # the lite pair, into .../lite/
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 source_ros
 SEEDS=("${@:-3 4 5 6 7 8}")
 [ $# -gt 0 ] || SEEDS=(3 4 5 6 7 8)
-OUT="$REPO/results/perception_spread"
+SUFFIX="${ASG_MODEL_SUFFIX:-}"
+OUT="$REPO/results/perception_spread${SUFFIX:+/${SUFFIX#_}}"
 mkdir -p "$OUT"
 for s in "${SEEDS[@]}"; do
   d="$(mktemp -d)"
@@ -14,7 +16,7 @@ for s in "${SEEDS[@]}"; do
   LP_NUM_THREADS=1 "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$d" --count 600 --seed "$s" \
       --meshes juniper,barberry >/dev/null
   /usr/bin/python3 "$WS/src/asg_perception/scripts/evaluate_unet" \
-      "full=$WS/src/asg_perception/models/full.pt" "flawed=$WS/src/asg_perception/models/flawed.pt" \
+      "full=$WS/src/asg_perception/models/full$SUFFIX.pt" "flawed=$WS/src/asg_perception/models/flawed$SUFFIX.pt" \
       --data "$d" --json "$OUT/seed_$s.json" >/dev/null
   rm -rf "$d"
 done

@@ -10,7 +10,7 @@ import torch.nn.functional as F
 from asg_perception.data import VOID, DatasetError, load_frames, to_tensor
 from asg_perception.metrics import Confusion
 from asg_perception.inference import BACKENDS, Segmenter
-from asg_perception.model import UNet, parameter_count
+from asg_perception.model import UNet, parameter_count, unet
 from asg_perception.train import TrainConfig, evaluate, load_model, predict, save_model, train
 
 MODELS = os.path.join(os.path.dirname(__file__), "..", "models")
@@ -21,6 +21,26 @@ def test_shapes_and_parameter_count():
     assert parameter_count(m) == 587123
     assert m(torch.rand(2, 3, 64, 96)).shape == (2, 3, 64, 96)
     assert m(torch.rand(1, 3, 256, 256)).shape == (1, 3, 256, 256)
+
+
+def test_width_scales_every_layer_and_travels_with_the_model(tmp_path):
+    assert parameter_count(unet(1.0)) == 587123  # width 1.0 is the original network
+    lite = unet(0.5)
+    assert parameter_count(lite) == 147259
+    assert [c.out_channels for c in lite.down] == [8, 16, 32, 64, 64]
+    assert [c.out_channels for c in lite.up] == [64, 32, 16, 8]
+    assert lite(torch.rand(1, 3, 64, 64)).shape == (1, 3, 64, 64)
+    with pytest.raises(ValueError, match="width 0"):
+        unet(0)
+    # A lite model file loads as the lite network (the width is in its config), not as width 1.0.
+    path = str(tmp_path / "lite.pt")
+    save_model(path, lite.eval(), TrainConfig(width=0.5), [])
+    x = torch.rand(1, 3, 64, 64)
+    with torch.no_grad():
+        assert torch.equal(lite(x), load_model(path)(x))
+    save_model(path, lite.eval(), TrainConfig(width=1.0), [])  # the wrong width is named, not guessed
+    with pytest.raises(ValueError, match="weights do not fit"):
+        load_model(path)
 
 
 def dataset_loss(model, frames):

@@ -13,7 +13,7 @@ import torch.nn.functional as F
 
 from .data import VOID, DatasetError, load_frames, to_tensor
 from .metrics import Confusion
-from .model import UNet, parameter_count
+from .model import UNet, parameter_count, unet
 
 FORMAT = "asg_unet/1"
 
@@ -33,6 +33,7 @@ class TrainConfig:
     seed: int = 0  #: seeds the split, the shuffles, the crops and the weights
     threads: int = 2  #: torch CPU threads
     limit: int = 0  #: use only the first N frames (0: all)
+    width: float = 1.0  #: [fraction] channel multiplier of the U-Net (model.unet); the lite models use 0.5
 
 
 def save_model(path: str, model: UNet, config: TrainConfig, history: list, extra: dict = None):
@@ -53,7 +54,10 @@ def load_model(path: str) -> UNet:
         raise ValueError(f"{path}: not a readable torch file ({e})") from None
     if not isinstance(blob, dict) or blob.get("format") != FORMAT:
         raise ValueError(f"{path}: not an {FORMAT} model file")
-    model = UNet()
+    try:  # models from before the width was recorded are width 1.0
+        model = unet(float(blob.get("config", {}).get("width", 1.0)))
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{path}: {e}") from None
     try:
         model.load_state_dict(blob["state_dict"])
     except RuntimeError as e:
@@ -106,7 +110,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     val_idx, train_idx = np.sort(order[:n_val]), order[n_val:]
     if len(train_idx) == 0:
         raise DatasetError(f"{cfg.data}: {n} frames leave none for training")
-    model = UNet()
+    model = unet(cfg.width)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     history, start = [], 0
     os.makedirs(cfg.out, exist_ok=True)

@@ -25,7 +25,7 @@ import numpy as np
 
 
 from asg_agent.campaign.experiment import Experiment
-from asg_agent.scoring.proxy import ProxyConfig, compute, placed_mask
+from asg_agent.scoring.proxy import ProxyConfig, run_terms
 from asg_agent.search.methods import SearchMethod
 from asg_agent.campaign.store import Store, attribute, pack_trajectory, unpack_trajectory
 from asg_agent.search.td3 import load_checked, save_atomic
@@ -333,19 +333,7 @@ class Campaign:
             self._finish(job, got["test"], got["ref"])
 
     def _terms(self, request, o: Outcome):
-        traj = np.asarray(o.trajectory, np.float32).reshape(-1, 5)
-        if o.termination == "ERROR" or not len(traj):
-            return traj, None
-        return traj, compute(
-            request,
-            traj[:, 0],
-            traj[:, 1:3],
-            traj[:, 4],
-            o.visibility,
-            o.termination,
-            placed_mask(request, o.removed),
-            self.proxy_config,
-        )
+        return run_terms(request, o, self.proxy_config)
 
     def _finish(self, job: Job, o: Outcome, ref: Optional[Outcome]):
         t0 = time.perf_counter()

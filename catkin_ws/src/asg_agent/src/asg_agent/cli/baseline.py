@@ -28,7 +28,7 @@ from typing import Dict, List
 import numpy as np
 
 from asg_agent.campaign.experiment import load_experiment
-from asg_agent.scoring.proxy import compute, placed_mask
+from asg_agent.scoring.proxy import run_terms
 from asg_agent.search.methods import RandomSearch
 from asg_agent.campaign.store import attribute
 
@@ -61,10 +61,7 @@ def read_rows(path: str) -> Dict[int, dict]:
 
 def row_of(k: int, req: dict, o) -> dict:
     """One layout's result: every proxy term, or the error."""
-    terms = None
-    if o.termination != "ERROR" and len(o.trajectory):
-        tr = np.asarray(o.trajectory, np.float64).reshape(-1, 5)
-        terms = compute(req, tr[:, 0], tr[:, 1:3], tr[:, 4], o.visibility, o.termination, placed_mask(req, o.removed))
+    terms = run_terms(req, o, dtype=np.float64)[1]
     r = {
         "layout": k,
         "termination": o.termination,

@@ -29,7 +29,7 @@ from asg_scenario import ScenarioError, load_scenario
 
 from asg_agent.campaign.loop import Outcome, kept_xy
 from asg_agent.campaign.experiment import LEGACY_UNET_BACKEND
-from asg_agent.scoring.proxy import compute, placed_mask
+from asg_agent.scoring.proxy import run_terms
 from asg_agent.campaign.store import Store, unpack_trajectory
 
 BAG_TOPICS = [
@@ -132,38 +132,36 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
             bag.write(f"{worker}/replay/earlier_plans", arr, times.get(stamp, when))
 
 
+def replayed_proxy(request, o: Outcome):
+    """The difficulty proxy of a replayed run (None for a run that ended in ERROR), computed as the
+    campaign computed it."""
+    terms = run_terms(request, o)[1]
+    return terms.proxy if terms else None
+
+
+def report_match(what: str, diff: float, samples: str, proxy, stored_proxy, bag) -> bool:
+    """Prints the position and proxy comparison of a replay with a stored run; True if the proxies agree."""
+    print(f"largest position difference to the stored {what}: {diff:.6f} m ({samples})")
+    print(
+        f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored "
+        f"{stored_proxy if stored_proxy is None else round(stored_proxy, 6)}"
+    )
+    if bag:
+        print(f"bag: {os.path.abspath(bag)}")
+    return (proxy is None and stored_proxy is None) or (
+        proxy is not None and stored_proxy is not None and abs(proxy - stored_proxy) <= 1e-6
+    )
+
+
 def check_reference_run(a, request, ref: dict, o: Outcome) -> int:
     """The replay of a row's reference run against what attribution stored of it: termination,
     proxy, and the positions it keeps (every 6th sample, to 1 cm)."""
-    terms = (
-        compute(
-            request,
-            o.trajectory[:, 0],
-            o.trajectory[:, 1:3],
-            o.trajectory[:, 4],
-            o.visibility,
-            o.termination,
-            placed_mask(request, o.removed),
-        )
-        if o.termination != "ERROR"
-        else None
-    )
-    proxy = terms.proxy if terms else None
+    proxy = replayed_proxy(request, o)
     kept = np.asarray(kept_xy(o.trajectory), float).reshape(-1, 2)
     stored = np.asarray(ref.get("trajectory_xy") or [], float).reshape(-1, 2)
     diff = float(np.abs(kept - stored).max()) if kept.shape == stored.shape and len(stored) else float("inf")
-    print(
-        f"largest position difference to the stored reference run: {diff:.6f} m ({len(kept)} vs {len(stored)} kept samples)"
-    )
-    print(
-        f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored reference "
-        f"{ref.get('proxy') if ref.get('proxy') is None else round(ref['proxy'], 6)}"
-    )
-    if a.bag:
-        print(f"bag: {os.path.abspath(a.bag)}")
-    same_proxy = (proxy is None and ref.get("proxy") is None) or (
-        proxy is not None and ref.get("proxy") is not None and abs(proxy - ref["proxy"]) <= 1e-6
-    )
+    samples = f"{len(kept)} vs {len(stored)} kept samples"
+    same_proxy = report_match("reference run", diff, samples, proxy, ref.get("proxy"), a.bag)
     ok = diff <= 0.011 and same_proxy and o.termination == ref.get("termination")
     print("REPRODUCED (the reference run)" if ok else "NOT REPRODUCED (the reference run)")
     return 0 if ok else 1
@@ -349,30 +347,8 @@ def run_replay(a, request, row, settings) -> int:
         return check_reference_run(a, request, json.loads(row["reference"]), o)
     stored = unpack_trajectory(row["trajectory"])
     diff = compare(stored, o.trajectory)
-    terms = (
-        compute(
-            request,
-            o.trajectory[:, 0],
-            o.trajectory[:, 1:3],
-            o.trajectory[:, 4],
-            o.visibility,
-            o.termination,
-            placed_mask(request, o.removed),
-        )
-        if o.termination != "ERROR"
-        else None
-    )
-    proxy = terms.proxy if terms else None
-    same_proxy = (proxy is None and row["proxy"] is None) or (
-        proxy is not None and row["proxy"] is not None and abs(proxy - row["proxy"]) <= 1e-6
-    )
-    print(f"largest position difference to the stored run: {diff:.6f} m ({len(o.trajectory)} vs {len(stored)} samples)")
-    print(
-        f"proxy: replayed {proxy if proxy is None else round(proxy, 6)}, stored "
-        f"{row['proxy'] if row['proxy'] is None else round(row['proxy'], 6)}"
-    )
-    if a.bag:
-        print(f"bag: {os.path.abspath(a.bag)}")
+    samples = f"{len(o.trajectory)} vs {len(stored)} samples"
+    same_proxy = report_match("run", diff, samples, replayed_proxy(request, o), row["proxy"], a.bag)
     ok = diff < 0.01 and same_proxy and o.termination == row["termination"]
     print("REPRODUCED" if ok else "NOT REPRODUCED")
     return 0 if ok else 1

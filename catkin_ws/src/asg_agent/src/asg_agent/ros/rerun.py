@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from asg_agent.analysis.export import read_export
-from asg_agent.scoring.proxy import compute, placed_mask
+from asg_agent.scoring.proxy import run_terms
 
 
 def top_requests(export: str, top: int):
@@ -57,12 +57,7 @@ def run(a) -> int:
                 pending.insert(0, o.job)
                 continue
             row, req = todo[o.job]
-            terms = None
-            if o.termination != "ERROR" and len(o.trajectory):
-                tr = o.trajectory
-                terms = compute(
-                    req, tr[:, 0], tr[:, 1:3], tr[:, 4], o.visibility, o.termination, placed_mask(req, o.removed)
-                )
+            terms = run_terms(req, o, dtype=o.trajectory.dtype)[1]
             results[o.job] = {
                 "label": a.label,
                 "campaign": camp["name"],

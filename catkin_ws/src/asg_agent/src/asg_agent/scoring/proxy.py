@@ -163,3 +163,17 @@ def compute(
     yaw = yaw_rate_term(t, yaw_rate, config.n_path, config.w_yaw)
     d = config.w_vis * vis + yaw + plr * plr
     return ProxyTerms(d, vis, yaw, plr, driven, opt, termination)
+
+
+def run_terms(scenario: dict, run, config: ProxyConfig = ProxyConfig(), dtype=np.float32):
+    """(trajectory as an N x 5 array of `dtype`, every term of eq. 3) for one finished run: any object
+    with `trajectory` (t, x, y, yaw, yaw rate rows), `visibility`, `termination` and `removed`, as the
+    worker pool's outcomes are. The terms are None for a run that ended in ERROR or has no samples.
+    The campaign scores in float32 (the stored proxies); keep `dtype` when recomputing them."""
+    traj = np.asarray(run.trajectory, dtype).reshape(-1, 5)
+    if run.termination == "ERROR" or not len(traj):
+        return traj, None
+    placed = placed_mask(scenario, run.removed)
+    return traj, compute(
+        scenario, traj[:, 0], traj[:, 1:3], traj[:, 4], run.visibility, run.termination, placed, config
+    )
