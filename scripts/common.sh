@@ -28,8 +28,12 @@ APT_PACKAGES=(
 # break Debian's torch): TensorBoard's event-file writer for campaign scalars, CMA-ES for the
 # `cmaes` search, and pyribs (the last release for numpy 1) with its one dependency Debian lacks
 # for the `map-elites` search (docs/agent.md), all pure Python; and ruff, the formatter and linter
-# that scripts/test.sh runs (ruff.toml; a static binary).
-PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0 numpy-groupies==0.11.2 ribs==0.7.1 ruff==0.8.4)
+# that scripts/test.sh runs (ruff.toml; a static binary). ONNX Runtime, OpenVINO and onnx (for
+# int8 quantization) are measured beside torch in issue #24's backend table
+# (python3 -m asg_perception.runtimes); the versions are the last built for numpy 1, and the
+# segmenter node does not use them.
+PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0 numpy-groupies==0.11.2 ribs==0.7.1 ruff==0.8.4
+  onnxruntime==1.19.2 openvino==2024.4.0 onnx==1.16.2)
 
 log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
 
@@ -54,7 +58,8 @@ install_pip_packages() {
   local p name want have
   for p in "${PIP_PACKAGES[@]}"; do
     name="${p%%==*}"; want="${p##*==}"
-    have="$(/usr/bin/python3 -m pip show "$name" 2>/dev/null | sed -n 's/^Version: //p')"
+    # `pip show` fails for a package not installed: under pipefail that must not end the script.
+    have="$({ /usr/bin/python3 -m pip show "$name" 2>/dev/null || true; } | sed -n 's/^Version: //p')"
     [ "$have" = "$want" ] && continue
     log "installing $p from PyPI (no dependencies) for /usr/bin/python3"
     as_root /usr/bin/python3 -m pip install --quiet --no-input --disable-pip-version-check \

@@ -3,15 +3,16 @@
 # their figures in docs/perception.md: renders the datasets with the simulator's ground-truth
 # labeler, trains both models (in parallel, one core each) and evaluates them on a held-apart
 # set. About 15 minutes on 2 cores (REFERENCE.md recipe: whole frames, 4 epochs, Adam 1e-4, batch 16).
-#   bash scripts/repro/make_models.sh [WORK_DIR] [EPOCHS] [WIDTH=1.0] [SUFFIX]
+#   bash scripts/repro/make_models.sh [WORK_DIR] [EPOCHS] [WIDTH=1.0] [SUFFIX] [LR=0.0001]
 # WIDTH scales the U-Net's channels (asg_perception.model.unet); the lite pair (issue #24) is
-#   bash scripts/repro/make_models.sh runs/models 4 0.5 _lite    # -> models/{full,flawed}_lite.pt
+#   bash scripts/repro/make_models.sh runs/models 8 0.5 _lite 0.001   # -> models/{full,flawed}_lite.pt
 # (the datasets are shared: a second call renders nothing).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 WORK="$(realpath -m "${1:-$REPO/runs/models}")"
 EPOCHS="${2:-4}"
 WIDTH="${3:-1.0}"
 SUFFIX="${4:-}"
+LR="${5:-0.0001}"
 install_packages
 build_workspace ON
 export LP_NUM_THREADS=1
@@ -24,7 +25,7 @@ log "datasets in $WORK (seeded: the same files every time)"
 log "training full$SUFFIX (bushes and trees) and flawed$SUFFIX (bushes only), width $WIDTH, $EPOCHS epochs each"
 for m in full flawed; do
   rosrun asg_perception train_unet --data "$WORK/$m" --out "$WORK/train_$m$SUFFIX" --epochs "$EPOCHS" \
-    --threads 1 --seed 0 --width "$WIDTH" --resume > "$WORK/train_$m$SUFFIX.log" 2>&1 &
+    --threads 1 --seed 0 --width "$WIDTH" --lr "$LR" --resume > "$WORK/train_$m$SUFFIX.log" 2>&1 &
 done
 wait
 grep -h "^epoch [0-9]*:" "$WORK"/train_*"$SUFFIX".log || true

@@ -177,3 +177,30 @@ def test_shipped_models_figures(test_dataset):
     assert flawed["shadow_false_obstacle_rate"] >= 3 * full["shadow_false_obstacle_rate"]
     assert flawed["shadow_false_obstacle_rate"] > 0.05
     assert flawed["low_sun"]["shadow_false_obstacle_rate"] >= 5 * full["low_sun"]["shadow_false_obstacle_rate"]
+
+
+def test_runtimes_table_runs_every_row_and_the_fp32_runtimes_keep_the_labels(tiny_dataset):
+    """Issue #24's backend table on a few frames: every row runs (the runtimes are installed by
+    scripts/common.sh), the fp32 rows of ONNX Runtime and OpenVINO label as torch fp32 does, and
+    the reduced precisions stay close to it."""
+    from asg_perception.runtimes import format_table, measure
+
+    frames = load_frames(tiny_dataset, 8)
+    r = measure(os.path.join(MODELS, "flawed_lite.pt"), frames.rgb[:4], frames.rgb[4:], repeats=1)
+    rows = {x["backend"]: x for x in r["rows"]}
+    assert set(rows) == {
+        "torch eager fp32",
+        "torch channels_last fp32",
+        "torch bf16 (shipped)",
+        "ONNX Runtime fp32",
+        "ONNX Runtime int8 (static, QDQ)",
+        "OpenVINO fp32",
+        "OpenVINO bf16",
+    }, rows
+    assert not [k for k, x in rows.items() if "error" in x], rows
+    for k in ("torch channels_last fp32", "ONNX Runtime fp32", "OpenVINO fp32"):
+        assert rows[k]["pixels_agreeing_with_eager"] > 0.9999, (k, rows[k])
+    for k in ("torch bf16 (shipped)", "ONNX Runtime int8 (static, QDQ)", "OpenVINO bf16"):
+        assert rows[k]["pixels_agreeing_with_eager"] > 0.98, (k, rows[k])
+    assert r["gflop_per_frame"] == pytest.approx(0.34, abs=0.01)
+    assert "| OpenVINO bf16 |" in format_table(r)
