@@ -23,6 +23,8 @@ import sys
 
 import numpy as np
 
+from asg_scenario.report import yaw_of
+
 
 def _bag_base(bag, w):
     for _, msg, _ in bag.read_messages(topics=[f"{w}/scenario"]):
@@ -91,7 +93,7 @@ def draw_snapshot(ax, bag_path: str, t: float, ns: str = "worker_0", legend: boo
         ax.plot(*zip(*plans[-1]), "-", color="tab:green", lw=2, label="plan in force")
     if odom:
         p, q = odom.pose.pose.position, odom.pose.pose.orientation
-        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of(q.x, q.y, q.z, q.w)
         ax.arrow(p.x, p.y, 3 * math.cos(yaw), 3 * math.sin(yaw), width=0.6, color="magenta", label="vehicle")
     if state:
         ax.plot([state.lookahead.x], [state.lookahead.y], "o", color="purple", label="look-ahead")

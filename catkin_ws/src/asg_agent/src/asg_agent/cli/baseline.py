@@ -33,7 +33,13 @@ from asg_agent.search.methods import RandomSearch
 from asg_agent.campaign.store import attribute
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
-STACKS = ("ground_truth", "flawed", "full", "flawed_lite", "full_lite")  #: labels: ground truth, or a shipped model's name
+STACKS = (
+    "ground_truth",
+    "flawed",
+    "full",
+    "flawed_lite",
+    "full_lite",
+)  #: labels: ground truth, or a shipped model's name
 BOUNDS = {"share_ge3": 0.01, "median_yaw_term": 0.2, "median_plr": 1.03, "collision_share": 0.005}  # issue #23
 
 

@@ -8,7 +8,6 @@ answer of that goal is ignored, so no scenario is counted twice. A worker whose 
 is gone is left out until it comes back.
 """
 
-import math
 import queue
 import threading
 import time
@@ -18,6 +17,7 @@ import actionlib
 import numpy as np
 import rospy
 from actionlib_msgs.msg import GoalStatus
+from asg_scenario.report import yaw_of
 from actionlib.action_client import CommState
 from asg_msgs.msg import RunScenarioAction
 
@@ -44,7 +44,7 @@ def result_to_outcome(job: int, worker: str, result, wall: float) -> Outcome:
     traj = np.zeros((n, 5), np.float32)
     for k, s in enumerate(result.trajectory):
         q = s.pose.orientation
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of(q.x, q.y, q.z, q.w)
         traj[k] = (s.t, s.pose.position.x, s.pose.position.y, yaw, s.twist.angular.z)
     return Outcome(
         job=job,
