@@ -27,19 +27,12 @@ from typing import Optional, Sequence
 import numpy as np
 
 from asg_scenario.catalogue import MESHES, TRAVERSABLE_HEIGHT, VEHICLE_HALF_WIDTH
+from asg_scenario.report import TERMINATION_NAMES
 
 from asg_agent.scoring.optimal_path import obstacle_discs, shortest_path
 
-TERMINATIONS = (
-    "SUCCESS",
-    "COLLISION",
-    "FLIPPED",
-    "SIM_TIMEOUT",
-    "IDLING_TIMEOUT",
-    "STUCK_TIMEOUT",
-    "OUT_OF_BOUNDS",
-    "ERROR",
-)
+#: Every run's ending, in the order of RunScenario.action's codes (one list: asg_scenario.report).
+TERMINATIONS = tuple(TERMINATION_NAMES)
 
 
 @dataclass(frozen=True)
