@@ -179,7 +179,7 @@ def measure(model_path: str, rgb: np.ndarray, calibration: np.ndarray, repeats: 
             }
         )
     return {
-        "model": os.path.abspath(model_path),
+        "model": os.path.basename(model_path),  # the file name: paths differ by machine
         "frames": int(len(rgb)),
         "threads": threads,
         "gflop_per_frame": flops / 1e9,
