@@ -28,8 +28,9 @@ class SoundRuns(unittest.TestCase):
         rospy.init_node("sound_runs_test")
         cls.w0, cls.w1 = su.client("worker_0"), su.client("worker_1")
         cls.lock = threading.Lock()
-        cls.states, cls.infos = [], []
+        cls.states, cls.infos, cls.states_1 = [], [], []
         rospy.Subscriber("/worker_0/planner/state", PlannerState, cls.on_state, queue_size=500)
+        rospy.Subscriber("/worker_1/planner/state", PlannerState, cls.on_state_1, queue_size=500)
         rospy.Subscriber("/worker_0/scenario", ScenarioInfo, cls.on_info, queue_size=10)
         cls.labels_pub = rospy.Publisher("/worker_0/labels", Image, queue_size=4)
         rospy.sleep(1.0)
@@ -46,6 +47,11 @@ class SoundRuns(unittest.TestCase):
     def on_state(cls, msg):
         with cls.lock:
             cls.states.append(msg)
+
+    @classmethod
+    def on_state_1(cls, msg):
+        with cls.lock:
+            cls.states_1.append(msg)
 
     @classmethod
     def on_info(cls, msg):
@@ -150,9 +156,20 @@ class SoundRuns(unittest.TestCase):
 
     def kill_mid_run(self, node, k):
         c = self.w1
+        with self.lock:
+            del self.states_1[:]
         c.send_goal(su.to_goal_msg(self.scenes[k]))
-        time.sleep(2.0)
-        self.assertEqual(c.get_state(), su.ACTIVE)
+        # Kill once the run is under way: the planner has published this scenario's state for a few
+        # control ticks. Not after a fixed wall time: on a fast machine a whole run takes less than
+        # a second or two, and a kill after it would test nothing.
+        sid = self.scenes[k]["scenario_id"]
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            with self.lock:
+                if sum(1 for m in self.states_1 if m.scenario_id == sid) >= 3:
+                    break
+            time.sleep(0.002)
+        self.assertEqual(c.get_state(), su.ACTIVE, f"scene {k} was not running when the {node} was to be killed")
         t0 = time.time()
         su.kill9(f"/worker_1/{node}")
         self.assertTrue(c.wait_for_result(rospy.Duration(60)))
