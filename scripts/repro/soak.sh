@@ -10,6 +10,8 @@
 #       [METHOD=random] [SEED=1] [EXP=exp1]        (SOAK_EXTRA: more campaign options)
 # The campaign is a valid campaign of METHOD on experiments/EXP.yaml (kills change nothing in what is stored), so
 # its export can serve as a search-comparison arm (docs/experiments.md).
+# SOAK_REFERENCE=2: attribution on, every scenario also run on 2 reference workers (ground-truth
+# stack, worker_2 and worker_3), which the killer hits too (their scene workers and planners).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 HOURS="${1:-2}"
 MIN_GAP="${2:-60}"
@@ -29,15 +31,28 @@ mkdir -p "$OUT"
 : > "$KILLS"
 : > "$REPO/runs/soak/agent.log"
 start_master
+REF="${SOAK_REFERENCE:-0}"
 start_workers 2 perception:=unet
+UNDER_TEST=("${WORKER_PIDS[@]}")
+REF_ARGS=()
+if [ "$REF" -gt 0 ]; then
+  for ((w = 2; w < 2 + REF; w++)); do
+    roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" markers:=false perception:=ground_truth >/dev/null 2>&1 &
+    UNDER_TEST+=($!)
+  done
+  REF_ARGS=(--reference-workers "$REF")
+fi
+WORKER_PIDS=("${UNDER_TEST[@]}")
 killer=""
 cleanup() { if [ -n "$killer" ]; then kill "$killer" 2>/dev/null || true; fi; stop_workers; stop_master; }
 trap cleanup EXIT
 # The killer: every MIN_GAP..MAX_GAP seconds one victim, by kind in turn of a random draw.
 (
   while sleep "$(( MIN_GAP + RANDOM % (MAX_GAP - MIN_GAP + 1) ))"; do
-    w=$(( RANDOM % 2 ))
-    case $(( RANDOM % 4 )) in
+    w=$(( RANDOM % (2 + REF) ))
+    kind=$(( RANDOM % 4 ))
+    if [ "$w" -ge 2 ] && [ "$kind" = 2 ]; then kind=$(( RANDOM % 2 )); fi  # no segmenter on a reference worker
+    case $kind in
       0) victim="/worker_$w/scene_worker" ;;
       1) victim="/worker_$w/planner" ;;
       2) victim="/worker_$w/segmenter" ;;
@@ -59,7 +74,7 @@ start=$(date +%s)
 deadline=$(( start + $(/usr/bin/python3 -c "print(int(float('$HOURS') * 3600))") ))
 agent() {  # agent BUDGET [--resume]
   /usr/bin/python3 -m asg_agent.cli.campaign "$REPO/experiments/$EXP.yaml" --workers 2 --method "$METHOD" \
-      --seed "$SEED" --scenarios "$1" --store "$STORE" --name "$NAME" --no-progress ${SOAK_EXTRA:-} "${@:2}" \
+      --seed "$SEED" --scenarios "$1" --store "$STORE" --name "$NAME" --no-progress "${REF_ARGS[@]}" ${SOAK_EXTRA:-} "${@:2}" \
       >> "$REPO/runs/soak/agent.log" 2>&1
 }
 resume=()
