@@ -18,6 +18,7 @@ from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.search.methods import make_method
 from asg_agent.campaign.store import Store, StoreError, park, unpark
 from asg_agent.search.td3 import TD3Config
+from asg_scenario import validate_scenario
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
@@ -630,3 +631,47 @@ def test_an_experiment_with_free_weather_sets_it_from_the_action(tmp_path):
         bad.write_text(text.replace(broken, fixed))
         with pytest.raises(ExperimentError, match=re.escape(message)):
             load_experiment(str(bad))
+
+
+def test_an_experiment_with_free_terrain_sets_it_from_the_action(tmp_path):
+    # Issue #27: experiments/exp6.yaml frees the rolling ground's amplitude, every hill's height
+    # and position after the obstacles and the weather: 16 + 2 + 1 + 3 + 6 values.
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp6.yaml"))
+    assert (exp.position_dim, exp.hills, exp.terrain_dim, exp.action_dim) == (16, 3, 10, 28)
+    a = np.zeros(28, np.float32)
+    a[18] = 1.0  # amplitude: the top of [0, 1.5]
+    a[19:22] = (-1.0, 0.0, 1.0)  # hill heights in [-3, 3]
+    a[22:28] = (-1.0, -1.0, 0.0, 0.5, 1.0, 1.0)  # hill positions over [0, 100]
+    req = exp.request(a, 4)
+    t = req["structural"]["terrain"]
+    assert t["amplitude_m"] == 1.5 and t["wavelength_m"] == 30.0 and t["seed"] == 1
+    assert [h["height_m"] for h in t["hills"]] == [-3.0, 0.0, 3.0]
+    assert [(h["x"], h["y"]) for h in t["hills"]] == [(0.0, 0.0), (50.0, 75.0), (100.0, 100.0)]
+    assert [h["radius_m"] for h in t["hills"]] == [10.0, 10.0, 8.0]
+    assert exp.scenario["structural"]["terrain"]["amplitude_m"] == 0.6  # the experiment's own is untouched
+    validate_scenario(req)  # every request the search can make is a valid scene
+    assert np.array_equal(exp.to_positions(a), load_experiment(EXP).to_positions(a[:16]))
+    m = make_method("td3-per-asp", exp, 1, budget=40, td3_config=TD3Config(**SMALL))
+    c = Campaign("t", exp, m, Store(str(tmp_path / "t.sqlite")), FakePool(2, seed=1), 12, 1, str(tmp_path / "t.ckpt"))
+    c.start()
+    c.run()
+    amps = [json.loads(r["request"])["structural"]["terrain"]["amplitude_m"] for r in c.store.rows("t")]
+    assert len(amps) == 12 and all(0.0 <= v <= 1.5 for v in amps) and len(set(amps)) > 3
+    bad = tmp_path / "bad.yaml"
+    text = open(os.path.join(REPO, "experiments", "exp6.yaml")).read()
+    text = text.replace("../scenarios/exp6.yaml", os.path.join(REPO, "scenarios", "exp6.yaml"))
+    for broken, fixed, message in (
+        ("amplitude_m: [0.0, 1.5]", "amplitude_m: [0.0, 4.0]", "terrain_free.amplitude_m: hi 4 m is too steep"),
+        ("hill_height_m: [-3.0, 3.0]", "hill_height_m: [-5.0, 3.0]", "is too steep for the smallest hill"),
+        ("hill_positions: true", "hill_positions: 1", "terrain_free.hill_positions: 1, must be true or false"),
+        ("hill_positions: true", "slope: [0, 1]", "terrain_free.slope: unknown key"),
+    ):
+        bad.write_text(text.replace(broken, fixed))
+        with pytest.raises(ExperimentError, match=re.escape(message)):
+            load_experiment(str(bad))
+    flat = tmp_path / "flat.yaml"
+    flat.write_text(
+        text.replace(os.path.join(REPO, "scenarios", "exp6.yaml"), os.path.join(REPO, "scenarios", "exp1.yaml"))
+    )
+    with pytest.raises(ExperimentError, match="need hills in the scenario"):
+        load_experiment(str(flat))

@@ -44,6 +44,7 @@ class VotingPlanner {
   ControlCommand tick(double t, const VehicleState2D& state, bool* replanned = nullptr);
 
   const VoteGrid& votes() const { return votes_; }
+  const GroundMap& ground() const { return ground_; }
   const PlannedPath& path() const { return path_; }
   const PathFollower& follower() const { return follower_; }
   const Task& task() const { return task_; }
@@ -56,6 +57,7 @@ class VotingPlanner {
   PlannerParams params_;
   Task task_;
   VoteGrid votes_;
+  GroundMap ground_;  ///< the stack's ground estimate (projection.height_above_ground only)
   PathFollower follower_;
   PlannedPath path_;
   bool sensing_ = false;

@@ -3,11 +3,15 @@
 namespace asg_planner {
 
 VotingPlanner::VotingPlanner(const PlannerParams& params)
-    : params_(params), votes_(params.vote_spacing, params.max_votes), follower_(params.follower) {}
+    : params_(params),
+      votes_(params.vote_spacing, params.max_votes),
+      ground_(params.projection.ground_cell),
+      follower_(params.follower) {}
 
 void VotingPlanner::reset(const Task& task) {
   task_ = task;
   votes_.clear();
+  ground_.clear();
   follower_.reset();
   path_ = PlannedPath();
   sensing_ = false;
@@ -24,7 +28,7 @@ size_t VotingPlanner::addFrame(double t, const float* depth, const uint8_t* labe
     next_plan_ = t + params_.first_plan_delay;
   }
   ++frames_;
-  return castVotes(depth, labels, width, height, K, T, params_.projection, &votes_);
+  return castVotes(depth, labels, width, height, K, T, params_.projection, &votes_, &ground_);
 }
 
 ControlCommand VotingPlanner::tick(double t, const VehicleState2D& s, bool* replanned) {

@@ -97,6 +97,8 @@ void PlannerROS::readParameters() {
   pnh_.param("projection/stride", stride, stride);
   if (stride < 1 || stride > 64) throw std::runtime_error("parameter ~projection/stride: must be 1..64");
   p.projection.stride = stride;
+  pnh_.param("projection/height_above_ground", p.projection.height_above_ground, p.projection.height_above_ground);
+  get("projection/ground_cell", p.projection.ground_cell, 0.1, 100.0);
   get("follower/lookahead", p.follower.lookahead, 0.1, 100.0);
   pnh_.param("follower/first_crossing", p.follower.first_crossing, p.follower.first_crossing);
   get("follower/kp", p.follower.kp, 0.0, 10000.0);

@@ -98,6 +98,43 @@ TEST(Projection, HighPointsAndOtherLabelsDoNotVote) {
   EXPECT_TRUE(g.voted().empty());
 }
 
+TEST(Projection, OnAHillTheHeightRuleIsAboveTheGroundTheStackSees) {
+  // Issue #27: the vehicle on a 4 m plateau, camera at map z 5.4, level, looking along +x. The
+  // plateau's ground fills the rows below the horizon; a wall 20 m ahead covers rows 28..33
+  // (map z 7.6 .. 4.5, so 3.6 .. 0.5 m above the plateau). Against map z every wall point is
+  // above 2 m and none votes; against the ground the planner estimates from its own returns,
+  // rows 31..33 (1.7, 1.1, 0.5 m above it) vote and row 30 (2.3 m) does not.
+  Frame f;
+  for (int v = 34; v < 64; ++v)
+    for (int u = 0; u < 64; ++u) f.depth[v * 64 + u] = float(1.4 * 32.0 / (v - 31.5));  // plateau, label 0
+  for (int v = 28; v < 34; ++v)
+    for (int u = 24; u < 40; ++u) {
+      f.depth[v * 64 + u] = 20.0f;
+      f.labels[v * 64 + u] = 1;
+    }
+  Eigen::Isometry3d T = levelCamera(0, 0);
+  T.translation().z() = 5.4;
+  ProjectionParams p;
+  p.ground_cell = 5.0;
+  VoteGrid map_rule(1.0, 50), ground_rule(1.0, 50);
+  GroundMap ground(p.ground_cell);
+  EXPECT_EQ(castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), T, p, &map_rule), 0u);
+  p.height_above_ground = true;
+  EXPECT_EQ(castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), T, p, &ground_rule, &ground), 3u * 16u);
+  EXPECT_NEAR(ground.lowNear(20.0, 0.0), 4.0, 0.01);
+  EXPECT_TRUE(std::isinf(ground.lowNear(80.0, 0.0)));  // nothing seen there
+  // On flat ground (camera at 1.4) both rules agree: the wall's points below 2 m vote.
+  T.translation().z() = 1.4;  // the same depths now meet the ground at map z 0
+  VoteGrid a(1.0, 50), b(1.0, 50);
+  GroundMap flat(p.ground_cell);
+  p.height_above_ground = false;
+  const size_t na = castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), T, p, &a);
+  p.height_above_ground = true;
+  const size_t nb = castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), T, p, &b, &flat);
+  EXPECT_GT(na, 0u);
+  EXPECT_EQ(na, nb);
+}
+
 TEST(AStar, CostFormulaMatchesHandComputedEdge) {
   VoteGrid g(5.0, 50);
   g.add({1, 1}, 10);  // vertex (5, 5)

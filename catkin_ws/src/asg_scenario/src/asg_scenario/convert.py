@@ -3,7 +3,14 @@
 Imports only the generated message classes (genpy), never rospy.
 """
 
-from .schema import INSTANCE_FIELDS, LANDSCAPE_FIELDS, OPERATIONAL_FIELDS, TEXTURAL_FIELDS
+from .schema import (
+    HILL_FIELDS,
+    INSTANCE_FIELDS,
+    LANDSCAPE_FIELDS,
+    OPERATIONAL_FIELDS,
+    TERRAIN_FIELDS,
+    TEXTURAL_FIELDS,
+)
 
 
 def _fill(msg, data, fields):
@@ -21,12 +28,14 @@ def _read(msg, fields):
 def to_scene_msg(scenario: dict):
     """asg_msgs/SceneDescription from a validated scenario dict."""
     from asg_msgs.msg import (
+        Hill,
         Landscape,
         ObstacleInstance,
         ObstacleLayout,
         OperationalAttributes,
         SceneDescription,
         StructuralAttributes,
+        Terrain,
         TexturalAttributes,
     )
 
@@ -35,9 +44,13 @@ def to_scene_msg(scenario: dict):
     for layout in st["layouts"]:
         insts = [_fill(ObstacleInstance(), i, INSTANCE_FIELDS) for i in layout["instances"]]
         layouts.append(ObstacleLayout(mesh_name=layout["mesh_name"], instances=insts))
+    # A request stored before terrain existed has none: the flat ground it ran on.
+    terrain = st.get("terrain", {})
+    terrain_msg = _fill(Terrain(), terrain, TERRAIN_FIELDS)
+    terrain_msg.hills = [_fill(Hill(), h, HILL_FIELDS) for h in terrain.get("hills", [])]
     return SceneDescription(
         structural=StructuralAttributes(
-            landscape=_fill(Landscape(), st["landscape"], LANDSCAPE_FIELDS), layouts=layouts
+            landscape=_fill(Landscape(), st["landscape"], LANDSCAPE_FIELDS), layouts=layouts, terrain=terrain_msg
         ),
         textural=_fill(TexturalAttributes(), scenario["textural"], TEXTURAL_FIELDS),
         operational=_fill(OperationalAttributes(), scenario["operational"], OPERATIONAL_FIELDS),
@@ -63,6 +76,7 @@ def from_scene_msg(scene, scenario_id: int = 1, name: str = "", record_labels: b
         "record_labels": record_labels,
         "structural": {
             "landscape": _read(st.landscape, LANDSCAPE_FIELDS),
+            "terrain": dict(_read(st.terrain, TERRAIN_FIELDS), hills=[_read(h, HILL_FIELDS) for h in st.terrain.hills]),
             "layouts": [
                 {"mesh_name": l.mesh_name, "instances": [_read(i, INSTANCE_FIELDS) for i in l.instances]}
                 for l in st.layouts

@@ -28,6 +28,11 @@ MAX_BORDER = 1000.0
 MAX_GROUND_CELLS_PER_SIDE = 2048.0
 #: [s] sim_timeout is required and finite, so every run ends.
 MAX_SIM_TIMEOUT = 3600.0
+#: Terrain (asg_sim terrain.hpp holds the same numbers): most hills and ditches in one scene, and
+#: the steepness bounds amplitude_m <= wavelength_m / 10 and |height_m| <= radius_m / 2.
+MAX_HILLS = 32
+MAX_AMPLITUDE_PER_WAVELENGTH = 0.1
+MAX_HILL_HEIGHT_PER_RADIUS = 0.5
 
 
 @dataclass(frozen=True)
@@ -84,6 +89,43 @@ LANDSCAPE_FIELDS = [
         MAX_BORDER,
         "Ground rendered around the nominal square (horizon, leaving the area).",
         50.0,
+    ),
+]
+
+TERRAIN_FIELDS = [
+    Field(
+        "amplitude_m",
+        float,
+        "m",
+        0.0,
+        5.0,
+        "Largest height of the rolling ground (the mean of 3 seeded plane waves); 0: none. "
+        "At most wavelength_m / 10.",
+        0.0,
+    ),
+    Field(
+        "wavelength_m",
+        float,
+        "m",
+        5.0,
+        1000.0,
+        "Typical wavelength of the rolling ground (each wave's within a factor sqrt 2 of it).",
+        40.0,
+    ),
+    Field("seed", int, "-", 0, 2**32 - 1, "Seed of the waves' directions, wavelengths and phases.", 0),
+]
+
+HILL_FIELDS = [
+    Field("x", float, "m", None, None, "Centre, within [0, landscape.size]."),
+    Field("y", float, "m", None, None, "Centre, within [0, landscape.size]."),
+    Field("radius_m", float, "m", 1.0, 200.0, "Where the raised-cosine bump meets the ground around it."),
+    Field(
+        "height_m",
+        float,
+        "m",
+        -10.0,
+        10.0,
+        "Height at the centre; negative: a ditch. Its absolute value at most radius_m / 2.",
     ),
 ]
 
@@ -165,6 +207,8 @@ OPERATIONAL_FIELDS = [
 SECTIONS = [
     ("", TOP_FIELDS),
     ("structural.landscape", LANDSCAPE_FIELDS),
+    ("structural.terrain", TERRAIN_FIELDS),
+    ("structural.terrain.hills[k]", HILL_FIELDS),
     ("structural.layouts[i].instances[j]", INSTANCE_FIELDS),
     ("textural", TEXTURAL_FIELDS),
     ("operational", OPERATIONAL_FIELDS),
@@ -274,11 +318,25 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
 
     structural = c.mapping(data.get("structural"), "structural")
     for key in structural:
-        if key not in ("landscape", "layouts"):
-            c.fail(f"structural.{key}", "unknown field (allowed: landscape, layouts)")
+        if key not in ("landscape", "layouts", "terrain"):
+            c.fail(f"structural.{key}", "unknown field (allowed: landscape, layouts, terrain)")
     landscape = c.fields(
         c.mapping(structural.get("landscape"), "structural.landscape"), LANDSCAPE_FIELDS, "structural.landscape"
     )
+    # Absent: the flat ground. Null is refused, as the simulator's loader does.
+    raw_terrain = c.mapping(structural.get("terrain", {}), "structural.terrain")
+    terrain = c.fields({k: v for k, v in raw_terrain.items() if k != "hills"}, TERRAIN_FIELDS, "structural.terrain")
+    raw_hills = raw_terrain.get("hills", [])
+    if not isinstance(raw_hills, list):
+        c.fail("structural.terrain.hills", f"= {raw_hills!r}: must be a list of hills")
+        raw_hills = []
+    if len(raw_hills) > MAX_HILLS:
+        c.fail("structural.terrain.hills", f"{len(raw_hills)} hills: at most {MAX_HILLS} allowed")
+        raw_hills = []
+    terrain["hills"] = [
+        c.fields(c.mapping(h, f"structural.terrain.hills[{k}]"), HILL_FIELDS, f"structural.terrain.hills[{k}]")
+        for k, h in enumerate(raw_hills)
+    ]
     layouts = []
     raw_layouts = structural.get("layouts", [])
     if not isinstance(raw_layouts, list):
@@ -311,7 +369,7 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
         layouts.append(layout)
     if total > MAX_OBSTACLES:
         c.fail("structural.layouts", f"{total} obstacle instances: at most {MAX_OBSTACLES} allowed")
-    out["structural"] = {"landscape": landscape, "layouts": layouts}
+    out["structural"] = {"landscape": landscape, "terrain": terrain, "layouts": layouts}
     out["textural"] = c.fields(c.mapping(data.get("textural"), "textural"), TEXTURAL_FIELDS, "textural")
     out["operational"] = c.fields(c.mapping(data.get("operational"), "operational"), OPERATIONAL_FIELDS, "operational")
     if not c.problems:
@@ -343,6 +401,22 @@ def _check_geometry(s: dict, c: _Checker):
 
     inside("operational.start_", op["start_x"], op["start_y"])
     inside("operational.goal_", op["goal_x"], op["goal_y"])
+    terrain = s["structural"]["terrain"]
+    if terrain["amplitude_m"] > MAX_AMPLITUDE_PER_WAVELENGTH * terrain["wavelength_m"]:
+        c.fail(
+            "structural.terrain.amplitude_m",
+            f"= {terrain['amplitude_m']!r}: too steep for wavelength_m {terrain['wavelength_m']:g}, "
+            "must be at most wavelength_m / 10 m",
+        )
+    for k, hill in enumerate(terrain["hills"]):
+        hpath = f"structural.terrain.hills[{k}]."
+        inside(hpath, hill["x"], hill["y"])
+        if abs(hill["height_m"]) > MAX_HILL_HEIGHT_PER_RADIUS * hill["radius_m"]:
+            c.fail(
+                f"{hpath}height_m",
+                f"= {hill['height_m']!r}: too steep for radius_m {hill['radius_m']:g}, "
+                "|height_m| must be at most radius_m / 2 m",
+            )
     for i, layout in enumerate(s["structural"]["layouts"]):
         mesh = MESHES[layout["mesh_name"]]
         for j, inst in enumerate(layout["instances"]):

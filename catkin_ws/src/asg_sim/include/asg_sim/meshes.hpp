@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "asg_sim/terrain.hpp"
+
 namespace asg_sim {
 
 struct Vertex {
@@ -38,11 +40,7 @@ const MeshInfo* findMesh(const std::string& name);
 Mesh makeObstacleMesh(const std::string& name);
 
 /// Ground over [-border, size + border]^2 with subdivisions cells across the nominal size
-/// (at most 8 x 8 cells when the ground is flat)
-/// (the heights array is where a heightmap goes later).
-Mesh makeGroundMesh(double size, double border, uint32_t subdivisions);
-
-/// Height of the ground [m] at (x, y) [m]; flat for now.
-inline double groundHeight(double /*x*/, double /*y*/) { return 0.0; }
+/// (at most 8 x 8 cells when the ground is flat), heights and normals from the terrain.
+Mesh makeGroundMesh(double size, double border, uint32_t subdivisions, const Terrain& terrain = Terrain());
 
 }  // namespace asg_sim

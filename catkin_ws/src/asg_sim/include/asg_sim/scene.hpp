@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "asg_sim/terrain.hpp"
+
 namespace asg_sim {
 
 /// One placed obstacle.
@@ -61,6 +63,7 @@ struct Operational {
 
 struct SceneSpec {
   Landscape landscape;
+  TerrainSpec terrain;  ///< structural.terrain: the ground's shape (flat by default)
   std::vector<ObstacleLayout> layouts;
   Textural textural;
   Operational operational;
@@ -93,6 +96,7 @@ struct PlacedObstacle {
   ObstacleInstance pose;
   double height = 0.0;      ///< [m] height x scale
   double radius = 0.0;      ///< [m] collision radius x scale
+  double z = 0.0;           ///< [m] ground height at (pose.x, pose.y): where it stands
   bool traversable = false; ///< height <= 0.2 m
 };
 

@@ -128,21 +128,18 @@ Mesh makeObstacleMesh(const std::string& name) {
   throw std::invalid_argument("unknown mesh '" + name + "'");
 }
 
-Mesh makeGroundMesh(double size, double border, uint32_t subdivisions) {
+Mesh makeGroundMesh(double size, double border, uint32_t subdivisions, const Terrain& terrain) {
   Mesh m;
   const double lo = -border, hi = size + border;
   int n = std::max<int>(1, std::ceil(subdivisions * (hi - lo) / size));
   // A flat ground looks the same at any tessellation; its vertex count is most of the
   // rasteriser's cost (llvmpipe shades every vertex), so a flat one is drawn as 8 x 8 cells.
-  bool flat = true;
-  for (int i = 0; i <= n && flat; ++i)
-    for (int j = 0; j <= n && flat; ++j)
-      flat = groundHeight(lo + (hi - lo) * j / n, lo + (hi - lo) * i / n) == groundHeight(lo, lo);
-  if (flat) n = std::min(n, 8);
+  if (terrain.flat()) n = std::min(n, 8);
   for (int i = 0; i <= n; ++i) {
     for (int j = 0; j <= n; ++j) {
-      const float x = lo + (hi - lo) * j / n, y = lo + (hi - lo) * i / n;
-      m.vertices.push_back({{x, y, float(groundHeight(x, y))}, {0, 0, 1}, {1, 1, 1}});
+      const double x = lo + (hi - lo) * j / n, y = lo + (hi - lo) * i / n;
+      const Eigen::Vector3f nrm = terrain.normal(x, y).cast<float>();
+      m.vertices.push_back({{float(x), float(y), float(terrain.height(x, y))}, {nrm.x(), nrm.y(), nrm.z()}, {1, 1, 1}});
     }
   }
   for (int i = 0; i < n; ++i) {

@@ -70,14 +70,16 @@ PhysicsWorld::PhysicsWorld(const SceneSpec& spec, const std::vector<PlacedObstac
   auto& w = impl_->world;
   w.setGravity(btVector3(0, 0, -9.81));
 
-  // Ground: heightfield over the rendered area (flat heights today).
+  // Ground: heightfield over the rendered area, sampled from the terrain at the rendered mesh's
+  // vertices (the same cells), so the vehicle drives on the ground the camera sees.
   const auto& L = spec.landscape;
+  const Terrain terrain(spec.terrain);
   const double lo = -L.border, hi = L.size + L.border;
   const int n = std::max<int>(2, std::ceil(L.subdivisions * (hi - lo) / L.size) + 1);
   const double cell = (hi - lo) / (n - 1);
   impl_->heights.resize(size_t(n) * n);
   for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) impl_->heights[i * n + j] = groundHeight(lo + j * cell, lo + i * cell);
+    for (int j = 0; j < n; ++j) impl_->heights[i * n + j] = terrain.height(lo + j * cell, lo + i * cell);
   const auto [hmin, hmax] = std::minmax_element(impl_->heights.begin(), impl_->heights.end());
   const double zmin = *hmin - 1.0, zmax = *hmax + 1.0;
   impl_->ground_shape.reset(new btHeightfieldTerrainShape(n, n, impl_->heights.data(), 1.0, zmin, zmax,
@@ -96,7 +98,7 @@ PhysicsWorld::PhysicsWorld(const SceneSpec& spec, const std::vector<PlacedObstac
     auto shape = std::make_unique<btCylinderShapeZ>(btVector3(o.radius, o.radius, o.height / 2));
     btTransform t;
     t.setIdentity();
-    t.setOrigin(btVector3(o.pose.x, o.pose.y, groundHeight(o.pose.x, o.pose.y) + o.height / 2));
+    t.setOrigin(btVector3(o.pose.x, o.pose.y, o.z + o.height / 2));
     auto body = std::make_unique<btRigidBody>(0.0, nullptr, shape.get());
     body->setWorldTransform(t);
     body->setUserIndex(int(o.id));
@@ -114,7 +116,7 @@ PhysicsWorld::PhysicsWorld(const SceneSpec& spec, const std::vector<PlacedObstac
   btTransform start;
   start.setIdentity();
   start.setOrigin(btVector3(op.start_x, op.start_y,
-                            groundHeight(op.start_x, op.start_y) + p.com_height));
+                            terrain.height(op.start_x, op.start_y) + p.com_height));
   start.setRotation(btQuaternion(btVector3(0, 0, 1), op.start_yaw));
   impl_->chassis_motion.reset(new btDefaultMotionState(start));
   btRigidBody::btRigidBodyConstructionInfo info(p.mass, impl_->chassis_motion.get(),

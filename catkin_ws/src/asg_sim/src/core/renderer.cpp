@@ -478,12 +478,19 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
   const auto& L = spec.landscape;
   scene_size_ = L.size;
   release(&gl_->ground);
-  gl_->ground = upload(makeGroundMesh(L.size, L.border, L.subdivisions));
+  const Terrain terrain(spec.terrain);
+  const Mesh ground = makeGroundMesh(L.size, L.border, L.subdivisions, terrain);
+  float ground_lo = 0.0f, ground_hi = 0.0f;  // [m] the ground's height range (0, 0 when flat)
+  for (const auto& v : ground.vertices) {
+    ground_lo = std::min(ground_lo, v.pos[2]);
+    ground_hi = std::max(ground_hi, v.pos[2]);
+  }
+  gl_->ground = upload(ground);
   gl_->seed = float(spec.textural.ground_texture_seed % 9973) * 0.6180339f;
   gl_->instances.clear();
   for (const auto& p : placed) {
     Eigen::Affine3f m = Eigen::Affine3f::Identity();
-    m.translate(Eigen::Vector3f(p.pose.x, p.pose.y, groundHeight(p.pose.x, p.pose.y)));
+    m.translate(Eigen::Vector3f(p.pose.x, p.pose.y, p.z));
     m.rotate(Eigen::AngleAxisf(p.pose.yaw, Eigen::Vector3f::UnitZ()));
     m.scale(float(p.pose.scale));
     const MeshInfo* info = findMesh(p.mesh_name);
@@ -505,7 +512,8 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
 
   // Orthographic light frustum fitted around the ground box and the tallest obstacle.
   double top = 1.0;
-  for (const auto& p : placed) top = std::max(top, p.height);
+  for (const auto& p : placed) top = std::max(top, p.z + p.height);
+  top = std::max(top, double(ground_hi));
   const Eigen::Vector3d centre(L.size / 2, L.size / 2, 0);
   const double R = L.size / 2 + L.border;
   const Eigen::Vector3d up =
@@ -514,7 +522,7 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
   Eigen::Vector3f lo(1e9, 1e9, 1e9), hi(-1e9, -1e9, -1e9);
   for (int c = 0; c < 8; ++c) {
     const Eigen::Vector4f corner(centre.x() + ((c & 1) ? R : -R), centre.y() + ((c & 2) ? R : -R),
-                                 (c & 4) ? top : 0.0, 1.0);
+                                 (c & 4) ? top : double(ground_lo), 1.0);
     const Eigen::Vector4f v = view * corner;
     lo = lo.cwiseMin(v.head<3>());
     hi = hi.cwiseMax(v.head<3>());

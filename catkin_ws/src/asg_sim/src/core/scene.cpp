@@ -82,6 +82,29 @@ void validateScene(const SceneSpec& spec) {
     }
     return ok;
   };
+  const auto& T = spec.terrain;
+  p.range("structural.terrain.amplitude_m", T.amplitude_m, 0.0, kMaxTerrainAmplitude, "m");
+  // The wavelength matters only with an amplitude: a message that leaves both 0 is flat.
+  if (T.amplitude_m != 0.0) p.range("structural.terrain.wavelength_m", T.wavelength_m, 5.0, 1000.0, "m");
+  if (std::isfinite(T.amplitude_m) && std::isfinite(T.wavelength_m) && T.amplitude_m > 0.0 &&
+      T.amplitude_m > kMaxAmplitudePerWavelength * T.wavelength_m)
+    p.add("structural.terrain.amplitude_m",
+          "= " + Problems::num(T.amplitude_m) + ": too steep for wavelength_m " + Problems::num(T.wavelength_m) +
+              ", must be at most wavelength_m / 10 m");
+  if (T.hills.size() > kMaxHills)
+    p.add("structural.terrain.hills",
+          std::to_string(T.hills.size()) + " hills: at most " + std::to_string(kMaxHills) + " allowed");
+  for (size_t i = 0; i < T.hills.size() && i < kMaxHills; ++i) {
+    const auto& h = T.hills[i];
+    const std::string hp = "structural.terrain.hills[" + std::to_string(i) + "].";
+    inside(hp, h.x, h.y);
+    p.range(hp + "radius_m", h.radius_m, 1.0, 200.0, "m");
+    p.range(hp + "height_m", h.height_m, -kMaxHillHeight, kMaxHillHeight, "m");
+    if (std::isfinite(h.radius_m) && std::isfinite(h.height_m) &&
+        std::abs(h.height_m) > kMaxHillHeightPerRadius * h.radius_m)
+      p.add(hp + "height_m", "= " + Problems::num(h.height_m) + ": too steep for radius_m " +
+                                 Problems::num(h.radius_m) + ", |height_m| must be at most radius_m / 2 m");
+  }
   const auto& O = spec.operational;
   inside("operational.start_", O.start_x, O.start_y);
   inside("operational.goal_", O.goal_x, O.goal_y);
@@ -139,6 +162,7 @@ void placeObstacles(const SceneSpec& spec, std::vector<PlacedObstacle>* placed,
   placed->clear();
   removed->clear();
   const auto& O = spec.operational;
+  const Terrain ground(spec.terrain);
   uint32_t id = 0;
   for (uint32_t i = 0; i < spec.layouts.size(); ++i) {
     const auto& layout = spec.layouts[i];
@@ -164,6 +188,7 @@ void placeObstacles(const SceneSpec& spec, std::vector<PlacedObstacle>* placed,
       p.height = mesh->height * inst.scale;
       p.radius = mesh->collision_radius * inst.scale;
       p.traversable = p.height <= kTraversableHeight;
+      p.z = ground.height(inst.x, inst.y);
       placed->push_back(p);
     }
   }

@@ -297,12 +297,35 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
   r.string(root, "name", &f.name, "", false);
 
   const YAML::Node st = r.mapping(root["structural"], "structural");
-  r.allowOnly(st, {"landscape", "layouts"}, "structural");
+  r.allowOnly(st, {"landscape", "layouts", "terrain"}, "structural");
   const YAML::Node ld = r.mapping(st["landscape"], "structural.landscape");
   r.allowOnly(ld, {"size", "subdivisions", "border"}, "structural.landscape");
   r.number(ld, "size", &s.landscape.size, "structural.landscape", true);
   r.integer(ld, "subdivisions", &s.landscape.subdivisions, "structural.landscape", false, 1, 4096);
   r.number(ld, "border", &s.landscape.border, "structural.landscape", false);
+  if (st["terrain"]) {  // absent: flat; null is refused, as in Python
+    const YAML::Node tr = r.mapping(st["terrain"], "structural.terrain");
+    r.allowOnly(tr, {"amplitude_m", "wavelength_m", "seed", "hills"}, "structural.terrain");
+    r.number(tr, "amplitude_m", &s.terrain.amplitude_m, "structural.terrain", false);
+    r.number(tr, "wavelength_m", &s.terrain.wavelength_m, "structural.terrain", false);
+    r.integer(tr, "seed", &s.terrain.seed, "structural.terrain", false, 0, 4294967295.0L);
+    const YAML::Node hills = tr["hills"];
+    if (hills && !hills.IsSequence()) {
+      r.fail("structural.terrain.hills", "must be a list of hills");
+    } else if (hills && hills.IsSequence()) {
+      for (size_t i = 0; i < hills.size(); ++i) {
+        const std::string hp = "structural.terrain.hills[" + std::to_string(i) + "]";
+        const YAML::Node h = r.mapping(hills[i], hp);
+        r.allowOnly(h, {"x", "y", "radius_m", "height_m"}, hp);
+        Hill hill;
+        r.number(h, "x", &hill.x, hp, true);
+        r.number(h, "y", &hill.y, hp, true);
+        r.number(h, "radius_m", &hill.radius_m, hp, true);
+        r.number(h, "height_m", &hill.height_m, hp, true);
+        s.terrain.hills.push_back(hill);
+      }
+    }
+  }
   const YAML::Node layouts = st["layouts"];
   if (layouts && !layouts.IsSequence()) {  // absent: none; null is refused, as in Python
     r.fail("structural.layouts", "must be a list of layouts");

@@ -22,6 +22,11 @@ SceneSpec toSpec(const asg_msgs::SceneDescription& m) {
   s.landscape.size = m.structural.landscape.size;
   s.landscape.subdivisions = m.structural.landscape.subdivisions;
   s.landscape.border = m.structural.landscape.border;
+  const auto& t = m.structural.terrain;
+  s.terrain.amplitude_m = t.amplitude_m;
+  s.terrain.wavelength_m = t.wavelength_m;
+  s.terrain.seed = t.seed;
+  for (const auto& h : t.hills) s.terrain.hills.push_back({h.x, h.y, h.radius_m, h.height_m});
   for (const auto& l : m.structural.layouts) {
     ObstacleLayout layout;
     layout.mesh_name = l.mesh_name;

@@ -175,3 +175,45 @@ TEST(Physics, SameSceneSameTrajectoryBitForBit) {
   run(&a, weave, 600);
   EXPECT_EQ(a.trajectory().back().state.position, b.trajectory().back().state.position);
 }
+
+TEST(Physics, VehicleRestsOnTheTerrainTiltedWithIt) {
+  // Issue #27: on the flank of a hill the vehicle starts on the ground, settles at the same
+  // height above it as on flat ground, and pitches with the slope (it faces uphill).
+  auto flat = emptyScene();
+  ScenarioRunner r0(nullptr);
+  r0.reset(flat);
+  run(&r0, [](const ScenarioRunner&) { return Command(); }, 120);
+  const double rest = r0.state().position.z();
+
+  auto s = emptyScene();
+  s.terrain.hills = {{30.0, 50.0, 16.0, 4.0}};  // the start (20, 50) is on its west flank
+  s.operational.max_pitch_deg = 70.0;
+  ScenarioRunner r(nullptr);
+  r.reset(s);
+  Command hold;
+  hold.brake = 1.0;
+  run(&r, [&](const ScenarioRunner&) { return hold; }, 120);
+  const Terrain t(s.terrain);
+  const auto p = r.state().position;
+  EXPECT_NEAR(p.z() - t.height(p.x(), p.y()), rest, 0.15);
+  const double slope = std::atan(t.gradient(20.0, 50.0).x());  // uphill towards +x
+  EXPECT_GT(slope, 0.3);
+  EXPECT_NEAR(-r.state().pitch(), slope, 0.06) << "pitch " << r.state().pitch();  // nose up
+  EXPECT_NEAR(r.state().roll(), 0.0, 0.03);
+}
+
+TEST(Physics, SameTerrainSameTrajectoryBitForBit) {
+  auto s = emptyScene();
+  s.terrain = TerrainSpec{0.8, 25.0, 3, {{50.0, 52.0, 10.0, 2.0}}};
+  std::vector<std::vector<double>> runs;
+  for (int k = 0; k < 2; ++k) {
+    ScenarioRunner r(nullptr);
+    r.reset(s);
+    run(&r, [](const ScenarioRunner& x) { return cruise(x, 5.0); }, 60 * 12);
+    std::vector<double> xs;
+    for (const auto& q : r.trajectory()) xs.insert(xs.end(), {q.state.position.x(), q.state.position.y(), q.state.position.z()});
+    runs.push_back(xs);
+  }
+  EXPECT_EQ(runs[0], runs[1]);
+  EXPECT_GT(runs[0].size(), 100u);
+}

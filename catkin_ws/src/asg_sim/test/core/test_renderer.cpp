@@ -249,3 +249,48 @@ TEST(Renderer, WeatherLeavesNoTraceOnTheNextClearScene) {
   EXPECT_EQ(a.rgb.data, b.rgb.data);
   EXPECT_EQ(a.labels.data, b.labels.data);
 }
+
+TEST(Renderer, AHillRaisesTheHorizonAndItsSunnySideIsBrighter) {
+  // Issue #27: a hill ahead hides sky that the flat ground leaves open, and is nearer than the
+  // flat ground in the rows it covers; its flank facing the sun is brighter than the flank
+  // facing away. The labels call it ground, not obstacle.
+  auto s = emptyScene();
+  s.textural.sun_yaw_deg = 90.0;  // light from +y: the hill's north flank is sunny
+  s.textural.sun_inclination_deg = 35.0;
+  CameraFrame flat, hilly;
+  setScene(s);
+  renderer().renderCamera(cameraAt(30, 50, 0), true, &flat);
+  s.terrain.hills = {{60.0, 50.0, 16.0, 7.0}};
+  setScene(s);
+  renderer().renderCamera(cameraAt(30, 50, 0), true, &hilly);
+  auto sky = [](const CameraFrame& f) {
+    int n = 0;
+    for (int v = 0; v < f.labels.height; ++v)
+      for (int u = 0; u < f.labels.width; ++u) n += f.labels.at(u, v) == kSky;
+    return n;
+  };
+  auto top = [](const CameraFrame& f, int u) {  // first row from the top that is not sky
+    int v = 0;
+    while (v < f.labels.height && f.labels.at(u, v) == kSky) ++v;
+    return v;
+  };
+  EXPECT_LT(top(hilly, 128), top(flat, 128) - 20);  // about 28 px: the hill's 7 m at 30 m
+  EXPECT_EQ(top(hilly, 0), top(flat, 0));            // beside it, the same horizon
+  EXPECT_LT(sky(hilly), sky(flat) - 1000);
+  // Straight ahead, just below the flat horizon: far ground (or sky) when flat, the hill near.
+  EXPECT_LT(hilly.depth.at(128, 126), 0.5 * (std::isnan(flat.depth.at(128, 126)) ? 1e9 : flat.depth.at(128, 126)));
+  EXPECT_EQ(hilly.labels.at(128, 126), kTraversable);
+  // The flanks: left of the image is +y (north, sunny), right is -y.
+  long north = 0, south = 0;
+  for (int v = 100; v < 127; ++v) {
+    north += brightness(hilly, 100, v);
+    south += brightness(hilly, 156, v);
+  }
+  EXPECT_GT(north, south * 1.1);
+  // Back to flat: the same pixels as before the hill.
+  s.terrain = TerrainSpec();
+  setScene(s);
+  CameraFrame again;
+  renderer().renderCamera(cameraAt(30, 50, 0), true, &again);
+  EXPECT_EQ(again.rgb.data, flat.rgb.data);
+}

@@ -129,3 +129,93 @@ TEST(Scene, SharedCorpus) {
     EXPECT_NE(error.find("- " + field + ":"), std::string::npos) << path << "\n" << error;
   }
 }
+
+// Issue #27: terrain.
+namespace {
+TerrainSpec rolling(uint32_t seed = 7) {
+  TerrainSpec t;
+  t.amplitude_m = 0.8;
+  t.wavelength_m = 30.0;
+  t.seed = seed;
+  t.hills = {{50.0, 45.0, 12.0, 3.0}, {70.0, 75.0, 8.0, -1.5}};
+  return t;
+}
+}  // namespace
+
+TEST(Terrain, DefaultIsTheFlatGroundExactly) {
+  const Terrain flat{TerrainSpec()};
+  EXPECT_TRUE(flat.flat());
+  for (double x : {-30.0, 0.0, 41.3, 150.0}) {
+    EXPECT_EQ(flat.height(x, 0.5 * x), 0.0);
+    EXPECT_EQ(flat.normal(x, 0.5 * x), Eigen::Vector3d(0, 0, 1));
+  }
+}
+
+TEST(Terrain, HeightsWithinBoundsAndGradientMatchesFiniteDifferences) {
+  const Terrain t(rolling());
+  EXPECT_FALSE(t.flat());
+  double lo = 1e9, hi = -1e9;
+  for (double x = -20; x <= 120; x += 0.7)
+    for (double y = -20; y <= 120; y += 0.9) {
+      const double h = t.height(x, y);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+      if (std::fmod(x + y, 7.0) > 0.5) continue;  // gradients on a sparser subset
+      const double e = 1e-5;
+      const Eigen::Vector2d g = t.gradient(x, y);
+      EXPECT_NEAR(g.x(), (t.height(x + e, y) - t.height(x - e, y)) / (2 * e), 1e-5);
+      EXPECT_NEAR(g.y(), (t.height(x, y + e) - t.height(x, y - e)) / (2 * e), 1e-5);
+      EXPECT_NEAR(t.normal(x, y).norm(), 1.0, 1e-12);
+      EXPECT_GT(t.normal(x, y).z(), std::cos(45.0 * M_PI / 180.0));  // the steepness bounds hold
+    }
+  EXPECT_GE(lo, -0.8 - 1.5 - 1e-9);
+  EXPECT_LE(hi, 0.8 + 3.0 + 1e-9);
+  EXPECT_NEAR(t.height(50.0, 45.0) - Terrain(TerrainSpec{0.8, 30.0, 7, {}}).height(50.0, 45.0), 3.0, 1e-12);
+}
+
+TEST(Terrain, TheSeedDecidesTheGround) {
+  const Terrain a(rolling(7)), b(rolling(7)), c(rolling(8));
+  double differ = 0;
+  for (double x = 0; x <= 100; x += 5) {
+    EXPECT_EQ(a.height(x, 30.0), b.height(x, 30.0));
+    differ = std::max(differ, std::abs(a.height(x, 30.0) - c.height(x, 30.0)));
+  }
+  EXPECT_GT(differ, 0.1);
+}
+
+TEST(Terrain, ValidationNamesSteepGroundAndStrayHills) {
+  auto s = emptyScene();
+  s.terrain = rolling();
+  EXPECT_NO_THROW(validateScene(s));
+  s.terrain.amplitude_m = 3.5;  // > 30 / 10
+  s.terrain.hills[1].height_m = -5.0;  // > 8 / 2
+  s.terrain.hills[0].x = 130.0;
+  try {
+    validateScene(s);
+    FAIL() << "accepted";
+  } catch (const SceneError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("structural.terrain.amplitude_m"), std::string::npos) << m;
+    EXPECT_NE(m.find("structural.terrain.hills[1].height_m"), std::string::npos) << m;
+    EXPECT_NE(m.find("structural.terrain.hills[0].x"), std::string::npos) << m;
+  }
+  // A message that leaves the terrain at its zero values (wavelength 0) is the flat ground.
+  s.terrain = TerrainSpec();
+  s.terrain.wavelength_m = 0.0;
+  EXPECT_NO_THROW(validateScene(s));
+}
+
+TEST(Terrain, ObstaclesStandOnTheGround) {
+  auto s = emptyScene();
+  s.terrain = rolling();
+  addObstacle(&s, "juniper", 50.0, 45.0);
+  addObstacle(&s, "barberry", 71.0, 74.0);
+  std::vector<PlacedObstacle> placed;
+  std::vector<RemovedObstacle> removed;
+  placeObstacles(s, &placed, &removed);
+  ASSERT_EQ(placed.size(), 2u);
+  const Terrain t(s.terrain);
+  for (const auto& p : placed) EXPECT_EQ(p.z, t.height(p.pose.x, p.pose.y));
+  EXPECT_GT(placed[0].z, 2.0);   // on the hill
+  EXPECT_LT(placed[1].z, -0.3);  // in the ditch
+}

@@ -17,11 +17,20 @@ from [-1, 1] to its range. Keys (docs/agent.md):
     textural_free:                     # optional: textural attributes the search sets, [lo, hi]
       fog_visibility_m: [25.0, 500.0]  #   in the field's unit (docs/scenario-format.md)
       cloud_cover: [0.0, 1.0]
+    terrain_free:                      # optional: the ground's shape the search sets (issue #27)
+      amplitude_m: [0.0, 1.5]          #   [m] the rolling ground's, at most wavelength_m / 10
+      hill_height_m: [-3.0, 3.0]       #   [m] one per hill of the scenario; |h| <= its radius_m / 2
+      hill_positions: true             #   every hill's x, y over the landscape, as the obstacles'
+
+The action then goes on with the terrain values, in this order: the amplitude, one height per
+hill, one x, y per hill.
 """
 
+import copy
 import math
 import os
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 import yaml
@@ -46,7 +55,9 @@ KEYS = {
     "sim_timeout",
     "description",
     "textural_free",
+    "terrain_free",
 }
+TERRAIN_FREE_KEYS = ("amplitude_m", "hill_height_m", "hill_positions")
 #: textural attributes a search may set (a number with a range; not the ground texture's seed)
 FREE_TEXTURAL = {f.key: f for f in TEXTURAL_FIELDS if f.kind is float}
 #: asg_perception.inference.BACKENDS (a test keeps the two equal; asg_agent does not import torch models)
@@ -70,6 +81,23 @@ class Experiment:
     text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
     #: (textural key, lo, hi) the search sets, in this order after the positions in the action
     textural_free: list = field(default_factory=list)
+    #: (lo, hi) [m] of the rolling ground's amplitude the search sets, or None
+    amplitude_free: Optional[tuple] = None
+    #: (lo, hi) [m] of every hill's height the search sets, or None
+    hill_height_free: Optional[tuple] = None
+    hill_positions_free: bool = False
+
+    @property
+    def hills(self) -> int:
+        return len(self.scenario["structural"].get("terrain", {}).get("hills", []))
+
+    @property
+    def terrain_dim(self) -> int:
+        return (
+            (self.amplitude_free is not None)
+            + (self.hills if self.hill_height_free is not None else 0)
+            + (2 * self.hills if self.hill_positions_free else 0)
+        )
 
     @property
     def size(self) -> float:
@@ -81,7 +109,7 @@ class Experiment:
 
     @property
     def action_dim(self) -> int:
-        return self.position_dim + len(self.textural_free)
+        return self.position_dim + len(self.textural_free) + self.terrain_dim
 
     def to_positions(self, action) -> np.ndarray:
         """The action's first 2n values, [-1, 1] -> (n, 2) positions [m], rounded to 1 mm."""
@@ -95,12 +123,38 @@ class Experiment:
         a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1)[self.position_dim :], -1.0, 1.0)
         return {k: round(float(lo + (v + 1.0) * 0.5 * (hi - lo)), 3) for (k, lo, hi), v in zip(self.textural_free, a)}
 
+    def to_terrain(self, action) -> dict:
+        """The scenario's structural.terrain with the action's terrain values (after the positions
+        and the textural values) applied, each scaled from [-1, 1], rounded to 1 mm."""
+        terrain = copy.deepcopy(self.scenario["structural"].get("terrain", {}))
+        k = self.position_dim + len(self.textural_free)
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(-1)[k : k + self.terrain_dim], -1.0, 1.0)
+
+        def scale(v, lo, hi):
+            return round(float(lo + (v + 1.0) * 0.5 * (hi - lo)), 3)
+
+        i = 0
+        if self.amplitude_free is not None:
+            terrain["amplitude_m"] = scale(a[i], *self.amplitude_free)
+            i += 1
+        if self.hill_height_free is not None:
+            for hill in terrain["hills"]:
+                hill["height_m"] = scale(a[i], *self.hill_height_free)
+                i += 1
+        if self.hill_positions_free:
+            for hill in terrain["hills"]:
+                hill["x"], hill["y"] = scale(a[i], 0.0, self.size), scale(a[i + 1], 0.0, self.size)
+                i += 2
+        return terrain
+
     def to_action(self, xy) -> np.ndarray:
         return (np.asarray(xy, dtype=np.float64).reshape(-1) / self.size * 2.0 - 1.0).astype(np.float32)
 
     def request(self, action, scenario_id: int) -> dict:
         s = with_positions(self.scenario, self.to_positions(action))
         s["textural"].update(self.to_textural(action))
+        if self.terrain_dim:
+            s["structural"]["terrain"] = self.to_terrain(action)
         s["scenario_id"] = int(scenario_id)
         s["name"] = f"{self.name}-{scenario_id}"
         return s
@@ -167,6 +221,32 @@ def load_experiment(path: str) -> Experiment:
             )
         else:
             free.append((k, float(r[0]), float(r[1])))
+    terrain_free = data.get("terrain_free", {})
+    if not isinstance(terrain_free, dict):
+        problems.append("terrain_free: must be a mapping (keys: " + ", ".join(TERRAIN_FREE_KEYS) + ")")
+        terrain_free = {}
+    for k in terrain_free:
+        if k not in TERRAIN_FREE_KEYS:
+            problems.append(f"terrain_free.{k}: unknown key (allowed: {', '.join(TERRAIN_FREE_KEYS)})")
+    ranges = {}
+    for k, (lo_lim, hi_lim) in (("amplitude_m", (0.0, 5.0)), ("hill_height_m", (-10.0, 10.0))):
+        if k not in terrain_free:
+            continue
+        r = terrain_free[k]
+        if (
+            not isinstance(r, list)
+            or len(r) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in r)
+        ):
+            problems.append(f"terrain_free.{k}: {r!r}, must be [lo, hi], two numbers in m")
+        elif not lo_lim <= r[0] < r[1] <= hi_lim:
+            problems.append(f"terrain_free.{k}: [{r[0]}, {r[1]}] must satisfy {lo_lim:g} <= lo < hi <= {hi_lim:g} (m)")
+        else:
+            ranges[k] = (float(r[0]), float(r[1]))
+    hill_positions = terrain_free.get("hill_positions", False)
+    if not isinstance(hill_positions, bool):
+        problems.append(f"terrain_free.hill_positions: {hill_positions!r}, must be true or false")
+        hill_positions = False
     if problems:
         raise ExperimentError(f"{path}: " + "; ".join(problems))
     spath = data["scenario"]
@@ -180,6 +260,27 @@ def load_experiment(path: str) -> Experiment:
         scenario["operational"]["sim_timeout"] = float(timeout)
     if instance_count(scenario) == 0:
         raise ExperimentError(f"{path}: the scenario has no obstacle to place")
+    # Every request the search can make must be a valid scene: the ranges within the scenario's
+    # steepness bounds (docs/scenario-format.md).
+    terrain = scenario["structural"]["terrain"]
+    if "amplitude_m" in ranges and ranges["amplitude_m"][1] > terrain["wavelength_m"] / 10.0:
+        problems.append(
+            f"terrain_free.amplitude_m: hi {ranges['amplitude_m'][1]:g} m is too steep for the scenario's "
+            f"wavelength_m {terrain['wavelength_m']:g} (at most wavelength_m / 10)"
+        )
+    if ("hill_height_m" in ranges or hill_positions) and not terrain["hills"]:
+        problems.append(
+            "terrain_free: hill_height_m and hill_positions need hills in the scenario's structural.terrain"
+        )
+    if "hill_height_m" in ranges and terrain["hills"]:
+        lim = min(h["radius_m"] for h in terrain["hills"]) / 2.0
+        if max(abs(v) for v in ranges["hill_height_m"]) > lim:
+            problems.append(
+                f"terrain_free.hill_height_m: {list(ranges['hill_height_m'])} is too steep for the smallest hill "
+                f"(|height| at most radius_m / 2 = {lim:g} m)"
+            )
+    if problems:
+        raise ExperimentError(f"{path}: " + "; ".join(problems))
     return Experiment(
         name=data["name"],
         scenario=scenario,
@@ -191,4 +292,7 @@ def load_experiment(path: str) -> Experiment:
         text=text,
         unet_backend=data.get("unet_backend", DEFAULT_UNET_BACKEND),
         textural_free=free,
+        amplitude_free=ranges.get("amplitude_m"),
+        hill_height_free=ranges.get("hill_height_m"),
+        hill_positions_free=hill_positions,
     )
