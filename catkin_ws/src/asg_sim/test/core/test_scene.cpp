@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -218,4 +219,34 @@ TEST(Terrain, ObstaclesStandOnTheGround) {
   for (const auto& p : placed) EXPECT_EQ(p.z, t.height(p.pose.x, p.pose.y));
   EXPECT_GT(placed[0].z, 2.0);   // on the hill
   EXPECT_LT(placed[1].z, -0.3);  // in the ditch
+}
+
+TEST(Terrain, HeightsAsInTheSharedTable) {
+  // The heights of scenarios/corpus/good/terrain.yaml at fixed points, one table for this
+  // implementation and asg_scenario.terrain's (test_terrain.py): rviz markers and reports stand on
+  // the ground the simulator built. Rewritten only on purpose, with ASG_WRITE_TERRAIN_HEIGHTS=1.
+  const std::string repo = ASG_REPO_DIR;
+  const Terrain t(loadScenarioYaml(repo + "/scenarios/corpus/good/terrain.yaml").spec.terrain);
+  const std::string table = repo + "/scenarios/corpus/terrain_heights.txt";
+  if (const char* w = std::getenv("ASG_WRITE_TERRAIN_HEIGHTS"); w && std::string(w) == "1") {
+    std::ofstream out(table);
+    out << "# x y height of scenarios/corpus/good/terrain.yaml [m] (asg_sim Terrain.HeightsAsInTheSharedTable)\n";
+    char line[96];
+    for (double x = -30.0; x <= 130.0; x += 7.3)
+      for (double y = -25.0; y <= 125.0; y += 11.9) {
+        std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", x, y, t.height(x, y));
+        out << line;
+      }
+  }
+  std::ifstream in(table);
+  ASSERT_TRUE(in.good()) << table;
+  std::string header;
+  std::getline(in, header);
+  int n = 0;
+  double x, y, h;
+  while (in >> x >> y >> h) {
+    EXPECT_NEAR(t.height(x, y), h, 1e-12) << x << " " << y;
+    ++n;
+  }
+  EXPECT_GT(n, 250);
 }

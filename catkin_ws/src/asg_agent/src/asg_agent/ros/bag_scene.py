@@ -10,35 +10,66 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 from asg_scenario.catalogue import MESHES
+from asg_scenario.terrain import scenario_terrain
 
 COLOURS = {"juniper": (0.1, 0.5, 0.15), "barberry": (0.7, 0.15, 0.15)}
 
 
-def _path(points, stamp, z=0.15):
+def _path(points, stamp, z=0.15, ground=None):
+    """A nav_msgs/Path z [m] above the ground (the terrain's, or the plane z = 0)."""
     p = Path()
     p.header.frame_id, p.header.stamp = "map", stamp
     for x, y in points:
         ps = PoseStamped()
         ps.header = p.header
-        ps.pose.position.x, ps.pose.position.y, ps.pose.position.z = x, y, z
+        ps.pose.position.x, ps.pose.position.y = x, y
+        ps.pose.position.z = z + (ground.height(x, y) if ground is not None else 0.0)
         ps.pose.orientation.w = 1.0
         p.poses.append(ps)
     return p
 
 
-def _circle(mid, ns, x, y, r, rgb, stamp):
+def _circle(mid, ns, x, y, r, rgb, stamp, ground):
     m = Marker(ns=ns, id=mid, type=Marker.LINE_STRIP, action=Marker.ADD)
     m.header.frame_id, m.header.stamp = "map", stamp
     m.pose.orientation.w = 1.0
     m.scale.x = 0.3
     m.color = ColorRGBA(*rgb, 1.0)
-    m.points = [Point(x + r * math.cos(a * math.pi / 32), y + r * math.sin(a * math.pi / 32), 0.1) for a in range(65)]
+    for a in range(65):
+        px, py = x + r * math.cos(a * math.pi / 32), y + r * math.sin(a * math.pi / 32)
+        m.points.append(Point(px, py, 0.1 + ground.height(px, py)))
+    return m
+
+
+def _ground(terrain, size, stamp, step=2.5):
+    """The terrain over the landscape as a shaded triangle list (only when it is not flat)."""
+    m = Marker(ns="terrain", id=0, type=Marker.TRIANGLE_LIST, action=Marker.ADD)
+    m.header.frame_id, m.header.stamp = "map", stamp
+    m.pose.orientation.w = 1.0
+    m.scale.x = m.scale.y = m.scale.z = 1.0
+    n = max(1, int(round(size / step)))
+    g = [i * size / n for i in range(n + 1)]
+    h = [[terrain.height(x, y) for x in g] for y in g]
+    lo, hi = min(map(min, h)), max(map(max, h))
+
+    def vertex(i, j):
+        m.points.append(Point(g[j], g[i], h[i][j]))
+        t = (h[i][j] - lo) / (hi - lo) if hi > lo else 0.5
+        m.colors.append(ColorRGBA(0.35 + 0.4 * t, 0.45 + 0.25 * t, 0.25, 0.6))  # low: green, high: tan
+
+    for i in range(n):
+        for j in range(n):
+            for a, b in ((i, j), (i, j + 1), (i + 1, j + 1), (i, j), (i + 1, j + 1), (i + 1, j)):
+                vertex(a, b)
     return m
 
 
 def scene_messages(request, removed, optimal_points, trajectory_xy, stamp):
     """(topic suffix, message) pairs describing the scene of a run."""
     arr = MarkerArray()
+    ground = scenario_terrain(request)
+    if not ground.flat:
+        arr.markers.append(_ground(ground, request["structural"]["landscape"]["size"], stamp))
     k = 0
     for li, layout in enumerate(request["structural"]["layouts"]):
         mesh = MESHES[layout["mesh_name"]]
@@ -49,7 +80,8 @@ def scene_messages(request, removed, optimal_points, trajectory_xy, stamp):
             k += 1
             m.header.frame_id, m.header.stamp = "map", stamp
             h = mesh.height * inst["scale"]
-            m.pose.position.x, m.pose.position.y, m.pose.position.z = inst["x"], inst["y"], h / 2
+            z = ground.height(inst["x"], inst["y"]) + h / 2  # stands on the ground, as in the simulator
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = inst["x"], inst["y"], z
             m.pose.orientation.w = 1.0
             m.scale.x = m.scale.y = 2 * mesh.collision_radius * inst["scale"]
             m.scale.z = h
@@ -59,12 +91,16 @@ def scene_messages(request, removed, optimal_points, trajectory_xy, stamp):
             )
             arr.markers.append(m)
     op = request["operational"]
-    arr.markers.append(_circle(0, "start", op["start_x"], op["start_y"], op["safety_radius"], (0.1, 0.4, 1.0), stamp))
-    arr.markers.append(_circle(0, "goal", op["goal_x"], op["goal_y"], op["goal_radius"], (1.0, 0.6, 0.0), stamp))
+    arr.markers.append(
+        _circle(0, "start", op["start_x"], op["start_y"], op["safety_radius"], (0.1, 0.4, 1.0), stamp, ground)
+    )
+    arr.markers.append(
+        _circle(0, "goal", op["goal_x"], op["goal_y"], op["goal_radius"], (1.0, 0.6, 0.0), stamp, ground)
+    )
     return [
         ("replay/scene", arr),
-        ("replay/optimal_path", _path(optimal_points, stamp, 0.2)),
-        ("replay/trajectory", _path(trajectory_xy, stamp, 0.25)),
+        ("replay/optimal_path", _path(optimal_points, stamp, 0.2, ground)),
+        ("replay/trajectory", _path(trajectory_xy, stamp, 0.25, ground)),
     ]
 
 
