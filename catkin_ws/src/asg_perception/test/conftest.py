@@ -7,9 +7,9 @@ WS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 DATASET_TOOL = os.path.join(WS, "devel", "lib", "asg_sim", "asg_sim_dataset")
 
 
-def make_dataset(folder, count, seed, meshes="juniper,barberry"):
+def make_dataset(folder, count, seed, meshes="juniper,barberry", extra=()):
     subprocess.run(
-        [DATASET_TOOL, "--out", str(folder), "--count", str(count), "--seed", str(seed), "--meshes", meshes],
+        [DATASET_TOOL, "--out", str(folder), "--count", str(count), "--seed", str(seed), "--meshes", meshes, *extra],
         check=True,
         capture_output=True,
         env=dict(os.environ, LP_NUM_THREADS="1"),

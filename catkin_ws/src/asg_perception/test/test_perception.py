@@ -7,7 +7,7 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from asg_perception.data import VOID, DatasetError, load_frames, to_tensor
+from asg_perception.data import VOID, DatasetError, load_frames, read_manifest, to_tensor
 from asg_perception.metrics import Confusion
 from asg_perception.inference import BACKENDS, Segmenter
 from asg_perception.model import UNet, parameter_count, unet
@@ -204,3 +204,24 @@ def test_runtimes_table_runs_every_row_and_the_fp32_runtimes_keep_the_labels(tin
         assert rows[k]["pixels_agreeing_with_eager"] > 0.98, (k, rows[k])
     assert r["gflop_per_frame"] == pytest.approx(0.34, abs=0.01)
     assert "| OpenVINO bf16 |" in format_table(r)
+
+
+def test_datasets_with_terrain_and_weather(tmp_path, tiny_dataset):
+    # Issue #27: --terrain and --weather give a share of the scenes terrain and weather (recorded
+    # in the manifest); at 0 the frames are those of a dataset made without the options.
+    import filecmp
+
+    from conftest import make_dataset
+
+    d = make_dataset(tmp_path / "tw", 24, 11, extra=("--terrain", "1", "--weather", "1", "--frames-per-scene", "4"))
+    rows = read_manifest(d)
+    assert all(float(r["terrain_amplitude_m"]) >= 0.2 for r in rows)
+    assert all(0.0 <= float(r["cloud_cover"]) <= 1.0 for r in rows)
+    assert len({r["fog_visibility_m"] for r in rows}) > 1 and any(float(r["fog_visibility_m"]) == 0 for r in rows)
+    assert any(int(r["hills"]) > 0 for r in rows)
+    frames = load_frames(d)
+    assert len(frames) == 24
+    z = make_dataset(tmp_path / "zero", 8, 11, extra=("--terrain", "0", "--weather", "0"))
+    for r in read_manifest(z):
+        assert filecmp.cmp(os.path.join(z, r["rgb"]), os.path.join(tiny_dataset, r["rgb"]), shallow=False)
+        assert (r["terrain_amplitude_m"], r["fog_visibility_m"], r["cloud_cover"]) == ("0", "0", "0")

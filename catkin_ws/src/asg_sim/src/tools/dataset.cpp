@@ -1,10 +1,15 @@
 // asg_sim_dataset: renders a segmentation dataset with the simulator's ground-truth labeler.
 //   asg_sim_dataset --out DIR --count N [--seed S] [--meshes juniper,barberry]
-//                   [--frames-per-scene 8] [--size 100]
+//                   [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]
 // Random scenes (deterministic from the seed), sun inclinations cycling through 0, 15, ..., 90
 // degrees, 10..30 obstacles per scene, camera poses mostly facing an obstacle at 3..20 m. Writes DIR/images/NNNNNN_{rgb,
 // labels,lit}.png and DIR/manifest.csv (one row per frame). The same arguments give the same
 // files on the same build.
+// Issue #27: --terrain P gives a share P of the scenes random terrain (rolling ground of
+// amplitude 0.2..1.5 m at wavelength 20..60 m, and 0..3 hills or ditches of radius 6..15 m), the
+// camera standing on it and tilted with it; --weather P a share P random weather (fog of 25..500 m
+// visibility on half of them, cloud cover 0..1). Their draws come from a generator of their own,
+// so with both at 0 (the default) the files are those of before.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -32,12 +37,14 @@ struct Args {
   std::vector<std::string> meshes{"juniper", "barberry"};
   int frames_per_scene = 8;
   double size = 100.0;
+  double terrain = 0.0;  ///< [-] share of scenes with terrain
+  double weather = 0.0;  ///< [-] share of scenes with weather
 };
 
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
                "error: %s\nusage: asg_sim_dataset --out DIR --count N [--seed S] "
-               "[--meshes juniper,barberry] [--frames-per-scene 8] [--size 100]\n",
+               "[--meshes juniper,barberry] [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]\n",
                why.c_str());
   std::exit(2);
 }
@@ -54,6 +61,8 @@ Args parse(int argc, char** argv) {
       else if (k == "--seed") a.seed = std::stoull(v);
       else if (k == "--frames-per-scene") a.frames_per_scene = std::stoi(v);
       else if (k == "--size") a.size = std::stod(v);
+      else if (k == "--terrain") a.terrain = std::stod(v);
+      else if (k == "--weather") a.weather = std::stod(v);
       else if (k == "--meshes") {
         a.meshes.clear();
         std::stringstream ss(v);
@@ -71,6 +80,8 @@ Args parse(int argc, char** argv) {
   if (a.frames_per_scene <= 0) usage("--frames-per-scene must be > 0");
   if (a.meshes.empty()) usage("--meshes must name at least one mesh");
   if (!(a.size >= 30.0)) usage("--size must be >= 30 m");
+  if (!(a.terrain >= 0.0 && a.terrain <= 1.0)) usage("--terrain must be a share in [0, 1]");
+  if (!(a.weather >= 0.0 && a.weather <= 1.0)) usage("--weather must be a share in [0, 1]");
   return a;
 }
 
@@ -94,8 +105,9 @@ int main(int argc, char** argv) {
     std::ofstream manifest(a.out + "/manifest.csv");
     if (!manifest) throw std::runtime_error("cannot write " + a.out + "/manifest.csv");
     manifest << "index,scene,rgb,labels,lit,sun_inclination_deg,sun_yaw_deg,meshes,obstacles,"
-                "cam_x,cam_y,cam_yaw\n";
+                "cam_x,cam_y,cam_yaw,terrain_amplitude_m,hills,fog_visibility_m,cloud_cover\n";
     std::mt19937_64 rng(a.seed);
+    std::mt19937_64 env(a.seed ^ 0x7E44A1A5EA7Eull);  // terrain and weather draws only
     Renderer renderer;
     CameraFrame frame;
     int index = 0;
@@ -118,6 +130,26 @@ int main(int argc, char** argv) {
         inst.scale = uniform(rng, 0.7, 1.3);
         layout.instances.push_back(inst);
       }
+      if (a.terrain > 0.0 && uniform(env, 0, 1) < a.terrain) {
+        auto& t = spec.terrain;
+        t.wavelength_m = uniform(env, 20.0, 60.0);
+        t.amplitude_m = std::min(uniform(env, 0.2, 1.5), 0.1 * t.wavelength_m);
+        t.seed = uint32_t(env() & 0xFFFFFFFF);
+        const int hills = int(uniform(env, 0, 4));
+        for (int k = 0; k < hills; ++k) {
+          Hill h;
+          h.x = uniform(env, 0, a.size);
+          h.y = uniform(env, 0, a.size);
+          h.radius_m = uniform(env, 6.0, 15.0);
+          h.height_m = uniform(env, -0.45, 0.45) * h.radius_m;
+          t.hills.push_back(h);
+        }
+      }
+      if (a.weather > 0.0 && uniform(env, 0, 1) < a.weather) {
+        if (uniform(env, 0, 1) < 0.5) spec.textural.fog_visibility_m = uniform(env, 25.0, 500.0);
+        spec.textural.cloud_cover = uniform(env, 0.0, 1.0);
+      }
+      const Terrain ground(spec.terrain);
       spec.operational.safety_radius = 0.0;
       std::vector<PlacedObstacle> placed;
       std::vector<RemovedObstacle> removed;
@@ -143,8 +175,11 @@ int main(int argc, char** argv) {
           if (clear) break;
         }
         Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-        base.translation() << x, y, 0.0;
+        base.translation() << x, y, ground.height(x, y);
         base.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        if (!ground.flat())  // the vehicle stands on the slope: tilted with the ground's normal
+          base.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), ground.normal(x, y))
+                              .toRotationMatrix() * base.linear();
         renderer.renderCamera(base * cameraMount(1.5, 0.0, 1.4), true, &frame);
         const int w = frame.rgb.width, h = frame.rgb.height;
         char name[32];
@@ -159,7 +194,9 @@ int main(int argc, char** argv) {
         manifest << index << "," << scene << ",images/" << name << "_rgb.png,images/" << name
                  << "_labels.png,images/" << name << "_lit.png," << spec.textural.sun_inclination_deg
                  << "," << spec.textural.sun_yaw_deg << "," << meshes << "," << placed.size() << ","
-                 << x << "," << y << "," << yaw << "\n";
+                 << x << "," << y << "," << yaw << "," << spec.terrain.amplitude_m << ","
+                 << spec.terrain.hills.size() << "," << spec.textural.fog_visibility_m << ","
+                 << spec.textural.cloud_cover << "\n";
         ++index;
         if (index % 25 == 0 || index == a.count) {
           const int bar = 30 * index / a.count;
