@@ -221,6 +221,9 @@ def test_datasets_with_terrain_and_weather(tmp_path, tiny_dataset):
     assert any(int(r["hills"]) > 0 for r in rows)
     frames = load_frames(d)
     assert len(frames) == 24
+    r = evaluate(unet(0.25).eval(), frames)  # figures per condition: terrain, fog, overcast
+    assert set(r["by_condition"]) >= {"terrain"} and set(r["by_condition"]) <= {"terrain", "fog", "overcast"}
+    assert all(0.0 <= f["mean_iou"] <= 1.0 for f in r["by_condition"].values())
     z = make_dataset(tmp_path / "zero", 8, 11, extra=("--terrain", "0", "--weather", "0"))
     for r in read_manifest(z):
         assert filecmp.cmp(os.path.join(z, r["rgb"]), os.path.join(tiny_dataset, r["rgb"]), shallow=False)

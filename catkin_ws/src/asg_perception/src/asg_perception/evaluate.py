@@ -108,6 +108,12 @@ def main(argv=None):
             f"{r['low_sun']['shadow_false_obstacle_rate']:.4f}; by inclination: "
             + ", ".join(f"{k}: {v:.4f}" for k, v in r["by_sun"].items())
         )
+    for name, r in results.items():
+        for c, f in r.get("by_condition", {}).items():
+            print(
+                f"{name:>8}  {c:>10}: mIoU {f['mean_iou']:.3f}  non-traversable IoU {f['iou']['non_traversable']:.3f}  "
+                f"shadow false-obstacle {f['shadow_false_obstacle_rate']:.4f}"
+            )
     if len(results) == 2:
         # The model with more shadow false obstacles over the other (the flaw's size).
         (na, ra), (nb, rb) = sorted(results.items(), key=lambda kv: -kv[1]["shadow_false_obstacle_rate"])
@@ -121,6 +127,9 @@ def main(argv=None):
             f"{ratio(lambda r: r['shadow_away_false_obstacle_rate']):.1f}x, low sun "
             f"{ratio(lambda r: r['low_sun']['shadow_false_obstacle_rate']):.1f}x)"
         )
+        for c in ra.get("by_condition", {}):
+            if c in rb.get("by_condition", {}):
+                print(f"  {c}: {ratio(lambda r: r['by_condition'][c]['shadow_false_obstacle_rate']):.1f}x")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)

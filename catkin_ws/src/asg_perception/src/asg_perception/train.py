@@ -7,6 +7,8 @@ import sys
 import time
 from dataclasses import asdict, dataclass, fields
 
+from typing import List
+
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -74,13 +76,29 @@ def predict(model: UNet, rgb: np.ndarray, batch: int = 8) -> np.ndarray:
     return np.concatenate(out)
 
 
+def conditions(row: dict) -> List[str]:
+    """The scene conditions of a dataset frame (issue #27; manifests before it: flat and clear):
+    `terrain` (rolling ground or hills), `fog`, `overcast` (cloud cover >= 0.5), or `flat_clear`."""
+    out = []
+    if float(row.get("terrain_amplitude_m") or 0) > 0 or int(row.get("hills") or 0) > 0:
+        out.append("terrain")
+    if float(row.get("fog_visibility_m") or 0) > 0:
+        out.append("fog")
+    if float(row.get("cloud_cover") or 0) >= 0.5:
+        out.append("overcast")
+    return out or ["flat_clear"]
+
+
 def evaluate(model: UNet, frames, batch: int = 8, low_sun_deg: float = 15.0, labeller=None) -> dict:
     """Figures over all frames, plus `low_sun`: the same over frames whose sun inclination is at
     most low_sun_deg (long shadows that lie apart from their obstacles), and `by_sun`: the
-    shadow false-obstacle rate per inclination. `labeller` (RGB batch -> labels), when given,
-    labels the frames instead of the eager model (an inference backend, inference.Segmenter)."""
+    shadow false-obstacle rate per inclination, and `by_condition`: the figures per scene
+    condition (`conditions`; a frame may count in several) when the set has more than flat, clear
+    scenes. `labeller` (RGB batch -> labels), when given, labels the frames instead of the eager
+    model (an inference backend, inference.Segmenter)."""
     conf, low = Confusion(), Confusion()
-    by_sun = {}
+    by_sun, by_cond = {}, {}
+    conds = [conditions(r) for r in frames.rows]
     inc = [float(r.get("sun_inclination_deg", "nan")) for r in frames.rows]
     for i in range(0, len(frames), batch):
         pred = labeller(frames.rgb[i : i + batch]) if labeller else predict(model, frames.rgb[i : i + batch], batch)
@@ -88,12 +106,16 @@ def evaluate(model: UNet, frames, batch: int = 8, low_sun_deg: float = 15.0, lab
             args = (pred[k], frames.labels[i + k], frames.lit[i + k])
             conf.add(*args)
             by_sun.setdefault(inc[i + k], Confusion()).add(*args)
+            for c in conds[i + k]:
+                by_cond.setdefault(c, Confusion()).add(*args)
             if inc[i + k] <= low_sun_deg:
                 low.add(*args)
     out = conf.summary()
     out["low_sun"] = low.summary()
     out["low_sun_deg"] = low_sun_deg
     out["by_sun"] = {f"{a:g}": c.shadow_false_obstacle_rate() for a, c in sorted(by_sun.items())}
+    if set(by_cond) - {"flat_clear"}:
+        out["by_condition"] = {c: by_cond[c].summary() for c in sorted(by_cond)}
     return out
 
 
