@@ -36,6 +36,10 @@ while read -r name scenarios launch args; do
     case "$a" in
       store:=*) store="$REPO/${a#store:=}" ;;
       experiment:=*) largs+=("experiment:=$REPO/${a#experiment:=}") ;;
+      planner_config:=*)  # a file name: one of asg_planner/config
+        p="${a#planner_config:=}"
+        [[ "$p" == */* ]] || p="$WS/src/asg_planner/config/$p"
+        largs+=("planner_config:=$p") ;;
       *) largs+=("$a") ;;
     esac
   done
