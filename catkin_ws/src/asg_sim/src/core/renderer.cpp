@@ -318,6 +318,7 @@ struct Renderer::Gl {
   float footprint_box[4] = {0, 0, 0, 0};
   Target camera, topdown;
   GpuMesh ground;
+  bool ground_casts = false;  // a shaped ground shades itself (hills cast shadows); flat: no
   std::map<std::string, GpuMesh> meshes;
   struct Instance {
     std::string mesh;
@@ -361,6 +362,21 @@ struct Renderer::Gl {
       glBindVertexArray(ground.vao);
       glDrawElements(GL_TRIANGLES, ground.count, GL_UNSIGNED_INT, nullptr);
       glUniform1i(ground_loc, 0);
+    }
+    if (pass == Pass::kShadow && ground_casts) {
+      // Only the ground's faces turned away from the sun go into the shadow map (front faces
+      // culled, as seen from the light): ground behind a hill falls in its shadow, and a slope
+      // facing the sun never compares against itself (no shadow acne). A slope facing away is
+      // unlit by its normal anyway.
+      Mat4 id = Mat4::Identity();
+      glUniformMatrix4fv(model_loc, 1, GL_FALSE, id.data());
+      glUniform1f(opacity_loc, 1.0f);
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_FRONT);
+      glBindVertexArray(ground.vao);
+      glDrawElements(GL_TRIANGLES, ground.count, GL_UNSIGNED_INT, nullptr);
+      glCullFace(GL_BACK);
+      glDisable(GL_CULL_FACE);
     }
     for (const auto& inst : instances) {
       if (pass == Pass::kShadow && !inst.cast_shadow) continue;
@@ -486,6 +502,7 @@ void Renderer::setScene(const SceneSpec& spec, const std::vector<PlacedObstacle>
     ground_hi = std::max(ground_hi, v.pos[2]);
   }
   gl_->ground = upload(ground);
+  gl_->ground_casts = !terrain.flat();
   gl_->seed = float(spec.textural.ground_texture_seed % 9973) * 0.6180339f;
   gl_->instances.clear();
   for (const auto& p : placed) {

@@ -294,3 +294,23 @@ TEST(Renderer, AHillRaisesTheHorizonAndItsSunnySideIsBrighter) {
   renderer().renderCamera(cameraAt(30, 50, 0), true, &again);
   EXPECT_EQ(again.rgb.data, flat.rgb.data);
 }
+
+TEST(Renderer, AHillShadowsTheGroundBehindItUnderALowSun) {
+  // Issue #27: under a low sun from +x, a 5 m hill at x = 60 shades the flat ground west of it
+  // (shadow about 28 m long); the same ground is lit without the hill. The lit mask and the
+  // colour both show it.
+  auto s = emptyScene();
+  s.textural.sun_yaw_deg = 0.0;
+  s.textural.sun_inclination_deg = 10.0;
+  const int v = int(std::lround(127.5 + 128.0 * 1.4 / 8.5)), u = 128;  // ground 8.5 m ahead: x = 40
+  CameraFrame flat, hilly;
+  setScene(s);
+  renderer().renderCamera(cameraAt(30, 50, 0), true, &flat);
+  s.terrain.hills = {{60.0, 50.0, 12.0, 5.0}};
+  setScene(s);
+  renderer().renderCamera(cameraAt(30, 50, 0), true, &hilly);
+  EXPECT_GT(flat.lit.at(u, v), 200);
+  EXPECT_LT(hilly.lit.at(u, v), 60);
+  EXPECT_LT(brightness(hilly, u, v), 0.8 * brightness(flat, u, v));
+  EXPECT_EQ(hilly.labels.at(u, v), kTraversable);
+}
