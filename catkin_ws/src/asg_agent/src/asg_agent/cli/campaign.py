@@ -243,6 +243,19 @@ def main(argv=None):
         except RuntimeError as e:
             print(f"campaign: {e}", file=sys.stderr)
             return 2
+        # The planner is part of the stack's identity: every worker must run the experiment's
+        # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
+        from asg_agent.ros.replay import planner_mismatch
+
+        wrong = [m for w in list(workers) + list(ref_workers) for m in planner_mismatch(w, exp.planner_config)]
+        if wrong:
+            print(
+                f"campaign: the experiment's planner_config is {exp.planner_config}, but:\n  "
+                + "\n  ".join(wrong[:8])
+                + "\n(launch the workers with planner_config:=... of that file)",
+                file=sys.stderr,
+            )
+            return 2
     td3 = TD3Config()
     if a.updates_per_step:
         td3.updates_per_step = a.updates_per_step

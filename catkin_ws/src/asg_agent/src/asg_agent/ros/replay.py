@@ -87,6 +87,61 @@ def stack_mismatch(worker: str, settings: dict) -> list:
     return out
 
 
+def planner_config_path(name: str) -> str:
+    """A planner configuration: a file of asg_planner/config by name, or a path."""
+    if os.sep in name:
+        return name
+    import rospkg
+
+    return os.path.join(rospkg.RosPack().get_path("asg_planner"), "config", name)
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.update(_flatten(v, f"{prefix}{k}/"))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+#: planner parameters that change what it shows, not what it decides (worker.launch sets them)
+PLANNER_DISPLAY_KEYS = ("publish_markers",)
+
+
+def planner_mismatch(worker: str, planner_config: str) -> list:
+    """What the planner of `worker` runs that the experiment's planner configuration does not say
+    (each parameter of the file against the worker's parameter server entry), e.g. the terrain
+    experiment run with the flat planner. [] when they agree."""
+    import rospy
+    import yaml
+
+    path = planner_config_path(planner_config)
+    try:
+        with open(path, encoding="utf-8") as f:
+            want = _flatten(yaml.safe_load(f) or {})
+    except OSError as e:
+        return [f"planner configuration {path}: cannot read ({e.strerror})"]
+    out = []
+    for key, v in sorted(want.items()):
+        if key in PLANNER_DISPLAY_KEYS:
+            continue
+        name = f"{worker}/planner/{key}"
+        if not rospy.has_param(name):
+            out.append(f"{worker}'s planner has no parameter {key} ({os.path.basename(path)} sets {v!r})")
+            continue
+        got = rospy.get_param(name)
+        same = (
+            abs(float(got) - float(v)) <= 1e-9 * max(1.0, abs(float(v)))
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and isinstance(got, (int, float))
+            else got == v
+        )
+        if not same:
+            out.append(f"{worker}'s planner runs {key} = {got!r}, {os.path.basename(path)} says {v!r}")
+    return out
+
+
 def add_scene_to_bag(path, worker, request, o: Outcome):
     """Writes the scene, optimal path, driven trajectory and fading earlier plans into the bag."""
     import rosbag

@@ -1,0 +1,78 @@
+"""ROS helpers of the agent without a running master: the replay's scene markers stand on the scenario's ground, and the campaign's planner check (issue #27)."""
+
+import os
+
+import rospy
+
+from asg_agent.ros.bag_scene import scene_messages
+from asg_scenario import load_scenario
+from asg_scenario.catalogue import MESHES
+from asg_scenario.terrain import scenario_terrain
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
+
+
+def markers(name):
+    s = load_scenario(os.path.join(REPO, "scenarios", name))
+    msgs = dict(scene_messages(s, set(), [(20.0, 20.0), (80.0, 80.0)], [(20.0, 20.0), (50.0, 52.0)], rospy.Time(1)))
+    return s, msgs
+
+
+def test_on_terrain_obstacles_and_paths_stand_on_the_ground():
+    s, msgs = markers("exp6.yaml")
+    t = scenario_terrain(s)
+    arr = msgs["replay/scene"].markers
+    ground = [m for m in arr if m.ns == "terrain"]
+    assert len(ground) == 1 and len(ground[0].points) == 6 * 40 * 40 == len(ground[0].colors)
+    obstacles = [m for m in arr if m.ns == "obstacles"]
+    insts = [(l["mesh_name"], i) for l in s["structural"]["layouts"] for i in l["instances"]]
+    assert len(obstacles) == len(insts) == 8
+    for m, (mesh, i) in zip(obstacles, insts):
+        assert abs(m.pose.position.z - (t.height(i["x"], i["y"]) + MESHES[mesh].height * i["scale"] / 2)) < 1e-9
+    p = msgs["replay/trajectory"].poses[1].pose.position
+    assert abs(p.z - (t.height(50.0, 52.0) + 0.25)) < 1e-9 and abs(t.height(50.0, 52.0)) > 0.3  # in the ditch
+
+
+def test_on_flat_ground_no_terrain_marker():
+    s, msgs = markers("exp1.yaml")
+    arr = msgs["replay/scene"].markers
+    assert not [m for m in arr if m.ns == "terrain"]
+    juniper = next(m for m in arr if m.ns == "obstacles")
+    assert juniper.pose.position.z == MESHES["juniper"].height / 2
+    assert msgs["replay/optimal_path"].poses[0].pose.position.z == 0.2
+
+
+def test_planner_mismatch_names_what_a_worker_runs_against_the_experiment(monkeypatch):
+    # Issue #27: the campaign refuses workers whose planner runs another configuration than the
+    # experiment's (exp6 with the flat planner.yaml, say), naming the parameter.
+    import yaml
+
+    from asg_agent.ros import replay
+
+    cfg = os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config")
+    params = {}
+
+    def load(worker, name):
+        def flat(d, p=""):
+            for k, v in d.items():
+                if isinstance(v, dict):
+                    flat(v, f"{p}{k}/")
+                else:
+                    params[f"{worker}/planner/{p}{k}"] = v
+
+        flat(yaml.safe_load(open(os.path.join(cfg, name))))
+
+    load("/worker_0", "planner.yaml")
+    load("/worker_1", "planner_terrain.yaml")
+    params["/worker_1/planner/publish_markers"] = False  # set by worker.launch: not the stack's identity
+    monkeypatch.setattr(rospy, "has_param", lambda n: n in params)
+    monkeypatch.setattr(rospy, "get_param", lambda n: params[n])
+    assert replay.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml")) == []
+    assert replay.planner_mismatch("/worker_0", os.path.join(cfg, "planner.yaml")) == []
+    wrong = replay.planner_mismatch("/worker_0", os.path.join(cfg, "planner_terrain.yaml"))
+    assert len(wrong) == 1 and "projection/height_above_ground = False" in wrong[0], wrong
+    del params["/worker_1/planner/projection/ground_cell"]
+    assert (
+        "has no parameter projection/ground_cell"
+        in replay.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))[0]
+    )
