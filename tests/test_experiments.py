@@ -211,3 +211,33 @@ def test_weather_tables_bin_findings_by_attribute(tmp_path):
     assert [b["collisions"] for b in s] == [1, 0] and [b["differential"] for b in s] == [1, 0]
     assert [b["reference_collisions"] for b in s] == [0, 1]
     assert os.path.getsize(tmp_path / "out" / "weather.png") > 10000
+
+
+def test_terrain_tables_bin_findings_by_terrain_attribute(tmp_path):
+    """Issue #27: rows that carry their terrain, binned by the rolling amplitude and by how far the
+    nearest hill of at least 1 m lies from the start-goal line (rows without such a hill: the far end)."""
+    import gzip
+    import json
+
+    camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
+    rows = sorted(rows, key=lambda r: r["job"])[:6]
+    for k, r in enumerate(rows):
+        hills = [{"x": 50.0 + 10.0 * k, "y": 50.0 - 10.0 * k, "radius_m": 8.0, "height_m": 2.0}] if k < 4 else []
+        r.update(proxy=1.1, termination="SUCCESS", textural={"fog_visibility_m": 0.0, "cloud_cover": 0.0})
+        r["terrain"] = {"amplitude_m": 0.3 * k, "wavelength_m": 30.0, "seed": 1, "hills": hills}
+        r["reference"] = {"proxy": 1.0, "termination": "SUCCESS"}
+    rows[0].update(termination="COLLISION")  # amplitude 0, a hill on the route (rim 8 m inside it)
+    with gzip.open(tmp_path / "t.jsonl.gz", "wt") as f:
+        f.write(json.dumps({"campaign": dict(camp, name="synthetic-terrain")}) + "\n")
+        for r in rows:
+            f.write(json.dumps(r) + "\n")
+    (tmp_path / "m.yaml").write_text(
+        "terrain: {exports: [t.jsonl.gz], attributes: [terrain.amplitude_m, terrain.hill_from_route_m], bins: 2}\n"
+    )
+    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["terrain"]
+    assert [b["scenarios"] for b in s["terrain.amplitude_m"]] == [3, 3]
+    assert [b["collisions"] for b in s["terrain.amplitude_m"]] == [1, 0]
+    # hills at 0, 14.1, 28.3, 42.4 m from the line, minus the 8 m radius; two rows without a hill
+    d = s["terrain.hill_from_route_m"]
+    assert abs(d[0]["from"] + 8.0) < 1e-6 and [b["scenarios"] for b in d] == [2, 4] and d[0]["collisions"] == 1
+    assert os.path.getsize(tmp_path / "out" / "terrain.png") > 10000

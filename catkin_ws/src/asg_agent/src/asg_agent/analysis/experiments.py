@@ -315,11 +315,43 @@ def attributed_figure(runs, budget, thr, measure, xlabel, out):
     plt.close(fig)
 
 
-def weather_tables(load, section: dict, out: str):
-    """Issue #27: attributed campaigns whose experiment frees textural attributes, their
-    scenarios binned by each attribute (equal-width bins over the values searched): scenarios,
-    ATTRIBUTED_SCORES, collisions of the reference stack, and the median proxy of both stacks;
-    and a figure of the proxy difference against each attribute."""
+def _segment_distance_xy(px, py, ax, ay, bx, by) -> float:
+    dx, dy = bx - ax, by - ay
+    t = 0.0 if dx == dy == 0 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy)))
+    return float(np.hypot(px - ax - t * dx, py - ay - t * dy))
+
+
+#: Issue #27: scene attributes of the terrain, from an export row's `terrain` (flat: absent)
+TERRAIN_ATTRIBUTES = {
+    "amplitude_m": lambda t, row: float(t.get("amplitude_m", 0.0)),
+    "highest_hill_m": lambda t, row: max([h["height_m"] for h in t.get("hills", [])] or [0.0]),
+    "deepest_ditch_m": lambda t, row: max([-h["height_m"] for h in t.get("hills", [])] or [0.0]),
+    # [m] the nearest hill or ditch of at least 1 m to the straight start-goal line, from its rim
+    "hill_from_route_m": lambda t, row: min(
+        [
+            _segment_distance_xy(h["x"], h["y"], *row["_route"]) - h["radius_m"]
+            for h in t.get("hills", [])
+            if abs(h["height_m"]) >= 1.0
+        ]
+        or [np.inf]
+    ),
+}
+
+
+def attribute_value(row: dict, attr: str, route=(20.0, 20.0, 80.0, 80.0)) -> float:
+    """A scene attribute of an export row: a textural one by name, or `terrain.NAME` of
+    TERRAIN_ATTRIBUTES (route: start x, y and goal x, y of the experiment)."""
+    if attr.startswith("terrain."):
+        return TERRAIN_ATTRIBUTES[attr[len("terrain.") :]](row.get("terrain") or {}, dict(row, _route=route))
+    return float(row["textural"][attr])
+
+
+def weather_tables(load, section: dict, out: str, what: str = "weather", figure: str = "weather.png"):
+    """Issue #27: attributed campaigns whose experiment frees textural (or terrain) attributes,
+    their scenarios binned by each attribute (equal-width bins over the values searched; textural
+    names, or terrain.NAME of TERRAIN_ATTRIBUTES): scenarios, ATTRIBUTED_SCORES, collisions of
+    the reference stack, and the median proxy of both stacks; and a figure of the proxy
+    difference against each attribute."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -333,10 +365,13 @@ def weather_tables(load, section: dict, out: str):
         rows += [r for r in rs if r.get("textural") and r["proxy"] is not None]
     if not rows or not attrs:
         return summary, md
-    md += ["", f"### Findings by weather (issue #27: {', '.join(section['exports'])}, {len(rows)} scenarios)", ""]
+    route = tuple(section.get("route", (20.0, 20.0, 80.0, 80.0)))
+    md += ["", f"### Findings by {what} (issue #27: {', '.join(section['exports'])}, {len(rows)} scenarios)", ""]
     fig, axes = plt.subplots(1, len(attrs), figsize=(5.0 * len(attrs), 3.8), squeeze=False)
     for ax, attr in zip(axes[0], attrs):
-        v = np.array([r["textural"][attr] for r in rows], float)
+        v = np.array([attribute_value(r, attr, route) for r in rows], float)
+        finite = v[np.isfinite(v)]
+        v = np.where(np.isfinite(v), v, finite.max() if len(finite) else 0.0)  # no hill: the far end
         edges = np.linspace(v.min(), v.max(), nbins + 1)
         idx = np.clip(np.digitize(v, edges[1:-1]), 0, nbins - 1)
         md += [
@@ -377,10 +412,10 @@ def weather_tables(load, section: dict, out: str):
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=7)
     fig.suptitle(
-        "Weather: what the flawed U-Net stack does worse than the ground-truth stack, by attribute", fontsize=9
+        f"{what.capitalize()}: what the U-Net stack does worse than the ground-truth stack, by attribute", fontsize=9
     )
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "weather.png"), dpi=100)
+    fig.savefig(os.path.join(out, figure), dpi=100)
     plt.close(fig)
     return summary, md
 
@@ -755,7 +790,10 @@ def run(manifest_path: str, out: str) -> dict:
     if (man.get("weather") or {}).get("exports"):
         summary["weather"], lines = weather_tables(load, man["weather"], out)
         md += lines[1:]
-    if man.get("attributed") or man.get("weather"):
+    if (man.get("terrain") or {}).get("exports"):
+        summary["terrain"], lines = weather_tables(load, man["terrain"], out, "terrain and weather", "terrain.png")
+        md += lines[1:]
+    if man.get("attributed") or man.get("weather") or man.get("terrain"):
         md += ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
     # -- Table 2 ---------------------------------------------------------------------------------
     if man.get("table2"):

@@ -92,6 +92,8 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
                         ],
                         "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
                         "textural": req["textural"],
+                        # issue #27: the ground's shape (absent: the flat ground)
+                        **({"terrain": req["structural"]["terrain"]} if req["structural"].get("terrain") else {}),
                         "visibility": json.loads(r["visibility"]),
                         "wall_time": round(r["wall_time"], 3),
                         "removed": json.loads(r["removed"]),
