@@ -39,6 +39,10 @@ constexpr double kMaxHillHeight = 10.0;   ///< [m] |height_m|
 /// amplitude_m <= wavelength_m / 10 (rolling slopes below about 42 deg) and
 /// |height_m| <= radius_m / 2 (hill flanks below about 38 deg).
 constexpr double kMaxAmplitudePerWavelength = 0.1;
+/// [-] cells per side of a shaped ground's mesh and heightfield, whatever `subdivisions` asks
+/// (the scene budget: a shaped ground at the format's 2048 cells per side would be 4 million
+/// vertices to shade every frame); a flat ground is drawn with 8 x 8 cells anyway.
+constexpr int kMaxTerrainCellsPerSide = 512;
 constexpr double kMaxHillHeightPerRadius = 0.5;
 
 class Terrain {

@@ -134,7 +134,7 @@ Mesh makeGroundMesh(double size, double border, uint32_t subdivisions, const Ter
   int n = std::max<int>(1, std::ceil(subdivisions * (hi - lo) / size));
   // A flat ground looks the same at any tessellation; its vertex count is most of the
   // rasteriser's cost (llvmpipe shades every vertex), so a flat one is drawn as 8 x 8 cells.
-  if (terrain.flat()) n = std::min(n, 8);
+  n = std::min(n, terrain.flat() ? 8 : kMaxTerrainCellsPerSide);
   for (int i = 0; i <= n; ++i) {
     for (int j = 0; j <= n; ++j) {
       const double x = lo + (hi - lo) * j / n, y = lo + (hi - lo) * i / n;

@@ -75,7 +75,8 @@ PhysicsWorld::PhysicsWorld(const SceneSpec& spec, const std::vector<PlacedObstac
   const auto& L = spec.landscape;
   const Terrain terrain(spec.terrain);
   const double lo = -L.border, hi = L.size + L.border;
-  const int n = std::max<int>(2, std::ceil(L.subdivisions * (hi - lo) / L.size) + 1);
+  int n = std::max<int>(2, std::ceil(L.subdivisions * (hi - lo) / L.size) + 1);
+  if (!terrain.flat()) n = std::min(n, kMaxTerrainCellsPerSide + 1);  // the rendered mesh's vertices
   const double cell = (hi - lo) / (n - 1);
   impl_->heights.resize(size_t(n) * n);
   for (int i = 0; i < n; ++i)

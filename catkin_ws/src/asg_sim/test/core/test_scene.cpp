@@ -250,3 +250,12 @@ TEST(Terrain, HeightsAsInTheSharedTable) {
   }
   EXPECT_GT(n, 250);
 }
+
+TEST(Terrain, AShapedGroundStaysWithinTheSceneBudget) {
+  // The format allows 2048 ground cells per side; a shaped ground is meshed with at most 512
+  // (the heightfield likewise), a flat one with 8.
+  const Terrain t(TerrainSpec{0.8, 30.0, 7, {}});
+  EXPECT_EQ(makeGroundMesh(100.0, 50.0, 1024, t).vertices.size(), size_t(513 * 513));
+  EXPECT_EQ(makeGroundMesh(100.0, 50.0, 64, t).vertices.size(), size_t(129 * 129));
+  EXPECT_EQ(makeGroundMesh(100.0, 50.0, 1024).vertices.size(), size_t(9 * 9));
+}
