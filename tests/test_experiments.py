@@ -227,6 +227,9 @@ def test_terrain_tables_bin_findings_by_terrain_attribute(tmp_path):
         r["terrain"] = {"amplitude_m": 0.3 * k, "wavelength_m": 30.0, "seed": 1, "hills": hills}
         r["reference"] = {"proxy": 1.0, "termination": "SUCCESS"}
     rows[0].update(termination="COLLISION")  # amplitude 0, a hill on the route (rim 8 m inside it)
+    rows[0]["collision_with"] = rows[0]["meshes"].index("juniper")
+    rows[5].update(termination="COLLISION", collision_with=rows[5]["meshes"].index("barberry"))
+    rows[5]["reference"]["termination"] = "COLLISION"  # both collided: not the perception's
     with gzip.open(tmp_path / "t.jsonl.gz", "wt") as f:
         f.write(json.dumps({"campaign": dict(camp, name="synthetic-terrain")}) + "\n")
         for r in rows:
@@ -237,6 +240,10 @@ def test_terrain_tables_bin_findings_by_terrain_attribute(tmp_path):
     s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["terrain"]
     assert [b["scenarios"] for b in s["terrain.amplitude_m"]] == [3, 3]
     assert [b["collisions"] for b in s["terrain.amplitude_m"]] == [1, 0]
+    assert s["obstacle_hit"] == {
+        "juniper": {"collisions": 1, "perception_collisions": 1},
+        "barberry": {"collisions": 1, "perception_collisions": 0},
+    }
     # hills at 0, 14.1, 28.3, 42.4 m from the line, minus the 8 m radius; two rows without a hill
     d = s["terrain.hill_from_route_m"]
     assert abs(d[0]["from"] + 8.0) < 1e-6 and [b["scenarios"] for b in d] == [2, 4] and d[0]["collisions"] == 1

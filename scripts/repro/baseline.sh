@@ -10,7 +10,8 @@
 # baseline before it) are in results/baseline/<exp>/, another backend's in
 # results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
 # with python3 -m asg_agent.cli.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks
-# (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite").
+# (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite"; the pair trained
+# with terrain and weather, issue #27: "flawed_tw full_tw").
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -26,7 +27,8 @@ ROOT=()
 [ "$BACKEND" = channels_last ] || ROOT=(--root "$REPO/results/baseline/backend_$BACKEND")
 GT_ROOT=(--ground-truth-root "$REPO/results/baseline")
 trap 'stop_workers; stop_master' EXIT
-for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET" flawed_lite:"$N_UNET" full_lite:"$N_UNET"; do
+for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET" flawed_lite:"$N_UNET" full_lite:"$N_UNET" \
+    flawed_tw:"$N_UNET" full_tw:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
   [[ " ${ASG_BASELINE_STACKS:-ground_truth flawed full} " == *" $stack "* ]] || continue

@@ -245,6 +245,7 @@ def test_export_summary_and_report_agree_with_the_store(tmp_path):
     assert export(c.store, "rep", str(tmp_path / "again.jsonl.gz")) == 30
     assert open(out, "rb").read() == open(tmp_path / "again.jsonl.gz", "rb").read()  # byte-identical re-export
     head, rows = read_export(out)
+    assert all(r["collision_with"] is None for r in rows if r["termination"] != "COLLISION")
     s = c.store.summary("rep")
     k = counts(rows)
     assert head["name"] == "rep"
@@ -254,6 +255,19 @@ def test_export_summary_and_report_agree_with_the_store(tmp_path):
     assert f"<td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>" in page
     assert page.count("rosrun asg_agent replay") == 3
     assert os.path.isfile(tmp_path / "report" / "curves.png")
+
+
+def test_the_export_names_the_obstacle_a_run_hit_by_its_index_in_positions():
+    from asg_agent.analysis.export import collision_index
+
+    req = {"structural": {"layouts": [{"instances": [{}, {}, {}]}, {"instances": [{}, {}]}]}}
+    assert collision_index(req, "") is None
+    assert collision_index(req, "0:2") == 2
+    assert collision_index(req, "1:0") == 3 and collision_index(req, "1:1") == 4
+    with pytest.raises(ValueError, match="names no obstacle"):
+        collision_index(req, "1:2")
+    with pytest.raises(ValueError, match="not 'layout:instance'"):
+        collision_index(req, "juniper")
 
 
 def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input(tmp_path, capsys):
@@ -387,6 +401,13 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     export(store, "a", str(tmp_path / "a2.jsonl.gz"))
     k2 = counts(read_export(str(tmp_path / "a2.jsonl.gz"))[1])
     assert (k2["perception_collisions"], k2["stack_collisions"]) == (5, 2)
+    # PLR < 0.999 is warned about only where the run reached the goal: a run that ended early is
+    # extended by a straight line to the goal, which may pass through what it hit.
+    base = s2["plr_below_0999"]
+    store.db.execute("UPDATE scenarios SET plr = 0.99 WHERE campaign = 'a' AND job IN (0, 20)")
+    store.db.commit()
+    assert next(x for x in store.rows("a") if x["job"] == 20)["termination"] == "SUCCESS"
+    assert store.summary("a")["plr_below_0999"] == base + 1  # job 20, not the collision of job 0
     # A resumed campaign takes its counts from the store.
     again = Campaign(
         "a",

@@ -346,6 +346,19 @@ def attribute_value(row: dict, attr: str, route=(20.0, 20.0, 80.0, 80.0)) -> flo
     return float(row["textural"][attr])
 
 
+def obstacles_hit(rows) -> Dict[str, dict]:
+    """Collisions of the stack under test by the mesh of the obstacle hit (the export's
+    `collision_with`, an index into `meshes`); {} for exports made before it was exported."""
+    out: Dict[str, dict] = {}
+    for r in rows:
+        if r["termination"] != "COLLISION" or r.get("collision_with") is None:
+            continue
+        c = out.setdefault(r["meshes"][r["collision_with"]], {"collisions": 0, "perception_collisions": 0})
+        c["collisions"] += 1
+        c["perception_collisions"] += int(_perception_collision(r))
+    return dict(sorted(out.items(), key=lambda kv: -kv[1]["collisions"]))
+
+
 def weather_tables(load, section: dict, out: str, what: str = "weather", figure: str = "weather.png"):
     """Issue #27: attributed campaigns whose experiment frees textural (or terrain) attributes,
     their scenarios binned by each attribute (equal-width bins over the values searched; textural
@@ -411,6 +424,17 @@ def weather_tables(load, section: dict, out: str, what: str = "weather", figure:
         ax.set_ylabel("proxy under test - reference")
         ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=7)
+    hit = obstacles_hit(rows)
+    if hit:
+        summary["obstacle_hit"] = hit
+        md += [
+            "Collisions of the stack under test by the obstacle it hit (exports from issue #27 on name it):",
+            "",
+            "| obstacle hit | collisions | perception collisions (the reference drove through) |",
+            "|---|---|---|",
+            *(f"| {m} | {c['collisions']} | {c['perception_collisions']} |" for m, c in hit.items()),
+            "",
+        ]
     fig.suptitle(
         f"{what.capitalize()}: what the U-Net stack does worse than the ground-truth stack, by attribute", fontsize=9
     )

@@ -22,7 +22,7 @@ import json
 import os
 import sys
 import tempfile
-from typing import List
+from typing import List, Optional
 
 import numpy as np
 
@@ -42,6 +42,21 @@ def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
 def saturated_fraction(actions: np.ndarray, window: int = 100, edge: float = 0.99) -> List[float]:
     sat = (np.abs(actions) >= edge).mean(axis=1)
     return [float(sat[k : k + window].mean()) for k in range(0, len(sat), window)]
+
+
+def collision_index(request: dict, collision_with: str) -> Optional[int]:
+    """The store's "layout:instance" of the obstacle a run collided with, as an index into the
+    export's flat `positions` / `meshes` lists; None when the run hit nothing (or an old row)."""
+    if not collision_with:
+        return None
+    try:
+        layout, instance = (int(v) for v in collision_with.split(":"))
+    except ValueError:
+        raise ValueError(f"collision_with {collision_with!r} is not 'layout:instance'") from None
+    layouts = request["structural"]["layouts"]
+    if not (0 <= layout < len(layouts) and 0 <= instance < len(layouts[layout]["instances"])):
+        raise ValueError(f"collision_with {collision_with!r} names no obstacle of the request")
+    return sum(len(l["instances"]) for l in layouts[:layout]) + instance
 
 
 def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
@@ -91,6 +106,8 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
                             for i in l["instances"]
                         ],
                         "meshes": [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]],
+                        # the obstacle the run collided with: an index into positions and meshes
+                        "collision_with": collision_index(req, r["collision_with"]),
                         "textural": req["textural"],
                         # issue #27: the ground's shape (absent: the flat ground)
                         **({"terrain": req["structural"]["terrain"]} if req["structural"].get("terrain") else {}),

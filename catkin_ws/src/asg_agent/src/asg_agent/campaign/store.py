@@ -229,7 +229,12 @@ class Store:
             f"WHERE campaign = ? AND reference IS NOT NULL",
             (campaign,),
         ).fetchone()
-        low_plr = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND plr < 0.999", (campaign,)).fetchone()[0]
+        # A run that reached the goal shorter than the optimal path means the optimal path is
+        # wrong. A run that ended early may (its rest is a straight line, through what it hit).
+        low_plr = q(
+            "SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND plr < 0.999 AND termination = 'SUCCESS'",
+            (campaign,),
+        ).fetchone()[0]
         return {
             "scenarios": n,
             "proxy_ge_3": c3,

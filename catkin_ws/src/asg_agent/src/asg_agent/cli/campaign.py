@@ -145,7 +145,10 @@ def print_summary(store, name, out=sys.stdout):
             file=out,
         )
     if s["plr_below_0999"]:
-        print(f"warning: {s['plr_below_0999']} runs with PLR < 0.999 (the optimal path overestimated)", file=out)
+        print(
+            f"warning: {s['plr_below_0999']} runs reached the goal with PLR < 0.999 (the optimal path overestimated)",
+            file=out,
+        )
     print("top 10 (store row id, job, episode.step, proxy = 0.1 vis + yaw term + PLR^2):", file=out)
     for r in s["top"]:
         print(
