@@ -5,12 +5,15 @@
 # (planner_fine.yaml, where the flawed stack is re-run too). Two workers per stack; results under
 # results/flaw_or_layout/, the table in docs/experiments.md (python3 -m asg_agent.analysis.experiments).
 #   bash scripts/repro/flaw_or_layout.sh [EXPORT=results/campaigns/exp1-td3-per-asp-s0.jsonl.gz] [TOP=50]
+# ASG_RERUN_OUT=results/NAME: another results folder (its table: results/NAME.json), e.g. round 3's
+#   ASG_RERUN_OUT=results/flaw_or_layout_round3 bash scripts/repro/flaw_or_layout.sh \
+#       results/comparison/exp1b-td3-per-asp-s0.jsonl.gz
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXPORT="${1:-$REPO/results/campaigns/exp1-td3-per-asp-s0.jsonl.gz}"
 TOP="${2:-50}"
 install_packages
 build_workspace ON
-OUT="$REPO/results/flaw_or_layout"
+OUT="$REPO/${ASG_RERUN_OUT:-results/flaw_or_layout}"
 mkdir -p "$OUT"
 use_local_master "${ASG_RERUN_PORT:-11396}" "$REPO/runs/flaw_or_layout/logs"
 trap 'stop_workers; stop_master' EXIT
@@ -29,4 +32,4 @@ for spec in paper:full paper:ground_truth fine:flawed fine:full fine:ground_trut
   stop_workers
   stop_master
 done
-/usr/bin/python3 -m asg_agent.ros.rerun summary "$OUT"/*.jsonl --json "$REPO/results/flaw_or_layout.json"
+/usr/bin/python3 -m asg_agent.ros.rerun summary "$OUT"/*.jsonl --json "$OUT.json"
