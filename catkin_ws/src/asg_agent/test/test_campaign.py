@@ -257,6 +257,54 @@ def test_export_summary_and_report_agree_with_the_store(tmp_path):
     assert os.path.isfile(tmp_path / "report" / "curves.png")
 
 
+def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_path):
+    """--reward collision (issue #27): the search learns from the proxy plus the bonus where the
+    stack under test collided and the reference stack did not; the stored proxy stays the paper's."""
+    from asg_agent.campaign.loop import collision_reward
+
+    assert collision_reward(1.2, "COLLISION", None, 2.0) == 3.2  # no reference: every collision
+    assert collision_reward(1.2, "COLLISION", "SUCCESS", 2.0) == 3.2
+    assert collision_reward(1.2, "COLLISION", "COLLISION", 2.0) == 1.2  # the stack's, not the perception's
+    assert collision_reward(1.2, "SUCCESS", None, 2.0) == 1.2
+    exp = load_experiment(EXP)
+    store = Store(str(tmp_path / "r.sqlite"))
+    c = Campaign(
+        "r",
+        exp,
+        make_method("random", exp, 3, budget=24),
+        store,
+        FakePool(2, seed=1, collide_jobs={2, 5, 9}),
+        24,
+        3,
+        str(tmp_path / "r.ckpt"),
+        slots=4,
+        reference=FakePool(2, seed=11, prefix="fake_ref", collide_jobs={9}),
+        reward="collision",
+        collision_bonus=1.5,
+    )
+    c.start()
+    c.run(poll_timeout=0.0)
+    rows = {r["job"]: r for r in store.rows("r")}
+    assert len(rows) == 24
+    for job, r in rows.items():
+        bonus = 1.5 if job in (2, 5) else 0.0  # job 9: the reference collided too
+        assert r["termination"] == ("COLLISION" if job in (2, 5, 9) else "SUCCESS")
+        assert abs(r["reward"] - (r["proxy"] + bonus)) < 1e-12, job
+    from asg_agent.cli.campaign import parse
+
+    assert parse([EXP, "--fake-workers", "2", "--reward", "collision"]).collision_bonus == 2.0
+    with pytest.raises(SystemExit):
+        parse([EXP, "--fake-workers", "2", "--reward", "collision", "--collision-bonus", "nan"])
+    for bad, match in (
+        ({"reward": "collisions"}, "must be one of"),
+        ({"reward": "collision", "collision_bonus": -1.0}, ">= 0"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            Campaign(
+                "x", exp, make_method("random", exp, 3, budget=4), store, FakePool(1), 4, 3, str(tmp_path / "x"), **bad
+            )
+
+
 def test_the_export_names_the_obstacle_a_run_hit_by_its_index_in_positions():
     from asg_agent.analysis.export import collision_index
 

@@ -62,7 +62,8 @@ def collision_index(request: dict, collision_with: str) -> Optional[int]:
 def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
     """A compact export of a campaign (gzip JSON lines, a few hundred bytes a scenario): the
     campaign row first, then per scenario its job, episode, step, obstacle positions, every proxy
-    term, termination and the trajectory at `hz` (x, y to 1 cm). Enough to recompute every count
+    term, termination, the obstacle hit (`collision_with`, an index into `positions`) and the
+    trajectory at `hz` (x, y to 1 cm). Enough to recompute every count
     and draw every figure without the store; the store keeps the full requests and 60 Hz
     trajectories for exact replays."""
     import gzip

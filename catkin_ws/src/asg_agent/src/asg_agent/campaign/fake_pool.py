@@ -50,12 +50,15 @@ def fake_run(request: dict, gain: float = 0.8) -> Outcome:
 
 
 class FakePool(Pool):
-    def __init__(self, workers: int = 2, seed: int = 0, fail_jobs=(), gain: float = 0.8, prefix: str = "fake"):
+    def __init__(
+        self, workers: int = 2, seed: int = 0, fail_jobs=(), gain: float = 0.8, prefix: str = "fake", collide_jobs=()
+    ):
         self.names = [f"/{prefix}_{i}" for i in range(workers)]
         self.gain = gain  # the stand-in stack's wiggle near obstacles (a "worse" stack: larger)
         self.busy: Dict[str, tuple] = {}
         self.rng = np.random.default_rng(seed)
         self.fail_jobs = set(fail_jobs)  # these jobs answer ERROR on their first attempt
+        self.collide_jobs = set(collide_jobs)  # these jobs end halfway as a COLLISION with obstacle 0:0
         self.failed_once = set()
         self.submitted: List[int] = []
 
@@ -80,5 +83,8 @@ class FakePool(Pool):
                 continue
             o = fake_run(request, self.gain)
             o.job, o.worker = job, w
+            if job in self.collide_jobs:
+                o.trajectory = o.trajectory[: max(2, len(o.trajectory) // 2)]
+                o.termination, o.collision_with, o.sim_time = "COLLISION", "0:0", float(o.trajectory[-1, 0])
             out.append(o)
         return out

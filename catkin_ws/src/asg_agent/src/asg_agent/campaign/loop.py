@@ -31,6 +31,18 @@ from asg_agent.campaign.store import Store, attribute, pack_trajectory, unpack_t
 from asg_agent.search.td3 import load_checked, save_atomic
 
 
+#: what a search can maximise (Campaign's `reward`, the campaign's --reward)
+REWARDS = ("proxy", "differential", "collision")
+
+
+def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
+    """The "collision" reward: the proxy, plus `bonus` [-] when the stack under test collided and
+    the reference stack (where there is one) did not: a perception collision, which the proxy
+    alone scores like any run that ended early."""
+    collided = termination == "COLLISION" and reference_termination != "COLLISION"
+    return proxy + (bonus if collided else 0.0)
+
+
 class Stages:
     """Wall seconds and calls per stage of the campaign loop (docs/benchmarks.md: `bench`)."""
 
@@ -115,6 +127,7 @@ class Campaign:
         early_dispatch: bool = True,
         reference: Optional[Pool] = None,
         reward: str = "proxy",
+        collision_bonus: float = 2.0,
         scalars: Optional[Callable[[int, dict, dict], None]] = None,
     ):
         if total < 1 or slots < 1:
@@ -130,12 +143,17 @@ class Campaign:
         # Attribution: every scenario also runs on the reference stack's workers (ground-truth
         # labels, the same planner and follower), and each finding is counted as the perception's
         # (reference < 2) or the stack's (reference >= 3). reward "proxy": the search learns from
-        # the stack under test's proxy (the paper); "differential": from proxy - reference proxy.
-        if reward not in ("proxy", "differential"):
-            raise ValueError(f"reward {reward!r}: must be proxy or differential")
+        # the stack under test's proxy (the paper); "differential": from proxy - reference proxy;
+        # "collision": the proxy plus `collision_bonus` [-] when the stack under test collided
+        # (with a reference stack: only where the reference did not), since the proxy itself
+        # scores a collision like any short run (issue #27).
+        if reward not in REWARDS:
+            raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
         if reward == "differential" and reference is None:
             raise ValueError("the differential reward needs a reference stack")
-        self.reference, self.reward = reference, reward
+        if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
+            raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
+        self.reference, self.reward, self.collision_bonus = reference, reward, float(collision_bonus)
         self.ref_queue: List[int] = []
         self.ref_running: Dict[int, str] = {}
         self.parts: Dict[int, Dict[str, Outcome]] = {}  # job -> {"test": .., "ref": ..} until both are in
@@ -359,6 +377,10 @@ class Campaign:
             diff = terms.proxy - rterms.proxy if terms and rterms else None
             if self.reward == "differential":
                 reward = diff
+        if self.reward == "collision" and terms:
+            reward = collision_reward(
+                terms.proxy, o.termination, ref.termination if ref else None, self.collision_bonus
+            )
         row = {
             "campaign": self.name,
             "job": o.job,
@@ -416,7 +438,8 @@ class Campaign:
             self.next_apply += 1
             slot = self.slot_state[job.slot]
             done = job.step >= self.exp.episode_steps - 1
-            reward = row["reward"] if self.reference is not None else row["proxy"]
+            # (rows of campaigns older than the reward column learnt from the proxy)
+            reward = row["reward"] if self.reference is not None or self.reward != "proxy" else row["proxy"]
             learnt = None
             if reward is None:  # ERROR after every attempt: no transition, the episode ends here
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)

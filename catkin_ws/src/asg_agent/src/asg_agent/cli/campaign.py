@@ -17,7 +17,7 @@ import os
 import sys
 import time
 
-from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.loop import REWARDS, Campaign
 from asg_agent.campaign.experiment import ExperimentError, load_experiment
 from asg_agent.search.methods import METHODS, make_method
 from asg_agent.campaign.store import Store, StoreError, checkpoint_path
@@ -81,9 +81,17 @@ def parse(argv):
     p.add_argument(
         "--reward",
         default="proxy",
-        choices=("proxy", "differential"),
-        help="what the search maximises: the stack under test's proxy (the paper), or "
-        "proxy - reference proxy (needs --reference-workers)",
+        choices=REWARDS,
+        help="what the search maximises: the stack under test's proxy (the paper), "
+        "proxy - reference proxy (differential; needs --reference-workers), or the proxy plus "
+        "--collision-bonus when the stack under test collided and the reference did not (collision)",
+    )
+    p.add_argument(
+        "--collision-bonus",
+        type=float,
+        default=2.0,
+        help="[-] --reward collision: added to the proxy of a collision (default 2: a collision "
+        "on a route of PLR 1 scores about 3, a finding)",
     )
     p.add_argument(
         "--stage-report",
@@ -111,6 +119,8 @@ def parse(argv):
         p.error("--scenarios must be >= 1")
     if a.reward == "differential" and not a.reference_workers:
         p.error("--reward differential needs --reference-workers (the reference stack to subtract)")
+    if not (math.isfinite(a.collision_bonus) and a.collision_bonus >= 0.0):
+        p.error(f"--collision-bonus {a.collision_bonus}: must be a finite number >= 0")
     return a
 
 
@@ -291,6 +301,7 @@ def main(argv=None):
         "workers": workers,
         "reference_workers": ref_workers,
         "reward": a.reward,
+        **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
         "experiment_file": exp.source,
         "perception": exp.perception,
         "model": exp.model,
@@ -338,6 +349,7 @@ def main(argv=None):
         early_dispatch=not a.no_early_dispatch,
         reference=reference,
         reward=a.reward,
+        collision_bonus=a.collision_bonus,
     )
     tb = None
     try:
