@@ -3,6 +3,7 @@
 /// Pixel to world: each pixel labelled non-traversable, with its planar depth and the camera
 /// pose, becomes a map point; points lower than max_height vote for their nearest grid vertex.
 
+#include <cmath>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <unordered_map>
@@ -38,6 +39,11 @@ class GroundMap {
   void add(double x, double y, double z);
   /// [m] lowest return in the 3 x 3 cells around (x, y); +inf where none was seen.
   double lowNear(double x, double y) const;
+  /// [m] lowNear(x, y) where the stack has seen ground near (x, y), else `fallback` (drawing).
+  double heightOr(double x, double y, double fallback) const {
+    const double z = lowNear(x, y);
+    return std::isfinite(z) ? z : fallback;
+  }
   size_t cells() const { return low_.size(); }
 
  private:

@@ -318,7 +318,7 @@ void PlannerROS::process() {
     if (replanned)
       for (const auto& p : planner_->path().points) st.path.push_back(point(p.x(), p.y()));
     const auto& la = planner_->follower().lookaheadPoint();
-    st.lookahead = point(la.x(), la.y());
+    st.lookahead = point(la.x(), la.y(), planner_->ground().heightOr(la.x(), la.y(), 0.0));
     st.heading_error = planner_->follower().headingError();
     st.throttle = c.throttle;
     st.steering = c.steering;
@@ -339,13 +339,15 @@ void PlannerROS::process() {
 }
 
 void PlannerROS::publishViz(const ros::Time& stamp) {
+  // Drawn on the ground the stack senses (projection/height_above_ground; else at map z 0).
+  const GroundMap& ground = planner_->ground();
   nav_msgs::Path path;
   path.header.stamp = stamp;
   path.header.frame_id = "map";
   for (const auto& p : planner_->path().points) {
     geometry_msgs::PoseStamped ps;
     ps.header = path.header;
-    ps.pose.position = point(p.x(), p.y(), 0.1);
+    ps.pose.position = point(p.x(), p.y(), ground.heightOr(p.x(), p.y(), 0.0) + 0.1);
     ps.pose.orientation.w = 1.0;
     path.poses.push_back(ps);
   }
@@ -362,7 +364,7 @@ void PlannerROS::publishViz(const ros::Time& stamp) {
   m.scale.x = m.scale.y = 0.6 * s;
   m.scale.z = 0.1;
   for (const auto& [v, n] : planner_->votes().voted()) {
-    m.points.push_back(point(v.i * s, v.j * s, 0.05));
+    m.points.push_back(point(v.i * s, v.j * s, ground.heightOr(v.i * s, v.j * s, 0.0) + 0.05));
     std_msgs::ColorRGBA c;
     const float k = float(n) / float(params_.max_votes);  // intensity by votes
     c.r = 1.0f;

@@ -123,6 +123,9 @@ TEST(Projection, OnAHillTheHeightRuleIsAboveTheGroundTheStackSees) {
   EXPECT_EQ(castVotes(f.depth.data(), f.labels.data(), 64, 64, K64(), T, p, &ground_rule, &ground), 3u * 16u);
   EXPECT_NEAR(ground.lowNear(20.0, 0.0), 4.0, 0.01);
   EXPECT_TRUE(std::isinf(ground.lowNear(80.0, 0.0)));  // nothing seen there
+  // rviz draws votes and plans on that ground, and at the fallback where none was seen
+  EXPECT_NEAR(ground.heightOr(20.0, 0.0, 0.0), 4.0, 0.01);
+  EXPECT_EQ(ground.heightOr(80.0, 0.0, -1.5), -1.5);
   // On flat ground (camera at 1.4) both rules agree: the wall's points below 2 m vote.
   T.translation().z() = 1.4;  // the same depths now meet the ground at map z 0
   VoteGrid a(1.0, 50), b(1.0, 50);
