@@ -34,6 +34,21 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
                 st = s.summary(camp["name"], top=0)
                 assert (st["proxy_ge_3"], st["proxy_ge_4"]) == (c["proxy_ge_3"], c["proxy_ge_4"])
                 assert abs(st["max_proxy"] - c["max_proxy"]) < 1e-9
+    # Round 3's Table 2: each row's counts and its split by the reference's proxy are the export's.
+    assert summary["table2_attributed"], "the manifest names no round-3 Table 2 campaign"
+    for exp, row in summary["table2_attributed"].items():
+        camp, rows = read_export(os.path.join(REPO, "results", row["export"]))
+        c = counts(rows)
+        assert (row["scenarios"], row["ge3_split"][0], row["ge4_split"][0]) == (
+            c["scenarios"],
+            c["proxy_ge_3"],
+            c["proxy_ge_4"],
+        )
+        assert row["ge3_split"][1] == c["perception_ge3"] and row["ge3_split"][2] == c["stack_ge3"], exp
+        assert row["ge4_split"][1] + row["ge4_split"][2] <= row["ge4_split"][0] <= row["ge3_split"][0]
+        assert row["perception_collisions"] == c["perception_collisions"]
+        for r in row["ranks"]:
+            assert os.path.getsize(tmp_path / r["figure"]) > 10000
     for arm, info in summary["comparison"].items():
         for run in info["runs"]:
             assert run["ge3"] <= run["scenarios"]

@@ -8,6 +8,8 @@ The manifest names which export serves which table (paths relative to the manife
     attributed: {budget: 1000, threshold_m: 5.0, arms: {td3-per-asp: [A, B], random: [...], ...}}
                                                          # round 3: searches on the fixed stack, every
                                                          # scenario attributed (scored by ATTRIBUTED_SCORES)
+    table2_attributed: {exp1: comparison/A.jsonl.gz, ...}  # round 3's Table 2: an attributed
+                                                         # TD3-PER-ASP campaign per experiment
     weather: {exports: [W.jsonl.gz], attributes: [fog_visibility_m, cloud_cover], bins: 4}
                                                          # issue #27: findings by textural attribute
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
@@ -545,6 +547,58 @@ def rank_figures(campaign: dict, rows, out_prefix: str, ranks: int = 2) -> List[
     return out
 
 
+def table2_attributed(load, section: dict, out: str):
+    """Round 3's Table 2 (issue #25): per experiment one attributed TD3-PER-ASP campaign, its
+    counts of proxy >= 3 and >= 4 (each split into the perception's, reference < 2, and the
+    stack's, reference >= 3), the largest, per 1,000, perception collisions, beside the paper's
+    row; and each campaign's rank-1 and rank-2 perception-attributable scenarios (rank_figures)."""
+    summary, md = {}, []
+    if not section:
+        return summary, md
+    md += [
+        "",
+        "### Table 2 on the fixed stack (round 3: TD3-PER-ASP, flawed U-Net, every scenario attributed)",
+        "",
+        "| experiment | scenarios | proxy >= 3: all / perception's / stack's | >= 4: all / perception's / stack's "
+        "| largest | per 1,000: >= 3 / >= 4 | perception collisions | paper (of 5,000): >= 3 / >= 4 / largest "
+        "| paper per 1,000 | wall time |",
+        "|" + "---|" * 10,
+    ]
+    for exp, rel in section.items():
+        camp, rows = load(rel)
+        c = counts(rows)
+        n = c["scenarios"]
+        split = {}
+        for level in (3.0, 4.0):
+            sel = [r for r in rows if r["proxy"] is not None and r["proxy"] >= level]
+            refp = [_ref(r).get("proxy") for r in sel]
+            split[level] = (
+                len(sel),
+                sum(q is not None and q < REFERENCE_CLEAR for q in refp),
+                sum(q is not None and q >= FINDING for q in refp),
+            )
+        hours = active_hours(rows)
+        p = PAPER.get(exp)
+        ranks = rank_figures(camp, rows, os.path.join(out, f"table2_{exp}_rank"))
+        summary[exp] = dict(
+            c, export=rel, hours=hours, ge3_split=list(split[3.0]), ge4_split=list(split[4.0]), ranks=ranks
+        )
+        md.append(
+            f"| {exp} | {n} | {' / '.join(map(str, split[3.0]))} | {' / '.join(map(str, split[4.0]))} | "
+            f"{fmt(c['max_proxy'])} | {1000 * split[3.0][0] / n:.0f} / {1000 * split[4.0][0] / n:.0f} | "
+            f"{c.get('perception_collisions', '-')} | "
+            + (
+                f"{p[0]} / {p[1]} / {p[2]:.2f} | {1000 * p[0] / PAPER_SCENARIOS:.0f} / "
+                f"{1000 * p[1] / PAPER_SCENARIOS:.0f}"
+                if p
+                else "- | -"
+            )
+            + f" | {fmt(hours * 60 if hours else None, '.0f')} min |"
+        )
+    md.append("")
+    return summary, md
+
+
 def top_figure(campaign: dict, rows, out: str) -> dict:
     from asg_scenario.report import plot_run
     from asg_agent.scoring.proxy import optimal_path, placed_mask
@@ -811,6 +865,9 @@ def run(manifest_path: str, out: str) -> dict:
     if (man.get("attributed") or {}).get("arms"):
         summary["attributed"], lines = attributed_comparison(load, man["attributed"], out)
         md += lines[1:]
+    if man.get("table2_attributed"):
+        summary["table2_attributed"], lines = table2_attributed(load, man["table2_attributed"], out)
+        md += lines
     if (man.get("weather") or {}).get("exports"):
         summary["weather"], lines = weather_tables(load, man["weather"], out)
         md += lines[1:]
