@@ -49,6 +49,23 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
         assert row["perception_collisions"] == c["perception_collisions"]
         for r in row["ranks"]:
             assert os.path.getsize(tmp_path / r["figure"]) > 10000
+    # Issue #27's paired baselines by condition: every count is the baseline files' own.
+    import json
+    import yaml
+
+    with open(MANIFEST) as f:
+        cond = yaml.safe_load(f)["conditions"]
+    for label, spec in cond["rows"].items():
+        got = summary["conditions"][label]
+        with open(os.path.join(REPO, "results", spec["stack"])) as f:
+            test = [r for r in map(json.loads, f) if r["layout"] < cond["layouts"]]
+        with open(os.path.join(REPO, "results", spec["ground_truth"])) as f:
+            gt = {r["layout"]: r for r in map(json.loads, f) if r["layout"] < cond["layouts"]}
+        hit = [r for r in test if r["termination"] == "COLLISION"]
+        assert got["layouts"] == len(test) == len(gt) and got["collisions"] == len(hit), label
+        assert got["perception_collisions"] == sum(gt[r["layout"]]["termination"] == "SUCCESS" for r in hit)
+        assert sum(got["by_obstacle"].values()) == got["perception_collisions"]
+    assert os.path.getsize(tmp_path / cond["figure"]) > 10000
     for arm, info in summary["comparison"].items():
         for run in info["runs"]:
             assert run["ge3"] <= run["scenarios"]

@@ -12,6 +12,8 @@ The manifest names which export serves which table (paths relative to the manife
                                                          # TD3-PER-ASP campaign per experiment
     weather: {exports: [W.jsonl.gz], attributes: [fog_visibility_m, cloud_cover], bins: 4}
                                                          # issue #27: findings by textural attribute
+    conditions: {stack: S, layouts: 300, rows: {LABEL: {experiment: E.yaml, stack: S.jsonl,
+                 ground_truth: G.jsonl}}}                # issue #27: paired baselines by condition
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
     diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0, all_thresholds_m: [2, 5, 10]}
@@ -446,6 +448,83 @@ def weather_tables(load, section: dict, out: str, what: str = "weather", figure:
     return summary, md
 
 
+def condition_table(base: str, section: dict, out: str):
+    """Issue #27: one stack's random-layout baselines (docs/baseline.md) under several conditions
+    whose layouts share their obstacle positions (paired: the experiments differ only in what
+    else they free), each run beside the ground-truth stack: collisions, the perception's (the
+    ground-truth stack reached the goal on the same layout), and those by the obstacle hit; a
+    bar figure of the perception collisions by obstacle. Rows: {label: {experiment, stack,
+    ground_truth}} with paths relative to the manifest; `layouts` caps every row."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from asg_agent.campaign.experiment import load_experiment
+
+    def rows_of(rel):
+        with open(os.path.join(base, rel)) as f:
+            return {r["layout"]: r for r in map(json.loads, f) if r["layout"] < n}
+
+    n = int(section.get("layouts", 300))
+    summary, md, meshes_seen = {}, [], []
+    for label, spec in section["rows"].items():
+        exp = load_experiment(os.path.join(base, spec["experiment"]))
+        names = [l["mesh_name"] for l in exp.scenario["structural"]["layouts"]]
+        test, gt = rows_of(spec["stack"]), rows_of(spec["ground_truth"])
+        if set(test) != set(gt):
+            raise ValueError(f"{label}: the stack's and the ground truth's layouts differ ({len(test)} / {len(gt)})")
+        coll = [r for r in test.values() if r["termination"] == "COLLISION"]
+        perc = [r for r in coll if gt[r["layout"]]["termination"] == "SUCCESS"]
+        by_mesh: Dict[str, int] = {}
+        for r in perc:
+            m = names[int(r["collision_with"].split(":")[0])] if r.get("collision_with") else "unknown"
+            by_mesh[m] = by_mesh.get(m, 0) + 1
+            meshes_seen += [m] if m not in meshes_seen else []
+        summary[label] = {
+            "experiment": spec["experiment"],
+            "layouts": len(test),
+            "collisions": len(coll),
+            "perception_collisions": len(perc),
+            "by_obstacle": by_mesh,
+            "ground_truth_collisions": sum(r["termination"] == "COLLISION" for r in gt.values()),
+        }
+    stack = section.get("stack", "the stack under test")
+    md += [
+        "",
+        f"### `{stack}` on the same random obstacle layouts, by condition (issue #27: paired baselines, "
+        f"{n} layouts each)",
+        "",
+        "| condition | experiment | collisions | perception collisions (ground truth drove through) | "
+        + " | ".join(f"of them {m}" for m in meshes_seen)
+        + " | ground-truth collisions |",
+        "|---|---|---|---|" + "---|" * len(meshes_seen) + "---|",
+    ]
+    for label, c in summary.items():
+        md.append(
+            f"| {label} | {os.path.basename(c['experiment'])} | {c['collisions']} "
+            f"({100 * c['collisions'] / max(1, c['layouts']):.1f} %) | {c['perception_collisions']} | "
+            + " | ".join(str(c["by_obstacle"].get(m, 0)) for m in meshes_seen)
+            + f" | {c['ground_truth_collisions']} |"
+        )
+    md.append("")
+    fig, ax = plt.subplots(figsize=(7.0, 3.6))
+    x = np.arange(len(summary))
+    bottom = np.zeros(len(summary))
+    for m in meshes_seen:
+        v = np.array([100.0 * c["by_obstacle"].get(m, 0) / max(1, c["layouts"]) for c in summary.values()])
+        ax.bar(x, v, 0.6, bottom=bottom, label=m)
+        bottom += v
+    ax.set_xticks(x, list(summary), fontsize=8)
+    ax.set_ylabel("perception collisions [% of layouts]")
+    ax.set_title(f"{stack} on {n} paired random layouts: where the ground-truth stack drove through", fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, section.get("figure", "conditions.png")), dpi=100)
+    plt.close(fig)
+    return summary, md
+
+
 def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]:
     """Where the search placed obstacles, window by window in job order: proxy >= 3 count, the
     share of obstacle coordinates within 2 m of the landscape's edge (a saturated action), and the
@@ -874,6 +953,9 @@ def run(manifest_path: str, out: str) -> dict:
     if (man.get("terrain") or {}).get("exports"):
         summary["terrain"], lines = weather_tables(load, man["terrain"], out, "terrain and weather", "terrain.png")
         md += lines[1:]
+    if (man.get("conditions") or {}).get("rows"):
+        summary["conditions"], lines = condition_table(base, man["conditions"], out)
+        md += lines
     if man.get("attributed") or man.get("weather") or man.get("terrain"):
         md += ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
     # -- Table 2 ---------------------------------------------------------------------------------
