@@ -259,13 +259,15 @@ def test_export_summary_and_report_agree_with_the_store(tmp_path):
 
 def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_path):
     """--reward collision (issue #27): the search learns from the proxy plus the bonus where the
-    stack under test collided and the reference stack did not; the stored proxy stays the paper's."""
+    stack under test collided and the reference stack reached the goal (a perception collision, as
+    every count defines it); the stored proxy stays the paper's."""
     from asg_agent.campaign.loop import collision_reward
 
     assert collision_reward(1.2, "COLLISION", None, 2.0) == 3.2  # no reference: every collision
     assert collision_reward(1.2, "COLLISION", "SUCCESS", 2.0) == 3.2
     assert collision_reward(1.2, "COLLISION", "COLLISION", 2.0) == 1.2  # the stack's, not the perception's
     assert collision_reward(1.2, "SUCCESS", None, 2.0) == 1.2
+    assert collision_reward(1.2, "COLLISION", "STUCK_TIMEOUT", 2.0) == 1.2  # the reference did not get through
     exp = load_experiment(EXP)
     store = Store(str(tmp_path / "r.sqlite"))
     c = Campaign(

@@ -479,7 +479,8 @@ def condition_table(base: str, section: dict, out: str):
         for r in perc:
             m = names[int(r["collision_with"].split(":")[0])] if r.get("collision_with") else "unknown"
             by_mesh[m] = by_mesh.get(m, 0) + 1
-            meshes_seen += [m] if m not in meshes_seen else []
+            if m not in meshes_seen:
+                meshes_seen.append(m)
         summary[label] = {
             "experiment": spec["experiment"],
             "layouts": len(test),

@@ -37,9 +37,10 @@ REWARDS = ("proxy", "differential", "collision")
 
 def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
     """The "collision" reward: the proxy, plus `bonus` [-] when the stack under test collided and
-    the reference stack (where there is one) did not: a perception collision, which the proxy
-    alone scores like any run that ended early."""
-    collided = termination == "COLLISION" and reference_termination != "COLLISION"
+    the reference stack (where there is one) reached the goal on the same scene: a perception
+    collision as every count of the project defines it, which the proxy alone scores like any
+    run that ended early."""
+    collided = termination == "COLLISION" and reference_termination in (None, "SUCCESS")
     return proxy + (bonus if collided else 0.0)
 
 
@@ -145,7 +146,7 @@ class Campaign:
         # (reference < 2) or the stack's (reference >= 3). reward "proxy": the search learns from
         # the stack under test's proxy (the paper); "differential": from proxy - reference proxy;
         # "collision": the proxy plus `collision_bonus` [-] when the stack under test collided
-        # (with a reference stack: only where the reference did not), since the proxy itself
+        # (with a reference stack: only where the reference reached the goal), since the proxy itself
         # scores a collision like any short run (issue #27).
         if reward not in REWARDS:
             raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")

@@ -84,7 +84,7 @@ def parse(argv):
         choices=REWARDS,
         help="what the search maximises: the stack under test's proxy (the paper), "
         "proxy - reference proxy (differential; needs --reference-workers), or the proxy plus "
-        "--collision-bonus when the stack under test collided and the reference did not (collision)",
+        "--collision-bonus when the stack under test collided and the reference reached the goal (collision)",
     )
     p.add_argument(
         "--collision-bonus",
