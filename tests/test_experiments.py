@@ -280,3 +280,100 @@ def test_terrain_tables_bin_findings_by_terrain_attribute(tmp_path):
     d = s["terrain.hill_from_route_m"]
     assert abs(d[0]["from"] + 8.0) < 1e-6 and [b["scenarios"] for b in d] == [2, 4] and d[0]["collisions"] == 1
     assert os.path.getsize(tmp_path / "out" / "terrain.png") > 10000
+
+
+def _attributed_export(tmp_path, n=20):
+    """An attributed export made from a real Exp. 1 campaign's first n scenarios: every run and
+    its reference succeed with proxy 1.2 / 1.1 unless a test changes them."""
+    camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
+    rows = sorted(rows, key=lambda r: r["job"])[:n]
+    for r in rows:
+        r.update(proxy=1.2, termination="SUCCESS")
+        r["reference"] = {"proxy": 1.1, "termination": "SUCCESS"}
+    return camp, rows
+
+
+def _write_export(path, camp, rows):
+    import gzip
+    import json
+
+    with gzip.open(path, "wt") as f:
+        f.write(json.dumps({"campaign": camp}) + "\n")
+        for r in rows:
+            f.write(json.dumps(r) + "\n")
+
+
+def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_path):
+    """Round 3's flaw or layout (issue #25): `--select perception` takes the perception findings,
+    then the differential-only ones, then the perception collisions, and nothing the reference
+    stack failed too; a collision on both stacks or an export without reference runs is refused
+    or left out, and `summary` counts per class what fails the same way again."""
+    import json
+
+    from asg_agent.ros import rerun
+
+    camp, rows = _attributed_export(tmp_path)
+    rows[2].update(termination="COLLISION")  # perception collision (reference succeeded)
+    rows[4].update(proxy=2.4)  # differential only
+    rows[6].update(proxy=3.3)  # perception finding
+    rows[8].update(proxy=3.6)
+    rows[8]["reference"]["proxy"] = 3.4  # the stack's finding: not selected
+    rows[10].update(termination="COLLISION")
+    rows[10]["reference"]["termination"] = "COLLISION"  # both collided: not selected
+    _write_export(tmp_path / "a.jsonl.gz", camp, rows)
+    _, todo = rerun.top_requests(str(tmp_path / "a.jsonl.gz"), 50, "perception")
+    assert [(r["job"], rerun.campaign_class(r)) for r, _ in todo] == [
+        (rows[6]["job"], "finding"),
+        (rows[4]["job"], "differential"),
+        (rows[2]["job"], "collision"),
+    ]
+    assert [req["scenario_id"] for _, req in todo] == [7000, 7001, 7002]
+    assert len(rerun.top_requests(str(tmp_path / "a.jsonl.gz"), 2, "perception")[1]) == 2
+    assert len(rerun.top_requests(str(tmp_path / "a.jsonl.gz"), 5, "proxy")[1]) == 5
+    for r in rows:
+        r.pop("reference")
+    _write_export(tmp_path / "b.jsonl.gz", camp, rows)
+    try:
+        rerun.top_requests(str(tmp_path / "b.jsonl.gz"), 50, "perception")
+        raise AssertionError("an export without reference runs was accepted")
+    except ValueError as e:
+        assert "no reference runs" in str(e)
+    # The re-runs on another stack: the finding drops to 2.9, the differential one stays 1 over the
+    # campaign's reference, the collision happens again.
+    out = [
+        {
+            "label": "paper/full",
+            "campaign_proxy": 3.3,
+            "campaign_class": "finding",
+            "proxy": 2.9,
+            "termination": "SUCCESS",
+            "campaign_reference_proxy": 1.1,
+        },
+        {
+            "label": "paper/full",
+            "campaign_proxy": 2.4,
+            "campaign_class": "differential",
+            "proxy": 2.1,
+            "termination": "SUCCESS",
+            "campaign_reference_proxy": 1.1,
+        },
+        {
+            "label": "paper/full",
+            "campaign_proxy": 1.2,
+            "campaign_class": "collision",
+            "proxy": 0.9,
+            "termination": "COLLISION",
+            "campaign_reference_proxy": 1.1,
+        },
+    ]
+    (tmp_path / "paper-full.jsonl").write_text("".join(json.dumps(r) + "\n" for r in out))
+    assert rerun.main(["summary", str(tmp_path / "paper-full.jsonl"), "--json", str(tmp_path / "r.json")]) == 0
+    s = json.loads((tmp_path / "r.json").read_text())["summary"][0]
+    assert s["by_class"] == {
+        "finding": {"runs": 1, "still": 0},
+        "differential": {"runs": 1, "still": 1},
+        "collision": {"runs": 1, "still": 1},
+    }
+    (tmp_path / "m.yaml").write_text("flaw_or_layout_attributed: {file: r.json, campaign: synthetic}\n")
+    experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))
+    assert "| paper | full | 3 | 0 of 1 | 1 of 1 | 1 of 1 | 0 |" in (tmp_path / "out" / "tables.md").read_text()

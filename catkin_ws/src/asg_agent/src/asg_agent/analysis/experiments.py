@@ -17,8 +17,11 @@ The manifest names which export serves which table (paths relative to the manife
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
     diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0, all_thresholds_m: [2, 5, 10]}
+    flaw_or_layout_attributed: {file: R.json, campaign: NAME}  # round 3: `rerun --select perception`
+    differentials: [{export: comparison/D.jsonl.gz, under_test: flawed U-Net, reference: ground truth,
+                     figures: diff_gt}]                  # round 3's differential campaigns
     flaw_or_layout: flaw_or_layout.json                  # from `asg_agent.ros.rerun` (optional)
-    differential: {export: campaigns/D.jsonl.gz, under_test: flawed, reference: full}
+    differential: {export: campaigns/D.jsonl.gz, under_test: flawed U-Net, reference: full U-Net}
                                                          # a --reference-workers campaign (optional)
 
 Writes OUT/tables.md (the tables, quoted in docs/experiments.md), OUT/attributed_{scenarios,hours}.png,
@@ -780,9 +783,9 @@ def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_
             r["trajectory_xy"],
             title=title,
             optimal=opt.points,
-            label=f"{test} U-Net",
+            label=test,
             removed={(l, i) for l, i, *_ in (r.get("removed") or [])},
-            others=[(f"{ref} U-Net (reference)", f["trajectory_xy"], "tab:green")],
+            others=[(f"{ref} (reference)", f["trajectory_xy"], "tab:green")],
         )
         out["top_figure"] = os.path.basename(top_png)
         import matplotlib
@@ -866,7 +869,7 @@ def differential_tables(campaign: dict, d: dict) -> List[str]:
     t, f = d["under_test"], d["reference"]
     md = [
         "",
-        f"### Differential campaign ({campaign['name']}: {t} U-Net under test, {f} U-Net as reference, "
+        f"### Differential campaign ({campaign['name']}: {t} under test, {f} as reference, "
         f"reward = proxy({t}) - proxy({f}))",
         "",
         f"| scenarios (both runs) | same proxy (within 0.01) | {t} worse by >= 1 / 2 / 3 | {f} worse by >= 1 / 2 / 3 "
@@ -924,6 +927,54 @@ def differential_tables(campaign: dict, d: dict) -> List[str]:
     return md
 
 
+def differential_section(load, spec, out: str, prefix: str):
+    """(summary, table lines) of one differential campaign: spec is an export path or {export,
+    under_test, reference} (the stacks' names as the tables print them); figures OUT/PREFIX_top.png
+    and OUT/PREFIX_curve.png."""
+    spec = {"export": spec} if isinstance(spec, str) else dict(spec)
+    camp, rows = load(spec["export"])
+    d = differential(
+        camp,
+        rows,
+        spec.get("under_test", "under test"),
+        spec.get("reference", "reference"),
+        os.path.join(out, f"{prefix}_top.png"),
+        os.path.join(out, f"{prefix}_curve.png"),
+    )
+    d["export"] = spec["export"]
+    return d, differential_tables(camp, d)
+
+
+def flaw_or_layout_attributed(base: str, section: dict):
+    """(summary, table lines) of round 3's flaw or layout: what an attributed campaign blamed on
+    the perception (`asg_agent.ros.rerun --select perception`), re-run on other stacks and grids;
+    per class of the campaign's verdict, how many fail the same way again. section: {file:
+    R.json (rerun summary's), campaign: NAME (the heading's)}."""
+    from asg_agent.ros.rerun import CLASSES
+
+    with open(os.path.join(base, section["file"])) as f:
+        rows = json.load(f)["summary"]
+    label = {
+        "finding": "perception findings: still >= 3",
+        "differential": "differential: still >= 1 over " "the reference",
+        "collision": "perception collisions: collides again",
+    }
+    md = [
+        "",
+        f"### Flaw or layout, round 3 (what {section.get('campaign', 'the campaign')} blamed on the perception, re-run)",
+        "",
+        "| planner grid | stack | re-run | " + " | ".join(label[c] for c in CLASSES) + " | errors |",
+        "|" + "---|" * (4 + len(CLASSES)),
+    ]
+    for s in rows:
+        cells = []
+        for c in CLASSES:
+            e = (s.get("by_class") or {}).get(c)
+            cells.append(f"{e['still']} of {e['runs']}" if e else "-")
+        md.append(f"| {s['grid']} | {s['stack']} | {s['runs']} | " + " | ".join(cells) + f" | {s['errors']} |")
+    return rows, md
+
+
 def fmt(v, spec=".2f"):
     return "-" if v is None else format(v, spec)
 
@@ -956,6 +1007,13 @@ def run(manifest_path: str, out: str) -> dict:
         md += lines[1:]
     if (man.get("conditions") or {}).get("rows"):
         summary["conditions"], lines = condition_table(base, man["conditions"], out)
+        md += lines
+    if (man.get("flaw_or_layout_attributed") or {}).get("file"):
+        summary["flaw_or_layout_attributed"], lines = flaw_or_layout_attributed(base, man["flaw_or_layout_attributed"])
+        md += lines
+    for spec in man.get("differentials") or []:
+        prefix = spec.get("figures") or os.path.basename(spec["export"]).split(".")[0]
+        summary.setdefault("differentials", {})[prefix], lines = differential_section(load, spec, out, prefix)
         md += lines
     if man.get("attributed") or man.get("weather") or man.get("terrain"):
         md += ["", "## Round 2 (the stiff follower; stale, kept for the record)", ""]
@@ -1133,21 +1191,9 @@ def run(manifest_path: str, out: str) -> dict:
                 f"| {s['grid']} | {s['stack']} | {s['runs']} | {s['still_ge3']} | {s['dropped']} | "
                 f"{fmt(s.get('median_proxy'))} ({fmt(s.get('campaign_median_proxy'))}) |"
             )
-    diff = man.get("differential")
-    if diff:
-        diff = {"export": diff} if isinstance(diff, str) else dict(diff)
-        camp, rows = load(diff["export"])
-        d = differential(
-            camp,
-            rows,
-            diff.get("under_test", "under test"),
-            diff.get("reference", "reference"),
-            os.path.join(out, "differential_top.png"),
-            os.path.join(out, "differential_curve.png"),
-        )
-        d["export"] = diff["export"]
-        summary["differential"] = d
-        md += differential_tables(camp, d)
+    if man.get("differential"):
+        summary["differential"], lines = differential_section(load, man["differential"], out, "differential")
+        md += lines
     with open(os.path.join(out, "tables.md"), "w") as f:
         f.write(
             "<!-- generated by `python3 -m asg_agent.analysis.experiments`; do not edit -->\n" + "\n".join(md) + "\n"

@@ -4,8 +4,15 @@ the repository), runs the top N through the scene workers named (any stack: the 
 ground-truth labels, another planner grid), and writes one JSON line per scenario with every
 proxy term. `summary` turns such files into the flaw-or-layout table of docs/experiments.md.
 
-    python3 -m asg_agent.ros.rerun run EXPORT.jsonl.gz --top 50 --workers 2 --label full-paper --out OUT.jsonl
-    python3 -m asg_agent.ros.rerun summary --campaign EXPORT.jsonl.gz OUT1.jsonl ... --json results/flaw_or_layout.json
+    python3 -m asg_agent.ros.rerun run EXPORT.jsonl.gz --top 50 --workers 2 --label paper/full --out OUT.jsonl
+    python3 -m asg_agent.ros.rerun summary OUT1.jsonl ... --json results/flaw_or_layout.json
+
+`--select proxy` (round 2) re-runs the N scenarios of largest proxy. `--select perception` (round
+3, an attributed campaign) re-runs what the campaign blamed on the perception: its perception
+findings, then its differential findings, then its perception collisions (the classes of
+`CLASSES`), each by proxy, up to N. `summary` then counts, per class, how many still fail the
+same way on the stack re-run (a finding: proxy >= 3; differential: proxy at least 1 over the
+campaign's reference run; a collision: it collides again).
 """
 
 import argparse
@@ -20,13 +27,46 @@ from asg_agent.analysis.export import read_export
 from asg_agent.scoring.proxy import run_terms
 
 
-def top_requests(export: str, top: int):
+#: What an attributed campaign blamed on the perception, in the order `--select perception` takes it.
+CLASSES = ("finding", "differential", "collision")
+
+
+def _classes():
+    """(class, predicate on an export row) for each of CLASSES (experiments' attributed scores)."""
+    from asg_agent.analysis.experiments import _differential, _perception_collision, _perception_finding
+
+    return zip(CLASSES, (_perception_finding, _differential, _perception_collision))
+
+
+def campaign_class(row) -> str:
+    """The first of CLASSES the campaign row falls in ('' for none, or a row without a reference)."""
+    for name, pred in _classes():
+        if pred(row):
+            return name
+    return ""
+
+
+def top_requests(export: str, top: int, select: str = "proxy"):
+    """[(campaign row, request)] to re-run: the `top` of largest proxy, or (select 'perception')
+    the perception-attributable ones, class by class. Raises ValueError for an unknown `select`
+    or a 'perception' selection from an export without reference runs."""
     from asg_agent.analysis.experiments import scenario_of
 
     camp, rows = read_export(export)
-    ranked = sorted((r for r in rows if r["proxy"] is not None), key=lambda r: -r["proxy"])[:top]
+    rows = [r for r in rows if r["proxy"] is not None]
+    if select == "proxy":
+        ranked = sorted(rows, key=lambda r: -r["proxy"])
+    elif select == "perception":
+        if not any(r.get("reference") for r in rows):
+            raise ValueError(f"{export}: no reference runs (an attributed campaign is needed for --select perception)")
+        order = {c: k for k, c in enumerate(CLASSES)}
+        ranked = sorted(
+            (r for r in rows if campaign_class(r)), key=lambda r: (order[campaign_class(r)], -r["proxy"], r["job"])
+        )
+    else:
+        raise ValueError(f"unknown selection {select!r} (proxy or perception)")
     out = []
-    for k, r in enumerate(ranked):
+    for k, r in enumerate(ranked[:top]):
         req = scenario_of(camp, r)
         req["scenario_id"] = 7000 + k
         out.append((r, req))
@@ -38,7 +78,11 @@ def run(a) -> int:
     from asg_agent.ros.pool import WorkerPool
     from asg_agent.cli.campaign import worker_names
 
-    camp, todo = top_requests(a.export, a.top)
+    try:
+        camp, todo = top_requests(a.export, a.top, a.select)
+    except ValueError as e:
+        print(f"rerun: {e}", file=sys.stderr)
+        return 2
     rospy.init_node("rerun", anonymous=True, disable_signals=True)
     pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
     pending = list(range(len(todo)))
@@ -64,6 +108,9 @@ def run(a) -> int:
                 "job": row["job"],
                 "rank": o.job + 1,
                 "campaign_proxy": row["proxy"],
+                "campaign_termination": row["termination"],
+                "campaign_reference_proxy": (row.get("reference") or {}).get("proxy"),
+                "campaign_class": campaign_class(row),
                 "termination": o.termination,
                 "error": o.error,
                 "proxy": terms.proxy if terms else None,
@@ -83,6 +130,31 @@ def run(a) -> int:
             f.write(json.dumps(results[k]) + "\n")
     print(f"{a.out}: {len(results)} re-runs in {time.time() - t0:.0f} s")
     return 0
+
+
+def still_failing(r) -> bool:
+    """Whether a re-run fails the way its campaign row did (its `campaign_class`)."""
+    c = r.get("campaign_class") or ""
+    if c == "collision":
+        return r["termination"] == "COLLISION"
+    if r["proxy"] is None:
+        return False
+    if c == "differential":
+        return r["proxy"] - r["campaign_reference_proxy"] >= 1.0
+    return r["proxy"] >= 3.0
+
+
+def by_class(rows) -> dict:
+    """{class: {runs, still}} over the re-runs of an attributed campaign's selection ({} for a
+    round-2 file, whose rows carry no class)."""
+    out = {}
+    for r in rows:
+        c = r.get("campaign_class")
+        if c:
+            e = out.setdefault(c, {"runs": 0, "still": 0})
+            e["runs"] += 1
+            e["still"] += still_failing(r)
+    return out
 
 
 def summary(a) -> int:
@@ -105,6 +177,7 @@ def summary(a) -> int:
                 "errors": len(rows) - len(p),
                 "median_proxy": float(np.median(p)) if p else None,
                 "campaign_median_proxy": float(np.median([r["campaign_proxy"] for r in rows])),
+                "by_class": by_class(rows),
             }
         )
     with open(a.json, "w") as f:
@@ -123,6 +196,13 @@ def main(argv=None):
     r.add_argument("--workers", default="2")
     r.add_argument("--label", required=True, help="GRID/STACK, e.g. paper/full")
     r.add_argument("--out", required=True)
+    r.add_argument(
+        "--select",
+        choices=("proxy", "perception"),
+        default="proxy",
+        help="proxy: the top by proxy; perception: the attributed campaign's perception findings, "
+        "differential findings and perception collisions, in that order",
+    )
     s = sub.add_parser("summary")
     s.add_argument("files", nargs="+")
     s.add_argument("--json", required=True)
