@@ -313,7 +313,7 @@ def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_
     from asg_agent.ros import rerun
 
     camp, rows = _attributed_export(tmp_path)
-    rows[2].update(termination="COLLISION")  # perception collision (reference succeeded)
+    rows[2].update(termination="COLLISION", collision_with=1)  # perception collision (reference succeeded)
     rows[4].update(proxy=2.4)  # differential only
     rows[6].update(proxy=3.3)  # perception finding
     rows[8].update(proxy=3.6)
@@ -366,14 +366,23 @@ def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_
             "campaign_reference_proxy": 1.1,
         },
     ]
-    (tmp_path / "paper-full.jsonl").write_text("".join(json.dumps(r) + "\n" for r in out))
-    assert rerun.main(["summary", str(tmp_path / "paper-full.jsonl"), "--json", str(tmp_path / "r.json")]) == 0
+    for r, (row, _) in zip(out, todo):
+        r["job"] = row["job"]
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "paper-full.jsonl").write_text("".join(json.dumps(r) + "\n" for r in out))
+    assert rerun.main(["summary", str(tmp_path / "r" / "paper-full.jsonl"), "--json", str(tmp_path / "r.json")]) == 0
     s = json.loads((tmp_path / "r.json").read_text())["summary"][0]
     assert s["by_class"] == {
         "finding": {"runs": 1, "still": 0},
         "differential": {"runs": 1, "still": 1},
         "collision": {"runs": 1, "still": 1},
     }
-    (tmp_path / "m.yaml").write_text("flaw_or_layout_attributed: {file: r.json, campaign: synthetic}\n")
-    experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))
-    assert "| paper | full | 3 | 0 of 1 | 1 of 1 | 1 of 1 | 0 |" in (tmp_path / "out" / "tables.md").read_text()
+    # The collision split by the obstacle the campaign's run hit (index 1 of its positions).
+    _write_export(tmp_path / "a.jsonl.gz", camp, rows)
+    (tmp_path / "m.yaml").write_text(
+        "flaw_or_layout_attributed: {file: r.json, campaign: synthetic, export: a.jsonl.gz}\n"
+    )
+    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["flaw_or_layout_attributed"][0]
+    assert s["collisions_by_obstacle"] == {rows[2]["meshes"][1]: {"runs": 1, "still": 1}}
+    table = (tmp_path / "out" / "tables.md").read_text()
+    assert f"| paper | full | 3 | 0 of 1 | 1 of 1 | 1 of 1 | {rows[2]['meshes'][1]} 1 of 1 | 0 |" in table

@@ -17,7 +17,8 @@ The manifest names which export serves which table (paths relative to the manife
     table2: {exp1: campaigns/A.jsonl.gz, ...}            # TD3-PER-ASP campaign per experiment
     comparison: {budget: 1000, arms: {td3-per-asp: [A, B, C], random: [...], ...}}
     diversity: {arms: [td3-per-asp, random], top: 100, threshold_m: 5.0, all_thresholds_m: [2, 5, 10]}
-    flaw_or_layout_attributed: {file: R.json, campaign: NAME}  # round 3: `rerun --select perception`
+    flaw_or_layout_attributed: {file: R.json, campaign: NAME, export: comparison/A.jsonl.gz}
+                                                         # round 3: `rerun --select perception`
     differentials: [{export: comparison/D.jsonl.gz, under_test: flawed U-Net, reference: ground truth,
                      figures: diff_gt}]                  # round 3's differential campaigns
     flaw_or_layout: flaw_or_layout.json                  # from `asg_agent.ros.rerun` (optional)
@@ -945,15 +946,32 @@ def differential_section(load, spec, out: str, prefix: str):
     return d, differential_tables(camp, d)
 
 
-def flaw_or_layout_attributed(base: str, section: dict):
+def flaw_or_layout_attributed(load, base: str, section: dict):
     """(summary, table lines) of round 3's flaw or layout: what an attributed campaign blamed on
     the perception (`asg_agent.ros.rerun --select perception`), re-run on other stacks and grids;
-    per class of the campaign's verdict, how many fail the same way again. section: {file:
-    R.json (rerun summary's), campaign: NAME (the heading's)}."""
-    from asg_agent.ros.rerun import CLASSES
+    per class of the campaign's verdict, how many fail the same way again, and the collisions
+    split by the obstacle the campaign's run hit. section: {file: R.json (rerun summary's; its
+    re-runs in the folder R/), campaign: NAME (the heading's), export: the campaign's export}."""
+    from asg_agent.ros.rerun import CLASSES, still_failing
 
     with open(os.path.join(base, section["file"])) as f:
         rows = json.load(f)["summary"]
+    hit = {}
+    if section.get("export"):
+        _, crows = load(section["export"])
+        hit = {r["job"]: r["meshes"][r["collision_with"]] for r in crows if r.get("collision_with") is not None}
+    folder = os.path.join(base, os.path.splitext(section["file"])[0])
+    for s in rows:
+        by_mesh = {}
+        path = os.path.join(folder, s["file"])
+        if hit and os.path.exists(path):
+            with open(path) as f:
+                for r in (json.loads(line) for line in f if line.strip()):
+                    if r.get("campaign_class") == "collision" and r["job"] in hit:
+                        e = by_mesh.setdefault(hit[r["job"]], {"runs": 0, "still": 0})
+                        e["runs"] += 1
+                        e["still"] += still_failing(r)
+        s["collisions_by_obstacle"] = by_mesh
     label = {
         "finding": "perception findings: still >= 3",
         "differential": "differential: still >= 1 over " "the reference",
@@ -963,14 +981,19 @@ def flaw_or_layout_attributed(base: str, section: dict):
         "",
         f"### Flaw or layout, round 3 (what {section.get('campaign', 'the campaign')} blamed on the perception, re-run)",
         "",
-        "| planner grid | stack | re-run | " + " | ".join(label[c] for c in CLASSES) + " | errors |",
-        "|" + "---|" * (4 + len(CLASSES)),
+        "| planner grid | stack | re-run | "
+        + " | ".join(label[c] for c in CLASSES)
+        + " | collides again, by the obstacle the campaign's run hit | errors |",
+        "|" + "---|" * (5 + len(CLASSES)),
     ]
-    for s in rows:
+    for s in sorted(rows, key=lambda s: (s["grid"] != "paper", s["grid"], s["stack"])):
         cells = []
         for c in CLASSES:
             e = (s.get("by_class") or {}).get(c)
             cells.append(f"{e['still']} of {e['runs']}" if e else "-")
+        cells.append(
+            ", ".join(f"{m} {e['still']} of {e['runs']}" for m, e in sorted(s["collisions_by_obstacle"].items())) or "-"
+        )
         md.append(f"| {s['grid']} | {s['stack']} | {s['runs']} | " + " | ".join(cells) + f" | {s['errors']} |")
     return rows, md
 
@@ -1009,7 +1032,9 @@ def run(manifest_path: str, out: str) -> dict:
         summary["conditions"], lines = condition_table(base, man["conditions"], out)
         md += lines
     if (man.get("flaw_or_layout_attributed") or {}).get("file"):
-        summary["flaw_or_layout_attributed"], lines = flaw_or_layout_attributed(base, man["flaw_or_layout_attributed"])
+        summary["flaw_or_layout_attributed"], lines = flaw_or_layout_attributed(
+            load, base, man["flaw_or_layout_attributed"]
+        )
         md += lines
     for spec in man.get("differentials") or []:
         prefix = spec.get("figures") or os.path.basename(spec["export"]).split(".")[0]

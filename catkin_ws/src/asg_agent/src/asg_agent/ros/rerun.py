@@ -112,6 +112,7 @@ def run(a) -> int:
                 "campaign_reference_proxy": (row.get("reference") or {}).get("proxy"),
                 "campaign_class": campaign_class(row),
                 "termination": o.termination,
+                "collision_with": o.collision_with,  # the store's "layout:instance" ('' for none)
                 "error": o.error,
                 "proxy": terms.proxy if terms else None,
                 "vis": terms.vis if terms else None,
