@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from asg_agent.analysis.export import read_export
+from asg_agent.campaign.store import FINDING
 from asg_agent.scoring.proxy import run_terms
 
 
@@ -60,9 +61,13 @@ def top_requests(export: str, top: int, select: str = "proxy"):
         if not any(r.get("reference") for r in rows):
             raise ValueError(f"{export}: no reference runs (an attributed campaign is needed for --select perception)")
         order = {c: k for k, c in enumerate(CLASSES)}
-        ranked = sorted(
-            (r for r in rows if campaign_class(r)), key=lambda r: (order[campaign_class(r)], -r["proxy"], r["job"])
-        )
+        classed = [(campaign_class(r), r) for r in rows]
+        ranked = [
+            r
+            for c, r in sorted(
+                ((c, r) for c, r in classed if c), key=lambda cr: (order[cr[0]], -cr[1]["proxy"], cr[1]["job"])
+            )
+        ]
     else:
         raise ValueError(f"unknown selection {select!r} (proxy or perception)")
     out = []
@@ -141,8 +146,10 @@ def still_failing(r) -> bool:
     if r["proxy"] is None:
         return False
     if c == "differential":
-        return r["proxy"] - r["campaign_reference_proxy"] >= 1.0
-    return r["proxy"] >= 3.0
+        from asg_agent.analysis.experiments import DIFF_MARGINS
+
+        return r["proxy"] - r["campaign_reference_proxy"] >= DIFF_MARGINS[0]
+    return r["proxy"] >= FINDING
 
 
 def by_class(rows) -> dict:
