@@ -974,7 +974,7 @@ def flaw_or_layout_attributed(load, base: str, section: dict):
         s["collisions_by_obstacle"] = by_mesh
     label = {
         "finding": "perception findings: still >= 3",
-        "differential": "differential: still >= 1 over " "the reference",
+        "differential": "differential: still >= 1 over the reference",
         "collision": "perception collisions: collides again",
     }
     md = [
