@@ -11,8 +11,8 @@
 # without the store. A campaign resumes only from its store rows and checkpoint, which a fresh
 # clone lacks: ASG_PARK=1 packs each unfinished one into results/parked/NAME.tar.xz (a few MB, to
 # commit), and the next run here or on another clone unparks it first and goes on from there.
-# About 45 minutes per 1,000 Exp. 1 scenarios on a 2-core machine (annealing: about 55), about
-# 100 for Exp. 3 (docs/experiments.md, Table 2 wall times).
+# On a 2-core machine, per 1,000 scenarios, every scenario attributed: about 25-30 minutes for
+# Exp. 1 and 40-45 for Exp. 2-4 (docs/experiments.md, Table 2 wall times).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 PLAN="${1:-$REPO/results/campaign_plan.txt}"
 ONLY="${2:-.}"
