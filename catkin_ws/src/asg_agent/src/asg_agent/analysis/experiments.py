@@ -40,7 +40,7 @@ import numpy as np
 import yaml
 
 from asg_agent.analysis.export import counts, read_export
-from asg_agent.campaign.store import FINDING, REFERENCE_CLEAR, attribute
+from asg_agent.campaign.store import DIFFERENTIAL, FINDING, REFERENCE_CLEAR, attribute
 
 PAPER = {"exp1": (682, 138, 8.31), "exp2": (126, 7, 6.79), "exp3": (477, 82, 6.67), "exp4": (305, 67, 8.00)}
 PAPER_SCENARIOS = 5000
@@ -142,7 +142,7 @@ def _perception_finding(r) -> bool:
 
 
 def _differential(r) -> bool:
-    return r["proxy"] is not None and _ref(r).get("proxy") is not None and r["proxy"] - _ref(r)["proxy"] >= 1.0
+    return r["proxy"] is not None and _ref(r).get("proxy") is not None and r["proxy"] - _ref(r)["proxy"] >= DIFFERENTIAL
 
 
 def _perception_collision(r) -> bool:
@@ -702,7 +702,7 @@ def top_figure(campaign: dict, rows, out: str) -> dict:
     return {"job": r["job"], "proxy": r["proxy"], "figure": os.path.basename(out)}
 
 
-DIFF_MARGINS = (1.0, 2.0, 3.0)  # a regression: the stack under test's proxy exceeds the reference's by this
+DIFF_MARGINS = (DIFFERENTIAL, 2.0, 3.0)  # a regression: the stack under test's proxy exceeds the reference's by this
 
 
 def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_png: str, window: int = 100) -> dict:

@@ -26,7 +26,16 @@ from typing import List, Optional
 
 import numpy as np
 
-from asg_agent.campaign.store import Store, StoreError, attribute, checkpoint_path, park, unpack_trajectory, unpark
+from asg_agent.campaign.store import (
+    DIFFERENTIAL,
+    Store,
+    StoreError,
+    attribute,
+    checkpoint_path,
+    park,
+    unpack_trajectory,
+    unpark,
+)
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -184,7 +193,7 @@ def counts(rows) -> dict:
             attributed=len(pairs),
             perception_ge3=sum(k[1] for k in kinds),
             stack_ge3=sum(k[2] for k in kinds),
-            differential_ge1=sum(t - ref >= 1 for t, ref in pairs),
+            differential_ge1=sum(t - ref >= DIFFERENTIAL for t, ref in pairs),
         )
     refs = [(r["termination"], r["reference"].get("termination")) for r in rows if r.get("reference")]
     if refs:

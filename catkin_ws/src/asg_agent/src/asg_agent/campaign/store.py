@@ -99,6 +99,7 @@ ADDED = (
 # Attribution, the one rule every count uses (summary, export, progress bar, TensorBoard, report):
 FINDING = 3.0  # [-] a run with proxy at or above this is a finding (the paper's count)
 REFERENCE_CLEAR = 2.0  # [-] a finding whose reference run stays below this is the perception's
+DIFFERENTIAL = 1.0  # [-] a differential finding: the proxy exceeds its reference run's by at least this
 
 
 def attribute(proxy: float, reference: float):
@@ -215,7 +216,7 @@ class Store:
         F, C = FINDING, REFERENCE_CLEAR  # attribute(), in SQL
         attributed = q(
             f"SELECT COUNT(*), SUM(proxy >= {F} AND {ref} < {C}), SUM(proxy >= {F} AND {ref} >= {F}), "
-            f"SUM(proxy - {ref} >= 1) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
+            f"SUM(proxy - {ref} >= {DIFFERENTIAL}) FROM scenarios WHERE campaign = ? AND reference IS NOT NULL "
             f"AND proxy IS NOT NULL AND {ref} IS NOT NULL",
             (campaign,),
         ).fetchone()

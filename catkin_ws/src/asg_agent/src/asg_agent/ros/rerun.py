@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from asg_agent.analysis.export import read_export
-from asg_agent.campaign.store import FINDING
+from asg_agent.campaign.store import DIFFERENTIAL, FINDING
 from asg_agent.scoring.proxy import run_terms
 
 
@@ -61,13 +61,8 @@ def top_requests(export: str, top: int, select: str = "proxy"):
         if not any(r.get("reference") for r in rows):
             raise ValueError(f"{export}: no reference runs (an attributed campaign is needed for --select perception)")
         order = {c: k for k, c in enumerate(CLASSES)}
-        classed = [(campaign_class(r), r) for r in rows]
-        ranked = [
-            r
-            for c, r in sorted(
-                ((c, r) for c, r in classed if c), key=lambda cr: (order[cr[0]], -cr[1]["proxy"], cr[1]["job"])
-            )
-        ]
+        keyed = [((order[c], -r["proxy"], r["job"]), r) for r in rows if (c := campaign_class(r))]
+        ranked = [r for _, r in sorted(keyed, key=lambda kr: kr[0])]
     else:
         raise ValueError(f"unknown selection {select!r} (proxy or perception)")
     out = []
@@ -146,9 +141,7 @@ def still_failing(r) -> bool:
     if r["proxy"] is None:
         return False
     if c == "differential":
-        from asg_agent.analysis.experiments import DIFF_MARGINS
-
-        return r["proxy"] - r["campaign_reference_proxy"] >= DIFF_MARGINS[0]
+        return r["proxy"] - r["campaign_reference_proxy"] >= DIFFERENTIAL
     return r["proxy"] >= FINDING
 
 
