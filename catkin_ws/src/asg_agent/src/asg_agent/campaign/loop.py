@@ -27,12 +27,16 @@ import numpy as np
 from asg_agent.campaign.experiment import Experiment
 from asg_agent.scoring.proxy import ProxyConfig, run_terms
 from asg_agent.search.methods import SearchMethod
-from asg_agent.campaign.store import Store, attribute, pack_trajectory, unpack_trajectory
+from asg_agent.campaign.store import Store, pack_trajectory, unpack_trajectory
+from asg_agent.scoring import attribution as attr
 from asg_agent.search.td3 import load_checked, save_atomic
 
 
 #: what a search can maximise (Campaign's `reward`, the campaign's --reward)
 REWARDS = ("proxy", "differential", "collision")
+#: which scenarios run on the reference stacks: "failures" (the candidates of
+#: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
+CANDIDATE_RULES = ("failures", "all")
 
 
 def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
@@ -104,8 +108,18 @@ class Job:
     request: dict
     attempts: int = 0
     avoid: str = ""  # the worker that failed it last
-    ref_attempts: int = 0  # differential campaigns: the same on the reference stack
-    ref_avoid: str = ""
+
+
+@dataclass
+class RefJob:
+    """A candidate's runs on the reference stacks, until every role has answered."""
+
+    job: int
+    request: dict
+    row: dict  # the stored row of the run on the stack under test
+    got: Dict[str, dict] = field(default_factory=dict)  # role -> the reference run as stored
+    attempts: Dict[str, int] = field(default_factory=dict)
+    avoid: Dict[str, str] = field(default_factory=dict)
 
 
 class Campaign:
@@ -128,6 +142,8 @@ class Campaign:
         early_dispatch: bool = True,
         reference: Optional[Pool] = None,
         reward: str = "proxy",
+        references: Optional[Dict[str, Pool]] = None,
+        candidates: Optional[str] = None,
         collision_bonus: float = 2.0,
         scalars: Optional[Callable[[int, dict, dict], None]] = None,
     ):
@@ -141,23 +157,48 @@ class Campaign:
         # search learns from it, in job order (tensorboard_log.TensorBoardLog.scenario).
         self.scalars = scalars
         self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
-        # Attribution: every scenario also runs on the reference stack's workers (ground-truth
-        # labels, the same planner and follower), and each finding is counted as the perception's
-        # (reference < 2) or the stack's (reference >= 3). reward "proxy": the search learns from
-        # the stack under test's proxy (the paper); "differential": from proxy - reference proxy;
+        # Attribution (scoring/attribution.py): the scenarios the `candidates` rule picks run again
+        # on each reference stack, keyed by role: "full" (the unflawed U-Net) and/or "ground_truth"
+        # (the simulator's labels), the same planner and follower. `reference` alone is the
+        # single-reference mode of round 3: ground truth, every scenario. reward "proxy": the search
+        # learns from the stack under test's proxy (the paper) and never waits for a reference;
+        # "differential": from proxy - ground-truth proxy (every scenario must be re-run);
         # "collision": the proxy plus `collision_bonus` [-] when the stack under test collided
-        # (with a reference stack: only where the reference reached the goal), since the proxy itself
-        # scores a collision like any short run (issue #27).
+        # (with a ground-truth reference: only where it reached the goal), since the proxy itself
+        # scores a collision like any short run (issue #27). Rewards that read a reference wait
+        # for it before the search learns, so a campaign stays a function of its seed.
         if reward not in REWARDS:
             raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
-        if reward == "differential" and reference is None:
+        references = dict(references or {})
+        if reference is not None:
+            if references:
+                raise ValueError("give `reference` (ground truth, every scenario) or `references`, not both")
+            references = {attr.TRUTH: reference}
+            candidates = candidates or "all"
+        unknown = sorted(set(references) - set(attr.ROLES))
+        if unknown:
+            raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")
+        if references and attr.TRUTH not in references:
+            raise ValueError(f"attribution needs a {attr.TRUTH!r} reference stack")
+        candidates = candidates or "failures"
+        if candidates not in CANDIDATE_RULES:
+            raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
+        if reward == "differential" and not references:
             raise ValueError("the differential reward needs a reference stack")
+        if reward == "differential" and candidates != "all":
+            raise ValueError("the differential reward needs every scenario re-run (candidates 'all')")
         if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
             raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
-        self.reference, self.reward, self.collision_bonus = reference, reward, float(collision_bonus)
-        self.ref_queue: List[int] = []
-        self.ref_running: Dict[int, str] = {}
-        self.parts: Dict[int, Dict[str, Outcome]] = {}  # job -> {"test": .., "ref": ..} until both are in
+        self.references, self.candidates = references, candidates
+        self.reward, self.collision_bonus = reward, float(collision_bonus)
+        # The single-reference mode stores each row with its reference run, as round 3 did.
+        self.wait_for_references = bool(references) and (reward != "proxy" or candidates == "all")
+        # attributed(job, class, counts of every class): called as each candidate's references
+        # are in (tensorboard_log.TensorBoardLog.attribution); out of job order.
+        self.attributed: Optional[Callable[[int, str, dict], None]] = None
+        self.ref_jobs: Dict[int, RefJob] = {}
+        self.ref_queue: Dict[str, List[int]] = {role: [] for role in references}
+        self.ref_running: Dict[str, Dict[int, str]] = {role: {} for role in references}
         self.pending: Dict[int, Job] = {}  # proposed, not applied
         self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
         self.queue: List[int] = []  # proposed jobs waiting for a worker
@@ -180,6 +221,7 @@ class Campaign:
             "diff_ge1": 0,
             "perception": 0,
             "stack": 0,
+            "classes": attr.count_classes(()),
         }
         self.t0 = time.time()
         self.done_at_start = 0
@@ -225,7 +267,6 @@ class Campaign:
                 del self.pending[j]
             self.next_job = min(self.next_job, max(self.total, self.next_apply))
             self.queue = sorted(self.pending)
-            self.ref_queue = sorted(self.pending) if self.reference is not None else []
             # A resume may also raise the budget of a finished (or cut) campaign: slots left
             # without a proposal by the old budget propose again, in slot order. The extension
             # is deterministic given the stored history (not the same scenarios a campaign run
@@ -235,12 +276,18 @@ class Campaign:
                 if s not in busy:
                     self._propose(s)
         # Results stored after the checkpoint are applied as the interrupted run applied them.
+        # A candidate whose reference runs were still out when it stopped runs on them again; a
+        # search that learns from the references waits for them, as the interrupted run did.
+        waiting = set()
+        if self.references:
+            for row in self.store.pending_references(self.name):
+                self._queue_references(dict(row))
+                waiting.add(row["job"])
         for row in self.store.rows(self.name, self.next_apply - 1):
-            self.finished[row["job"]] = dict(row)
+            if not (self.wait_for_references and row["job"] in waiting):
+                self.finished[row["job"]] = dict(row)
             if row["job"] in self.queue:
                 self.queue.remove(row["job"])
-            if row["job"] in self.ref_queue:
-                self.ref_queue.remove(row["job"])
         self.done_at_start = self.store.count(self.name)
         summary = self.store.summary(self.name, top=0)
         self.stats.update(
@@ -251,6 +298,7 @@ class Campaign:
             perception=summary["perception_ge3"],
             stack=summary["stack_ge3"],
             diff_ge1=summary["differential_ge1"],
+            classes=summary["classes"],
         )
         self._apply_ready()
 
@@ -273,115 +321,162 @@ class Campaign:
         self.pending[j] = Job(j, slot, st["episode"], st["step"], st["state"], action, request)
         if j not in self.finished:
             self.queue.append(j)
-            if self.reference is not None:
-                self.ref_queue.append(j)
 
     # -- the loop -------------------------------------------------------------------------------
     def run(self, poll_timeout: float = 0.2, deadline: Optional[float] = None) -> dict:
-        while self.next_apply < self.total:
+        while self.next_apply < self.total or self.ref_jobs:
             if deadline is not None and time.time() > deadline:
                 break
             t0 = time.perf_counter()
             self._dispatch()
             self.stages.add("dispatch", t0)
             t0 = time.perf_counter()
-            outcomes = self.pool.poll(poll_timeout)
+            outcomes = self.pool.poll(poll_timeout if self.next_apply < self.total else 0.0)
             self.stages.add("wait", t0)
             for outcome in outcomes:
-                self._on_outcome(outcome, "test")
-            if self.reference is not None:
-                ref = self.reference.poll(0.0)
+                self._on_outcome(outcome)
+            for role, pool in self.references.items():
+                ref = pool.poll(0.0 if outcomes or self.next_apply < self.total else poll_timeout / len(self.references))
                 for outcome in ref:
-                    self._on_outcome(outcome, "ref")
+                    self._on_ref_outcome(role, outcome)
                 outcomes = outcomes + ref
             if outcomes and self.early_dispatch:  # freed workers get a waiting proposal before the agent learns
                 t0 = time.perf_counter()
                 self._dispatch()
                 self.stages.add("dispatch", t0)
             self._apply_ready()
-        if self.next_apply >= self.total:
+        if self.next_apply >= self.total and not self.ref_jobs:
             self._checkpoint()
             if self.store.count(self.name) > self.done_at_start or self.store.campaign(self.name)["finished"] is None:
                 self.store.finish_campaign(self.name)  # a resumed finished campaign keeps its time
         return self.store.summary(self.name)
 
     def _dispatch(self):
-        self._dispatch_part(self.pool, self.queue, self.running, "attempts", "avoid")
-        if self.reference is not None:
-            self._dispatch_part(self.reference, self.ref_queue, self.ref_running, "ref_attempts", "ref_avoid")
-
-    def _dispatch_part(self, pool, queue, running, attempts, avoid):
-        free = pool.free()
+        free = self.pool.free()
         for worker in free:
-            pick = None
-            for j in queue:
-                if getattr(self.pending[j], avoid) != worker or len(free) == 1:
-                    pick = j
-                    break
+            pick = next((j for j in self.queue if self.pending[j].avoid != worker or len(free) == 1), None)
             if pick is None:
                 continue
-            queue.remove(pick)
+            self.queue.remove(pick)
             job = self.pending[pick]
-            setattr(job, attempts, getattr(job, attempts) + 1)
-            running[pick] = worker
-            pool.submit(worker, pick, job.request)
+            job.attempts += 1
+            self.running[pick] = worker
+            self.pool.submit(worker, pick, job.request)
+        for role, pool in self.references.items():
+            queue, running = self.ref_queue[role], self.ref_running[role]
+            free = pool.free() if queue else []
+            for worker in free:
+                pick = next((j for j in queue if self.ref_jobs[j].avoid.get(role) != worker or len(free) == 1), None)
+                if pick is None:
+                    continue
+                queue.remove(pick)
+                rj = self.ref_jobs[pick]
+                rj.attempts[role] = rj.attempts.get(role, 0) + 1
+                running[pick] = worker
+                pool.submit(worker, pick, rj.request)
 
-    def _on_outcome(self, o: Outcome, part: str = "test"):
+    def _on_outcome(self, o: Outcome):
         job = self.pending.get(o.job)
-        running = self.running if part == "test" else self.ref_running
-        if job is None or running.get(o.job) != o.worker:
+        if job is None or self.running.get(o.job) != o.worker:
             return  # a late answer for a job already re-queued elsewhere: never counted twice
-        del running[o.job]
-        attempts = job.attempts if part == "test" else job.ref_attempts
-        if o.termination == "ERROR" and attempts < self.max_attempts:
+        del self.running[o.job]
+        if o.termination == "ERROR" and job.attempts < self.max_attempts:
             self.stats["retries"] += 1
-            if part == "test":
-                job.avoid = o.worker
-                self.queue.insert(0, o.job)
-            else:
-                job.ref_avoid = o.worker
-                self.ref_queue.insert(0, o.job)
+            job.avoid = o.worker
+            self.queue.insert(0, o.job)
             print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
             return
-        if self.reference is None:
-            return self._finish(job, o, None)
-        got = self.parts.setdefault(o.job, {})
-        got[part] = o
-        if len(got) == 2:
-            del self.parts[o.job]
-            self._finish(job, got["test"], got["ref"])
+        self._finish(job, o)
+
+    def _on_ref_outcome(self, role: str, o: Outcome):
+        rj = self.ref_jobs.get(o.job)
+        running = self.ref_running[role]
+        if rj is None or running.get(o.job) != o.worker:
+            return  # a late answer for a run already re-queued elsewhere
+        del running[o.job]
+        if o.termination == "ERROR" and rj.attempts.get(role, 0) < self.max_attempts:
+            self.stats["retries"] += 1
+            rj.avoid[role] = o.worker
+            self.ref_queue[role].insert(0, o.job)
+            print(
+                f"[campaign] job {o.job} failed on {o.worker} ({role} reference: {o.error}); retrying elsewhere",
+                file=sys.stderr,
+            )
+            return
+        _, terms = self._terms(rj.request, o)
+        rj.got[role] = {
+            "stack": role,
+            "worker": o.worker,
+            "attempts": rj.attempts.get(role, 0),
+            "termination": o.termination,
+            "error": o.error,
+            "proxy": terms.proxy if terms else None,
+            "vis": terms.vis if terms else None,
+            "yaw_term": terms.yaw_term if terms else None,
+            "plr": terms.plr if terms else None,
+            "sim_time": o.sim_time,
+            "collision_with": o.collision_with,
+            "trajectory_xy": kept_xy(o.trajectory),
+        }
+        if set(rj.got) == set(self.references):
+            self._attach(self.ref_jobs.pop(o.job))
+
+    def _queue_references(self, row: dict):
+        """Sends a stored candidate to every reference stack."""
+        j = row["job"]
+        self.ref_jobs[j] = RefJob(j, json.loads(row["request"]), row)
+        for role in self.references:
+            self.ref_queue[role].append(j)
+
+    def _attach(self, rj: RefJob):
+        """Every reference run of a candidate is in: its class, stored with the runs."""
+        row = rj.row
+        cls = attr.classify_rows(row, rj.got)
+        truth = rj.got.get(attr.TRUTH)
+        legacy = json.dumps({k: v for k, v in truth.items() if k not in ("stack", "collision_with")}, sort_keys=True)
+        proxy, tproxy = row["proxy"], truth["proxy"]
+        diff = proxy - tproxy if proxy is not None and tproxy is not None else None
+        reward = row["reward"]
+        if self.reward == "differential":
+            reward = diff
+        elif self.reward == "collision" and proxy is not None:
+            reward = collision_reward(proxy, row["termination"], truth["termination"], self.collision_bonus)
+        t0 = time.perf_counter()
+        self.store.set_references(
+            self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy if truth else None, reward
+        )
+        self.stages.add("store", t0)
+        classes = self.stats["classes"]
+        classes[attr.PENDING] = max(0, classes.get(attr.PENDING, 0) - 1)
+        classes[cls] = classes.get(cls, 0) + 1
+        if diff is not None:
+            self.stats["diff_best"] = max(self.stats["diff_best"], diff)
+            self.stats["diff_ge1"] += diff >= attr.DIFFERENTIAL
+            _, perception, stack = attr.attribute(proxy, tproxy)
+            self.stats["perception"] += perception
+            self.stats["stack"] += stack
+        if self.wait_for_references and rj.job >= self.next_apply:
+            self.finished[rj.job] = dict(row, reward=reward, attribution=cls, reference=legacy)
+        if self.attributed:
+            self.attributed(rj.job, cls, dict(classes))
+        if self.progress:
+            self.progress(self.status())
 
     def _terms(self, request, o: Outcome):
         return run_terms(request, o, self.proxy_config)
 
-    def _finish(self, job: Job, o: Outcome, ref: Optional[Outcome]):
+    def _finish(self, job: Job, o: Outcome):
         t0 = time.perf_counter()
         traj, terms = self._terms(job.request, o)
-        reference, reward, diff = None, (terms.proxy if terms else None), None
-        if ref is not None:
-            _, rterms = self._terms(job.request, ref)
-            reference = json.dumps(
-                {
-                    "worker": ref.worker,
-                    "attempts": job.ref_attempts,
-                    "termination": ref.termination,
-                    "error": ref.error,
-                    "proxy": rterms.proxy if rterms else None,
-                    "vis": rterms.vis if rterms else None,
-                    "yaw_term": rterms.yaw_term if rterms else None,
-                    "plr": rterms.plr if rterms else None,
-                    "sim_time": ref.sim_time,
-                    "trajectory_xy": kept_xy(ref.trajectory),
-                },
-                sort_keys=True,
-            )
-            diff = terms.proxy - rterms.proxy if terms and rterms else None
-            if self.reward == "differential":
-                reward = diff
-        if self.reward == "collision" and terms:
-            reward = collision_reward(
-                terms.proxy, o.termination, ref.termination if ref else None, self.collision_bonus
-            )
+        reward = terms.proxy if terms else None
+        if self.reward == "collision" and terms:  # with references, rewritten once they are in
+            reward = collision_reward(terms.proxy, o.termination, None, self.collision_bonus)
+        label, candidate = None, False
+        if self.references:
+            candidate = self.candidates == "all" or attr.is_candidate(o.termination, terms.proxy if terms else None)
+            label = attr.PENDING if candidate else attr.NOT_CANDIDATE
+            if candidate and self.reward != "proxy":
+                reward = None  # known once the references are in
         row = {
             "campaign": self.name,
             "job": o.job,
@@ -409,24 +504,26 @@ class Campaign:
             "samples": len(traj),
             "wall_time": o.wall_time,
             "finished": time.time(),
-            "reference": reference,
+            "reference": None,
             "reward": reward,
+            "reference_runs": None,
+            "attribution": label,
         }
         self.stages.add("proxy", t0)
         t0 = time.perf_counter()
         self.store.add(row)
         self.stages.add("store", t0)
-        self.finished[o.job] = row
-        if terms and reward is not None:
+        if candidate:
+            self._queue_references(row)
+            self.stats["classes"][attr.PENDING] += 1
+        elif label is not None:
+            self.stats["classes"][label] += 1
+        if not (candidate and self.wait_for_references):
+            self.finished[o.job] = row
+        if terms:
             self.stats["best"] = max(self.stats["best"], terms.proxy)
-            self.stats["ge3"] += terms.proxy >= 3
+            self.stats["ge3"] += terms.proxy >= attr.FINDING
             self.stats["ge4"] += terms.proxy >= 4
-            if self.reference is not None and diff is not None:
-                self.stats["diff_best"] = max(self.stats["diff_best"], diff)
-                self.stats["diff_ge1"] += diff >= 1
-                _, perception, stack = attribute(terms.proxy, rterms.proxy)
-                self.stats["perception"] += perception
-                self.stats["stack"] += stack
         else:
             self.stats["errors"] += 1
         if self.progress:
@@ -440,7 +537,7 @@ class Campaign:
             slot = self.slot_state[job.slot]
             done = job.step >= self.exp.episode_steps - 1
             # (rows of campaigns older than the reward column learnt from the proxy)
-            reward = row["reward"] if self.reference is not None or self.reward != "proxy" else row["proxy"]
+            reward = row["reward"] if self.references or self.reward != "proxy" else row["proxy"]
             learnt = None
             if reward is None:  # ERROR after every attempt: no transition, the episode ends here
                 self.method.observe(job.job, job.episode, job.step, job.state, job.action, None, None, True)
@@ -512,8 +609,11 @@ class Campaign:
             "ge4": self.stats["ge4"],
             "errors": self.stats["errors"],
             "retries": self.stats["retries"],
-            "diff_best": self.stats["diff_best"] if self.reference is not None else None,
-            "diff_ge1": self.stats["diff_ge1"] if self.reference is not None else None,
-            "perception": self.stats["perception"] if self.reference is not None else None,
-            "stack": self.stats["stack"] if self.reference is not None else None,
+            "diff_best": self.stats["diff_best"] if attr.TRUTH in self.references else None,
+            "diff_ge1": self.stats["diff_ge1"] if attr.TRUTH in self.references else None,
+            "perception": self.stats["perception"] if attr.TRUTH in self.references else None,
+            "stack": self.stats["stack"] if attr.TRUTH in self.references else None,
+            # attribution classes (candidates re-run, not_candidate, pending) with named references
+            "classes": dict(self.stats["classes"]) if self.references else None,
+            "roles": list(self.references),
         }

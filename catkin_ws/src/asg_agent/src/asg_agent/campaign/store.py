@@ -87,28 +87,34 @@ COLUMNS = (
     "finished",
     "reference",
     "reward",
+    "reference_runs",
+    "attribution",
 )
 # Columns added after the first stores were written: (name, SQL type); added to an older store
 # when it is opened.
 ADDED = (
     ("reference", "TEXT"),  # differential campaigns: JSON of the reference stack's run
-    ("reward", "REAL"),
-)  # what the search learnt from: the proxy, or proxy - reference proxy
+    ("reward", "REAL"),  # what the search learnt from: the proxy, or proxy - reference proxy
+    # Attribution on named reference stacks (issue #36): JSON {role: the reference run} of every
+    # reference the scenario ran on (NULL: not re-run), and its class (scoring/attribution.py:
+    # flaw, model, stack, ..., not_candidate, pending).
+    ("reference_runs", "TEXT"),
+    ("attribution", "TEXT"),
+)
 
 
-# Attribution, the one rule every count uses (summary, export, progress bar, TensorBoard, report):
-FINDING = 3.0  # [-] a run with proxy at or above this is a finding (the paper's count)
-REFERENCE_CLEAR = 2.0  # [-] a finding whose reference run stays below this is the perception's
-DIFFERENTIAL = 1.0  # [-] a differential finding: the proxy exceeds its reference run's by at least this
+# Attribution: the rule and its thresholds live in scoring/attribution.py (re-exported here for
+# the modules that read them from the store).
+from asg_agent.scoring.attribution import (  # noqa: E402
+    DIFFERENTIAL,
+    FINDING,
+    PENDING,
+    REFERENCE_CLEAR,
+    attribute,
+    count_classes,
+)
 
-
-def attribute(proxy: float, reference: float):
-    """(finding, the perception's, the stack's) for a run's proxy and its reference run's: a
-    finding is the perception's when the reference stack (ground-truth labels, the same planner
-    and follower) stays below REFERENCE_CLEAR on the same scene, the stack's own when the
-    reference is a finding too."""
-    finding = proxy >= FINDING
-    return finding, finding and reference < REFERENCE_CLEAR, finding and reference >= FINDING
+__all__ = ["DIFFERENTIAL", "FINDING", "REFERENCE_CLEAR", "attribute", "Store", "StoreError"]
 
 
 class StoreError(RuntimeError):
@@ -177,6 +183,33 @@ class Store:
             )
         except sqlite3.IntegrityError:
             raise StoreError(f"campaign {row['campaign']!r} already holds job {row['job']}") from None
+
+    def set_references(self, campaign: str, job: int, reference_runs: str, attribution: str, reference, reward):
+        """Attaches a candidate's reference runs (JSON {role: run}), its class, the legacy
+        single-reference column (the ground-truth run's JSON, or None) and the reward the search
+        learns from (the proxy unless the reward needs the references)."""
+        cur = self.db.execute(
+            "UPDATE scenarios SET reference_runs = ?, attribution = ?, reference = ?, reward = ? "
+            "WHERE campaign = ? AND job = ?",
+            (reference_runs, attribution, reference, reward, campaign, job),
+        )
+        if cur.rowcount != 1:
+            raise StoreError(f"campaign {campaign!r} holds no job {job} to attach reference runs to")
+
+    def pending_references(self, campaign: str) -> List[sqlite3.Row]:
+        """Candidates whose reference runs are not all in (a resume re-runs them)."""
+        return self.db.execute(
+            "SELECT * FROM scenarios WHERE campaign = ? AND attribution = ? ORDER BY job", (campaign, PENDING)
+        ).fetchall()
+
+    def classes(self, campaign: str) -> Dict[str, int]:
+        """Scenarios per attribution class (scoring/attribution.py), zeros included."""
+        return count_classes(
+            r[0]
+            for r in self.db.execute(
+                "SELECT attribution FROM scenarios WHERE campaign = ? AND attribution IS NOT NULL", (campaign,)
+            )
+        )
 
     def rows(self, campaign: str, after_job: int = -1) -> Iterator[sqlite3.Row]:
         yield from self.db.execute(
@@ -250,6 +283,7 @@ class Store:
             "plr_below_0999": low_plr,
             "perception_collisions": collided[0] or 0,
             "stack_collisions": collided[1] or 0,
+            "classes": self.classes(campaign),
         }
 
     def content_digest(self, campaign: str) -> List[tuple]:

@@ -6,7 +6,9 @@
 
 Per scenario (x axis: the job, in the order the search learnt from them): `scenario/proxy`,
 `scenario/reward`, `scenario/yaw_term`, `scenario/plr`, `scenario/reference_proxy` (attribution),
-and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/stack`. Per update
+and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/stack`; with named
+reference stacks, `attribution/CLASS` (flaw, model, stack, ..., not_candidate, pending) as each
+candidate's reference runs come in. Per update
 (the agent's last gradient step after that scenario): `agent/critic_loss`, `agent/q`,
 `agent/actor_loss`, `agent/asp_penalty`, `agent/asp_weight`, `agent/per_beta`,
 `agent/actor_saturation`; CMA-ES's `search/cma_sigma` and `search/cma_best`, annealing's
@@ -88,6 +90,12 @@ class TensorBoardLog:
             v = (stats or {}).get(key)
             if v is not None:
                 w.add_scalar(tag, v, job)
+
+    def attribution(self, job: int, label: str, classes: dict):
+        """A candidate's references are in (Campaign's `attributed` hook): the running count of
+        every attribution class, at the candidate's job (these come out of job order)."""
+        for key, n in classes.items():
+            self.writer.add_scalar(f"attribution/{key}", n, job)
 
     def close(self):
         self.writer.close()
