@@ -1,6 +1,8 @@
 #!/usr/bin/python3
 """rostest (issue #24): the stored reference runs of the backend worker_0 runs (reference_runs.test
-starts it on channels_last) repeat bit for bit. ASG_WRITE_REFERENCE=1 records them instead."""
+starts it on channels_last) repeat bit for bit. ASG_WRITE_REFERENCE=1 records them instead. Under
+ONEDNN_MAX_CPU_ISA=ALL (reference_runs_uncapped.test, issue #36) they repeat, or are refused before
+any run where this CPU's kernels are not the recorded ones."""
 
 import os
 import unittest
@@ -17,6 +19,20 @@ class ReferenceRuns(unittest.TestCase):
         path = su.reference_path("worker_0")
         self.assertTrue(os.path.isfile(path), f"no reference runs for this backend: {path}")
         su.wait_for_segmenter("worker_0")
+        if os.environ.get("ONEDNN_MAX_CPU_ISA", "").upper() == "ALL":
+            # reference_runs_uncapped.test: repeat them, or refuse them with the reason, before any run.
+            import json
+
+            from asg_perception.numerics import can_reproduce
+
+            with open(path) as f:
+                recorded = json.load(f).get("numerics", "")
+            here = su.wait_for_numerics("/worker_0")
+            why = can_reproduce(recorded, here)
+            if why:
+                self.assertIn("oneDNN kernels", why)
+                print(f"refused, as it must be: recorded {recorded!r}, here {here!r}: {why}")
+                return
         su.check_reference(self, su.client("worker_0"), path, os.environ.get("ASG_WRITE_REFERENCE") == "1")
 
 

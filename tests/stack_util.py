@@ -4,6 +4,7 @@ import math
 import os
 import signal
 import subprocess
+import time
 import xmlrpc.client
 
 import actionlib
@@ -98,7 +99,18 @@ def reference_path(worker_ns):
     return os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.json")
 
 
-def check_reference(test, c, path, write=False):
+def wait_for_numerics(worker, timeout=120.0):
+    """The segmenter's numerics identity (asg_perception.numerics), set once its model is loaded."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        got = rospy.get_param(f"{worker}/segmenter/numerics", "")
+        if got:
+            return got
+        time.sleep(0.2)
+    raise AssertionError(f"{worker}'s segmenter set no ~numerics within {timeout:.0f} s")
+
+
+def check_reference(test, c, path, write=False, worker="/worker_0"):
     """Runs every stored request of `path` on client `c`; each run must repeat its stored
     termination, length and trajectory digest. write=True (ASG_WRITE_REFERENCE=1) stores what
     the runs did instead."""
@@ -106,6 +118,20 @@ def check_reference(test, c, path, write=False):
 
     with open(path) as f:
         ref = json.load(f)
+    # Issue #36: before any run, whether this machine can repeat them (the segmenter's numerics:
+    # oneDNN kernels, threads, torch) or why not.
+    here = wait_for_numerics(worker)
+    if write:
+        ref["numerics"] = here
+    else:
+        from asg_perception.numerics import can_reproduce
+
+        why = can_reproduce(ref.get("numerics", ""), here)
+        test.assertIsNone(
+            why,
+            f"{os.path.basename(path)} was recorded where the segmenter ran {ref.get('numerics')!r}; this "
+            f"machine cannot repeat it bit for bit: {why}",
+        )
     for k, entry in enumerate(ref["runs"]):
         state, r = run(c, entry["request"])
         test.assertEqual(state, SUCCEEDED, r.error)

@@ -17,6 +17,7 @@ from asg_lockstep.stack_protocol import Run
 from asg_msgs.msg import ScenarioInfo, StackAck, StackError, StageTimes
 from sensor_msgs.msg import Image
 
+from . import numerics
 from .inference import BACKENDS, DEFAULT_BACKEND, Segmenter
 from .stage_clock import StageClock
 
@@ -49,7 +50,11 @@ class SegmenterNode:
             raise ValueError(f"~threads = {threads}: must be 1..64")
         path = resolve_model(model)
         self.segmenter = Segmenter(path, backend, threads, height, width)
-        rospy.loginfo("segmenter: %s (%s backend, %d thread(s))", path, backend, threads)
+        # What decides the labels' numerics on this CPU (numerics.py): the campaign stores it,
+        # replay compares it before it runs.
+        self.numerics = numerics.identity(backend, threads)
+        rospy.set_param("~numerics", self.numerics)
+        rospy.loginfo("segmenter: %s (%s)", path, self.numerics)
         self.width, self.height = width, height
         self.lock = threading.Lock()
         # Which run is current and which images belong to it: the protocol core (asg_lockstep).

@@ -108,6 +108,27 @@ def breakdown(
     return out
 
 
+def stack_costs(first: dict, last: dict, groups: Dict[str, List[str]], scenarios: int) -> dict:
+    """CPU per campaign scenario of each stack's processes (issue #36: the stack under test and
+    each reference apart), from readings keyed (worker, node); `groups`: {stack: its workers}.
+    `runs`: the scenarios its workers ran; `cpu_per_run_s`: what one of its runs costs."""
+    out = {}
+    for name, ws in groups.items():
+        cpu, runs = 0.0, 0
+        for key, end in last.items():
+            if key[0] not in ws:
+                continue
+            d = _delta(first.get(key, end), end)
+            cpu += d["cpu"]
+            runs += d["runs"] if key[1] == "scene_worker" else 0
+        out[name] = {
+            "cpu_per_scenario_s": cpu / scenarios,
+            "runs": runs,
+            "cpu_per_run_s": cpu / runs if runs else None,
+        }
+    return out
+
+
 ROWS = [  # (label, key in per_scenario_s)
     ("scene build + announce", "scene_worker.build"),
     ("stack acknowledgements", "scene_worker.acks"),
@@ -153,7 +174,21 @@ def table(runs: List[dict], labels: List[str]) -> str:
             + " | ".join(f"{r['cpu_per_scenario_s'].get(kind, 0.0):.3f}" for r in runs)
             + " |"
         )
+    for name in sorted({k for r in runs for k in r.get("stacks", {})}, key=lambda k: (k != "under test", k)):
+        lines.append(
+            f"| CPU: {name} stack, all its processes (a run of it) | "
+            + " | ".join(
+                (
+                    f"{r['stacks'][name]['cpu_per_scenario_s']:.3f} ({r['stacks'][name]['cpu_per_run_s'] or 0:.2f})"
+                    if name in r.get("stacks", {})
+                    else "-"
+                )
+                for r in runs
+            )
+            + " |"
+        )
     summary = [
+        ("share of scenarios re-run on the references", "{rerun_share:.1%}"),
         ("scenarios", "{scenarios}"),
         ("wall (s)", "{wall_s:.0f}"),
         ("**scenarios an hour**", "**{rate_per_hour:.0f}**"),

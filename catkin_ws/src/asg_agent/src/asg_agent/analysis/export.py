@@ -36,6 +36,7 @@ from asg_agent.campaign.store import (
     unpack_trajectory,
     unpark,
 )
+from asg_agent.scoring.attribution import count_classes
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -128,6 +129,13 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
                         "attempts": r["attempts"],
                         "reward": r["reward"],
                         "reference": json.loads(r["reference"]) if r["reference"] else None,
+                        # issue #36: named reference stacks ({role: run}) and the class
+                        **(
+                            {"attribution": r["attribution"]}
+                            | ({"reference_runs": json.loads(r["reference_runs"])} if r["reference_runs"] else {})
+                            if r["attribution"]
+                            else {}
+                        ),
                         "trajectory_xy": np.round(keep[:, 1:3], 2).tolist(),
                     }
                 )
@@ -201,6 +209,9 @@ def counts(rows) -> dict:
             perception_collisions=sum(t == "COLLISION" and ref == "SUCCESS" for t, ref in refs),
             stack_collisions=sum(t == "COLLISION" and ref == "COLLISION" for t, ref in refs),
         )
+    labels = [r["attribution"] for r in rows if r.get("attribution")]
+    if labels:
+        out["classes"] = count_classes(labels)
     return out
 
 

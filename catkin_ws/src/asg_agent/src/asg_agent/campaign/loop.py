@@ -336,7 +336,9 @@ class Campaign:
             for outcome in outcomes:
                 self._on_outcome(outcome)
             for role, pool in self.references.items():
-                ref = pool.poll(0.0 if outcomes or self.next_apply < self.total else poll_timeout / len(self.references))
+                ref = pool.poll(
+                    0.0 if outcomes or self.next_apply < self.total else poll_timeout / len(self.references)
+                )
                 for outcome in ref:
                     self._on_ref_outcome(role, outcome)
                 outcomes = outcomes + ref

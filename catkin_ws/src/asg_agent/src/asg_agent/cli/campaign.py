@@ -17,7 +17,8 @@ import os
 import sys
 import time
 
-from asg_agent.campaign.loop import REWARDS, Campaign
+from asg_agent.campaign.loop import CANDIDATE_RULES, REWARDS, Campaign
+from asg_agent.scoring import attribution as attr
 from asg_agent.campaign.experiment import ExperimentError, load_experiment
 from asg_agent.search.methods import METHODS, make_method
 from asg_agent.campaign.store import Store, StoreError, checkpoint_path
@@ -79,6 +80,30 @@ def parse(argv):
         "(reference proxy < 2) or the stack's (reference proxy >= 3)",
     )
     p.add_argument(
+        "--reference",
+        action="append",
+        default=[],
+        metavar="ROLE=WORKERS",
+        help="three-stack attribution (issue #36): a reference stack by role, full (the unflawed U-Net "
+        "on the same backend) or ground_truth, and its workers (count, numbered after the workers "
+        "before it, or namespaces); give both. Candidates (--candidates) are re-run on each, and "
+        "every candidate is classed flaw, model, stack, unclear, reverse, pass or error (docs/agent.md)",
+    )
+    p.add_argument(
+        "--candidates",
+        default="",
+        choices=("",) + CANDIDATE_RULES,
+        help="which scenarios run on the references: failures (a collision, timeout, flip, out of "
+        "bounds, or proxy >= 2: the default with --reference) or all (the default with "
+        "--reference-workers)",
+    )
+    p.add_argument(
+        "--full-model",
+        default="",
+        help="--reference full: the unflawed model its workers must run (default: the experiment's "
+        "model with 'flawed' read as 'full')",
+    )
+    p.add_argument(
         "--reward",
         default="proxy",
         choices=REWARDS,
@@ -117,8 +142,19 @@ def parse(argv):
     a = p.parse_args(argv)
     if a.scenarios < 1:
         p.error("--scenarios must be >= 1")
-    if a.reward == "differential" and not a.reference_workers:
+    if a.reward == "differential" and not (a.reference_workers or a.reference):
         p.error("--reward differential needs --reference-workers (the reference stack to subtract)")
+    if a.reference and a.reference_workers:
+        p.error("give --reference ROLE=WORKERS (named references) or --reference-workers (ground truth), not both")
+    roles = [r.partition("=")[0] for r in a.reference]
+    for r in a.reference:
+        role, eq, spec = r.partition("=")
+        if not eq or not spec or role not in attr.ROLES:
+            p.error(f"--reference {r!r}: must be ROLE=WORKERS with ROLE one of {', '.join(attr.ROLES)}")
+    if len(set(roles)) != len(roles):
+        p.error(f"--reference: each role once (got {', '.join(roles)})")
+    if a.reference and attr.TRUTH not in roles:
+        p.error(f"--reference: attribution needs a {attr.TRUTH} reference (the simulator's labels)")
     if not (math.isfinite(a.collision_bonus) and a.collision_bonus >= 0.0):
         p.error(f"--collision-bonus {a.collision_bonus}: must be a finite number >= 0")
     return a
@@ -131,6 +167,59 @@ def worker_names(spec: str):
             raise ValueError("--workers must be >= 1")
         return [f"/worker_{i}" for i in range(n)]
     return ["/" + s.strip().strip("/") for s in spec.split(",") if s.strip()]
+
+
+def reference_roles(a, workers):
+    """{role: worker namespaces} of the reference stacks: --reference ROLE=WORKERS (each count
+    numbered after the workers named before it), or --reference-workers (ground truth)."""
+    specs = [r.partition("=")[::2] for r in a.reference]
+    if a.reference_workers:
+        specs = [(attr.TRUTH, a.reference_workers)]
+    roles, taken = {}, list(workers)
+    for role, spec in specs:
+        if spec.isdigit():
+            n = int(spec)
+            if n < 1:
+                raise ValueError(f"reference {role}: at least one worker")
+            first = len(taken)
+            ws = (
+                [f"fake_{role}_{i}" for i in range(n)] if a.fake_workers else [f"/worker_{first + i}" for i in range(n)]
+            )
+        else:
+            ws = worker_names(spec)
+        if not ws or set(ws) & set(taken):
+            raise ValueError(f"reference {role}: its workers must be others than --workers and the other references'")
+        roles[role] = ws
+        taken += ws
+    return roles
+
+
+def reference_settings(a, exp, roles, candidates) -> dict:
+    """What the campaign stores of its reference stacks: each role's identity (perception, model,
+    backend: what the workers are checked against), the candidate rule and the thresholds."""
+    if not roles:
+        return {}
+    out = {}
+    for role, ws in roles.items():
+        if role == attr.FULL:
+            model = a.full_model or attr.unflawed(exp.model)
+            if not model:
+                raise SystemExit(
+                    f"campaign: --reference full: the experiment's model {exp.model!r} has no known unflawed "
+                    "counterpart: name it with --full-model"
+                )
+            out[role] = {"workers": ws, "perception": "unet", "model": model, "unet_backend": exp.unet_backend}
+        else:
+            out[role] = {"workers": ws, "perception": "ground_truth"}
+    return {
+        "references": out,
+        "candidates": candidates,
+        "attribution_thresholds": {
+            "finding": attr.FINDING,
+            "reference_clear": attr.REFERENCE_CLEAR,
+            "candidate": attr.CANDIDATE,
+        },
+    }
 
 
 def print_summary(store, name, out=sys.stdout):
@@ -154,6 +243,17 @@ def print_summary(store, name, out=sys.stdout):
             f"{s['stack_collisions']} the stack's (the reference collided too)",
             file=out,
         )
+    cl = s["classes"]
+    if sum(cl.values()):
+        rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+        print(
+            f"three-stack attribution ({rerun} of {s['scenarios']} scenarios re-run on the references, "
+            f"{cl[attr.NOT_CANDIDATE]} not candidates): flaw {cl['flaw']}, model {cl['model']}, stack {cl['stack']}"
+            + (f", perception {cl['perception']}" if cl["perception"] else "")
+            + f"; unclear {cl['unclear']}, reverse {cl['reverse']}, pass {cl['pass']}, error {cl['error']}"
+            + (f", pending {cl[attr.PENDING]}" if cl[attr.PENDING] else ""),
+            file=out,
+        )
     if s["plr_below_0999"]:
         print(
             f"warning: {s['plr_below_0999']} runs reached the goal with PLR < 0.999 (the optimal path overestimated)",
@@ -170,8 +270,8 @@ def print_summary(store, name, out=sys.stdout):
     return s
 
 
-def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu):
-    from asg_agent.analysis.bench import breakdown
+def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu, groups=None):
+    from asg_agent.analysis.bench import breakdown, stack_costs
 
     wall, cpu = time.time() - t_wall, time.process_time() - t_cpu
     first, last = {}, {}
@@ -181,8 +281,23 @@ def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu):
     rows = [r for r in store.rows(name) if r["finished"] >= t_wall]
     sim = sum(r["sim_time"] or 0.0 for r in rows)
     agent = {"seconds": c.stages.seconds, "calls": c.stages.calls, "cpu": cpu}
+    groups = groups or {}
+    tested = set(groups.get("under test", ()))
     try:
-        out = breakdown(first, last, agent, len(rows), wall, sim, workers)
+        out = breakdown(
+            {k: v for k, v in first.items() if not tested or k[0] in tested},
+            {k: v for k, v in last.items() if not tested or k[0] in tested},
+            agent,
+            len(rows),
+            wall,
+            sim,
+            workers,
+        )
+        if groups:
+            out["stacks"] = stack_costs(first, last, groups, len(rows))
+            labels = [r["attribution"] for r in rows]
+            if any(labels):
+                out["rerun_share"] = sum(x not in (None, attr.NOT_CANDIDATE) for x in labels) / len(rows)
     except ValueError as e:
         print(f"campaign: --stage-report: {e}", file=sys.stderr)
         return
@@ -207,21 +322,13 @@ def main(argv=None):
     except ValueError as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2
-    ref_workers = []
-    if a.reference_workers:
-        spec = a.reference_workers
-        if spec.isdigit():
-            first = len(workers)
-            ref_workers = (
-                [f"fake_ref_{i}" for i in range(int(spec))]
-                if a.fake_workers
-                else [f"/worker_{first + i}" for i in range(int(spec))]
-            )
-        else:
-            ref_workers = worker_names(spec)
-        if not ref_workers or set(ref_workers) & set(workers):
-            print("campaign: --reference-workers must name workers other than --workers", file=sys.stderr)
-            return 2
+    try:
+        roles = reference_roles(a, workers)
+    except ValueError as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
+    ref_workers = [w for ws in roles.values() for w in ws]
+    candidates = a.candidates or ("all" if a.reference_workers else "failures")
     slots = a.slots or 2 * len(workers)
     try:
         os.makedirs(os.path.dirname(os.path.abspath(a.store)), exist_ok=True)
@@ -237,13 +344,13 @@ def main(argv=None):
             f"campaign: {name!r} already exists in {a.store}: add --resume to continue it, or --name", file=sys.stderr
         )
         return 2
-    reference = None
+    references = {}
     if a.fake_workers:
         from asg_agent.campaign.fake_pool import FakePool
 
         pool = FakePool(a.fake_workers, seed=int(time.time()))
-        if ref_workers:  # a stand-in reference stack that wiggles less
-            reference = FakePool(len(ref_workers), seed=int(time.time()) + 1, gain=0.3, prefix="fake_ref")
+        for k, (role, ws) in enumerate(roles.items()):  # stand-in reference stacks that wiggle less
+            references[role] = FakePool(len(ws), seed=int(time.time()) + 1 + k, gain=0.3, prefix=f"fake_{role}")
     else:
         import rospy
         from asg_agent.ros.pool import WorkerPool
@@ -251,8 +358,8 @@ def main(argv=None):
         rospy.init_node("campaign", anonymous=True, disable_signals=True)
         try:
             pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
-            if ref_workers:
-                reference = WorkerPool(ref_workers, answer_timeout=a.answer_timeout)
+            for role, ws in roles.items():
+                references[role] = WorkerPool(ws, answer_timeout=a.answer_timeout)
         except RuntimeError as e:
             print(f"campaign: {e}", file=sys.stderr)
             return 2
@@ -287,7 +394,11 @@ def main(argv=None):
         bar.n = st["done"]
         best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
         diff = ""
-        if st.get("perception") is not None:
+        cl = st.get("classes")
+        if cl and attr.FULL in st.get("roles", ()):
+            rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+            diff = f" flaw {cl['flaw']} model {cl['model']} stack {cl['stack']} rerun {rerun}"
+        elif st.get("perception") is not None:
             diff = f" perception {st['perception']} stack {st['stack']}"
         if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
             diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
@@ -300,6 +411,7 @@ def main(argv=None):
     settings = {
         "workers": workers,
         "reference_workers": ref_workers,
+        **reference_settings(a, exp, roles, candidates),
         "reward": a.reward,
         **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
         "experiment_file": exp.source,
@@ -315,6 +427,24 @@ def main(argv=None):
         from asg_agent.ros.replay import stack_mismatch
 
         wrong = [m for w in workers for m in stack_mismatch(w, settings)]
+        for role, ws in roles.items():
+            wrong += [m for w in ws for m in stack_mismatch(w, settings["references"][role])]
+        # Issue #36: what decides the U-Net's numerics on each worker's machine, recorded so that a
+        # replay elsewhere can tell whether it repeats the runs; one campaign, one numerics.
+        groups = [(settings, workers)] + [(settings["references"][r], ws) for r, ws in roles.items()]
+        for where, ws in groups:
+            if where.get("perception") != "unet":
+                continue
+            from asg_agent.ros.replay import segmenter_numerics
+
+            seen = {w: segmenter_numerics(w, timeout=60.0) for w in ws}
+            if len(set(seen.values())) > 1 or "" in seen.values():
+                wrong.append(
+                    "the segmenters do not all run the same numerics: "
+                    + ", ".join(f"{w}: {v or 'none reported'}" for w, v in seen.items())
+                )
+            else:
+                where["numerics"] = next(iter(seen.values()))
         if wrong:
             print(
                 "campaign: the workers do not run the experiment's stack (" + exp.source + "): " + "; ".join(wrong),
@@ -325,9 +455,12 @@ def main(argv=None):
     if a.stage_report and not a.fake_workers:
         from asg_agent.ros.stages import StageCollector
 
-        collector = StageCollector(workers)
-        nodes = 3 if exp.perception == "unet" else 2
-        if not collector.wait_for(nodes * len(workers), timeout=15.0):
+        collector = StageCollector(list(workers) + ref_workers)
+        nodes = (3 if exp.perception == "unet" else 2) * len(workers)
+        nodes += sum(
+            (3 if settings["references"][r]["perception"] == "unet" else 2) * len(ws) for r, ws in roles.items()
+        )
+        if not collector.wait_for(nodes, timeout=15.0):
             print(
                 "campaign: --stage-report: not every worker, segmenter and planner published stage_times "
                 "within 15 s; the breakdown will lack them",
@@ -347,7 +480,8 @@ def main(argv=None):
         progress=progress,
         settings=settings,
         early_dispatch=not a.no_early_dispatch,
-        reference=reference,
+        references=references,
+        candidates=candidates if references else None,
         reward=a.reward,
         collision_bonus=a.collision_bonus,
     )
@@ -368,11 +502,13 @@ def main(argv=None):
         tb = None if a.no_tensorboard else open_tensorboard(a, store, name, c)
         if tb:
             c.scalars = tb.scenario
+            c.attributed = tb.attribution
         progress(c.status())
         t_wall, t_cpu = time.time(), time.process_time()
         c.run()
         if a.stage_report:
-            write_stage_report(a, c, store, name, collector, len(workers), t_wall, t_cpu)
+            groups = {"under test": list(workers), **roles}
+            write_stage_report(a, c, store, name, collector, len(workers), t_wall, t_cpu, groups)
     except (ValueError, StoreError) as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2

@@ -82,9 +82,31 @@ def stack_mismatch(worker: str, settings: dict) -> list:
             )
             if backend != ran:
                 out.append(f"the campaign's stack runs the {ran!r} inference backend, {worker} runs {backend!r}")
+            # Issue #36: the numerics (oneDNN kernels, threads, torch) the runs were made with.
+            recorded = settings.get("numerics", "")
+            here = segmenter_numerics(worker, timeout=30.0) if recorded else ""
+            if recorded and here:
+                from asg_perception.numerics import can_reproduce
+
+                why = can_reproduce(recorded, here)
+                if why:
+                    out.append(f"{worker} cannot repeat the stored runs bit for bit on this machine ({why})")
     elif want == "ground_truth" and has_seg:
         out.append(f"the campaign ran ground-truth labels, {worker} runs a segmenter")
     return out
+
+
+def segmenter_numerics(worker: str, timeout: float = 0.0) -> str:
+    """The numerics identity `worker`'s segmenter set once its model was loaded
+    (asg_perception.numerics.identity), waiting up to `timeout` [s, wall] for it; "" if none."""
+    import rospy
+
+    deadline = time.time() + timeout
+    while True:
+        got = rospy.get_param(f"{worker}/segmenter/numerics", "")
+        if got or time.time() >= deadline:
+            return got
+        time.sleep(0.2)
 
 
 def planner_config_path(name: str) -> str:

@@ -84,6 +84,15 @@ class RunOutcome:
         return self.termination == "SUCCESS" and self.proxy is not None and self.proxy < REFERENCE_CLEAR
 
 
+def unflawed(model: str) -> Optional[str]:
+    """The `full` reference's model for a stack under test's: the shipped pairs are named
+    flawed/full, flawed_lite/full_lite, flawed_tw/full_tw. None when the name says nothing."""
+    base = model.rsplit("/", 1)[-1]
+    if "flawed" not in base:
+        return None
+    return model[: len(model) - len(base)] + base.replace("flawed", "full")
+
+
 def fails(termination: str, proxy: Optional[float]) -> bool:
     return RunOutcome(termination, proxy).fails
 

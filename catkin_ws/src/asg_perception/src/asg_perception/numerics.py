@@ -1,0 +1,122 @@
+"""What decides the U-Net's numerics on a CPU, pinned and recorded (no rospy; issue #36).
+
+oneDNN, under torch, picks its convolution kernels by the CPU's instruction set. For bf16, an
+Intel Xeon with AMX runs AMX kernels and a CPU with AVX512-BF16 (but no AMX) runs AVX-512 ones:
+the labels differ in a few pixels, and a run recorded on one does not replay on the other. So
+the segmenter caps oneDNN at ISA_CAP (the environment variable ONEDNN_MAX_CPU_ISA, and its older
+name DNNL_MAX_CPU_ISA, set before oneDNN creates its first kernel) and records which kernels it
+can then use: the *effective ISA*, the cap or the CPU's best below it. Two machines with the same
+effective ISA, thread count and torch give the same labels; `replay` refuses, before it runs, a
+stored run whose effective ISA this machine cannot reach, saying why.
+
+A user may set ONEDNN_MAX_CPU_ISA themselves; the effective ISA recorded is then theirs.
+"""
+
+import os
+from typing import Iterable, Optional
+
+#: oneDNN's ISA names, lowest first (the subset that decides x86-64 convolution kernels)
+ISA_ORDER = (
+    "SSE41",
+    "AVX",
+    "AVX2",
+    "AVX2_VNNI",
+    "AVX512_CORE",
+    "AVX512_CORE_VNNI",
+    "AVX512_CORE_BF16",
+    "AVX512_CORE_FP16",
+    "AVX512_CORE_AMX",
+)
+#: the highest ISA the segmenter lets oneDNN use: AVX512-BF16, the kernels the stored references
+#: were recorded with (tests/reference); AMX machines then run the same kernels.
+ISA_CAP = "AVX512_CORE_BF16"
+ENV = ("ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA")
+#: backends whose convolutions run in bf16 (the others run fp32, whose kernels VNNI, BF16 and AMX
+#: do not change: their numerics are those of FP32_TOP on any CPU at or above it)
+BF16_BACKENDS = ("bf16",)
+FP32_TOP = "AVX512_CORE"
+
+# /proc/cpuinfo flags each ISA needs (all of them)
+_NEEDS = {
+    "SSE41": ("sse4_1",),
+    "AVX": ("avx",),
+    "AVX2": ("avx2",),
+    "AVX2_VNNI": ("avx2", "avx_vnni"),
+    "AVX512_CORE": ("avx512f", "avx512bw", "avx512vl", "avx512dq"),
+    "AVX512_CORE_VNNI": ("avx512f", "avx512bw", "avx512vl", "avx512dq", "avx512_vnni"),
+    "AVX512_CORE_BF16": ("avx512f", "avx512bw", "avx512vl", "avx512dq", "avx512_vnni", "avx512_bf16"),
+    "AVX512_CORE_FP16": ("avx512f", "avx512bw", "avx512vl", "avx512dq", "avx512_vnni", "avx512_bf16", "avx512_fp16"),
+    "AVX512_CORE_AMX": ("avx512f", "avx512bw", "avx512vl", "avx512dq", "avx512_vnni", "avx512_bf16", "amx_bf16"),
+}
+
+
+def cpu_flags(path: str = "/proc/cpuinfo") -> frozenset:
+    try:
+        with open(path, encoding="utf-8") as f:
+            for line in f:
+                if line.startswith("flags"):
+                    return frozenset(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return frozenset()
+
+
+def best_isa(flags: Iterable[str]) -> str:
+    """The highest ISA of ISA_ORDER the CPU has ("" when not even SSE4.1: not x86-64)."""
+    flags = set(flags)
+    best = ""
+    for isa in ISA_ORDER:
+        if all(f in flags for f in _NEEDS[isa]):
+            best = isa
+    return best
+
+
+def effective_isa(flags: Iterable[str], cap: Optional[str] = None) -> str:
+    """The kernels oneDNN can use: the CPU's best ISA, capped at `cap` (default: the
+    environment's ONEDNN_MAX_CPU_ISA, else ISA_CAP)."""
+    cap = (cap or os.environ.get(ENV[0]) or os.environ.get(ENV[1]) or ISA_CAP).upper()
+    if cap == "ALL":  # oneDNN's own word for no cap
+        cap = ISA_ORDER[-1]
+    if cap not in ISA_ORDER:
+        raise ValueError(f"ONEDNN_MAX_CPU_ISA={cap!r}: not one of {', '.join(ISA_ORDER)}")
+    best = best_isa(flags)
+    if not best:
+        return ""
+    return min(best, cap, key=ISA_ORDER.index)
+
+
+def pin() -> str:
+    """Caps oneDNN at ISA_CAP unless the environment already names a cap; call before the first
+    inference (asg_perception.inference does, at import). Returns the cap in force."""
+    cap = os.environ.get(ENV[0]) or os.environ.get(ENV[1]) or ISA_CAP
+    for name in ENV:
+        os.environ[name] = cap
+    return cap
+
+
+def identity(backend: str, threads: int, flags: Optional[Iterable[str]] = None) -> str:
+    """The segmenter's numerics as one string, stored with every campaign and compared by replay:
+    'BACKEND isa=EFFECTIVE threads=N torch=VERSION'."""
+    import torch
+
+    isa = effective_isa(cpu_flags() if flags is None else flags)
+    if isa and backend not in BF16_BACKENDS:  # fp32 convolutions: AVX512_CORE and above run the same kernels
+        isa = min(isa, FP32_TOP, key=ISA_ORDER.index)
+    return f"{backend} isa={isa or 'unknown'} threads={int(threads)} torch={torch.__version__}"
+
+
+def can_reproduce(recorded: str, here: str) -> Optional[str]:
+    """None when a run whose segmenter numerics were `recorded` replays bit for bit where they are
+    `here`; otherwise the reason, in words. An empty `recorded` (runs from before issue #36) is
+    taken as reproducible."""
+    if not recorded or recorded == here:
+        return None
+    want = dict(kv.split("=", 1) for kv in recorded.split()[1:] if "=" in kv)
+    got = dict(kv.split("=", 1) for kv in here.split()[1:] if "=" in kv)
+    why = []
+    if recorded.split()[0] != here.split()[0]:
+        why.append(f"backend {recorded.split()[0]} was recorded, this segmenter runs {here.split()[0]}")
+    for key, what in (("isa", "oneDNN kernels"), ("threads", "torch threads"), ("torch", "torch")):
+        if want.get(key) != got.get(key):
+            why.append(f"{what}: recorded {want.get(key)}, here {got.get(key)}")
+    return "; ".join(why) or f"recorded {recorded!r}, here {here!r}"
