@@ -33,12 +33,22 @@ def test_launch_file_parses(path):
 def test_train_launch_starts_n_workers_and_the_campaign():
     path = os.path.join(REPO, "launch", "train.launch")
     nodes = roslaunch("--nodes", path, "workers:=3").split()
-    # 3 workers under test with the U-Net, and 2 reference workers (ground-truth labels) after them
+    # 3 workers under test with the U-Net, and 2 reference workers after them: the unflawed U-Net, ground truth
     assert [n for n in nodes if n.endswith("/scene_worker")] == [f"/worker_{i}/scene_worker" for i in range(5)]
-    assert [n for n in nodes if n.endswith("/segmenter")] == [f"/worker_{i}/segmenter" for i in range(3)]
+    assert [n for n in nodes if n.endswith("/segmenter")] == [f"/worker_{i}/segmenter" for i in range(4)]
     assert "/campaign" in nodes
     args = roslaunch("--args", "/campaign", path, "workers:=3")
-    assert "--workers 3" in args and "--reference-workers 2" in args and "--reward proxy" in args
+    # Issue #36: three-stack attribution by default, the unflawed U-Net on worker_3, ground truth on worker_4
+    assert "--workers 3" in args and "--reward proxy" in args
+    assert "--reference full=1 --reference ground_truth=1 --full-model full" in args
+    import yaml
+
+    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "model:=flawed_lite"))
+    assert params["/worker_3/segmenter/model"] == "full_lite" and "/worker_4/segmenter/model" not in params
+    assert params["/worker_4/scene_worker/publish_labels"] is True
+    for single in ("true", "ground_truth"):  # round 3's single-reference mode stays selectable
+        args = roslaunch("--args", "/campaign", path, "workers:=3", f"attribution:={single}")
+        assert "--reference-workers 2" in args and "--reference " not in args
     nodes = roslaunch("--nodes", path, "workers:=3", "attribution:=false").split()
     assert [n for n in nodes if n.endswith("/scene_worker")] == [f"/worker_{i}/scene_worker" for i in range(3)]
     assert "--reference-workers" not in roslaunch("--args", "/campaign", path, "attribution:=false")

@@ -12,6 +12,8 @@
 # its export can serve as a search-comparison arm (docs/experiments.md).
 # SOAK_REFERENCE=2: attribution on, every scenario also run on 2 reference workers (ground-truth
 # stack, worker_2 and worker_3), which the killer hits too (their scene workers and planners).
+# SOAK_REFERENCE=three: three-stack attribution (issue #36): worker_2 runs the unflawed U-Net
+# (`full`), worker_3 ground truth, and the candidates are re-run on both; the killer hits them too.
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 HOURS="${1:-2}"
 MIN_GAP="${2:-60}"
@@ -35,7 +37,16 @@ REF="${SOAK_REFERENCE:-0}"
 start_workers 2 perception:=unet
 UNDER_TEST=("${WORKER_PIDS[@]}")
 REF_ARGS=()
-if [ "$REF" -gt 0 ]; then
+NOSEG=2  # the first worker without a segmenter
+if [ "$REF" = three ]; then
+  roslaunch "$REPO/launch/worker.launch" ns:=worker_2 markers:=false perception:=unet model:=full >/dev/null 2>&1 &
+  UNDER_TEST+=($!)
+  roslaunch "$REPO/launch/worker.launch" ns:=worker_3 markers:=false perception:=ground_truth >/dev/null 2>&1 &
+  UNDER_TEST+=($!)
+  REF=2
+  NOSEG=3
+  REF_ARGS=(--reference full=1 --reference ground_truth=1)
+elif [ "$REF" -gt 0 ]; then
   for ((w = 2; w < 2 + REF; w++)); do
     roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" markers:=false perception:=ground_truth >/dev/null 2>&1 &
     UNDER_TEST+=($!)
@@ -51,7 +62,7 @@ trap cleanup EXIT
   while sleep "$(( MIN_GAP + RANDOM % (MAX_GAP - MIN_GAP + 1) ))"; do
     w=$(( RANDOM % (2 + REF) ))
     kind=$(( RANDOM % 4 ))
-    if [ "$w" -ge 2 ] && [ "$kind" = 2 ]; then kind=$(( RANDOM % 2 )); fi  # no segmenter on a reference worker
+    if [ "$w" -ge "$NOSEG" ] && [ "$kind" = 2 ]; then kind=$(( RANDOM % 2 )); fi  # no segmenter on a ground-truth worker
     case $kind in
       0) victim="/worker_$w/scene_worker" ;;
       1) victim="/worker_$w/planner" ;;

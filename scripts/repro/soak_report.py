@@ -57,12 +57,16 @@ def main(argv):
         "retries_by_reason": dict(by_reason),
         "retried_scenarios_in_store": sum(1 for r in rows if r["attempts"] > 1),
         "stored_as_error": sum(1 for r in rows if r["termination"] == "ERROR"),
+        # issue #36: three-stack attribution under kills: every candidate attributed once, none left pending
+        "attribution": s.classes(name) if any(r["attribution"] for r in rows) else None,
+        "candidates_pending": sum(1 for r in rows if r["attribution"] == "pending"),
         "proxy_ge_3": sum((r["proxy"] or 0) >= 3 for r in rows),
     }
     with open(out, "w") as f:
         json.dump(res, f, indent=1)
     print(json.dumps(res, indent=1))
-    return 0 if res["lost"] == 0 and res["duplicates"] == 0 and res["integrity_ok"] and res["finished"] else 1
+    ok = res["lost"] == 0 and res["duplicates"] == 0 and res["integrity_ok"] and res["finished"]
+    return 0 if ok and res["candidates_pending"] == 0 else 1
 
 
 if __name__ == "__main__":

@@ -165,7 +165,23 @@ def top_down(store: Store, campaign: str, job: int, out: str):
         f"+ yaw term {row['yaw_term']:.2f} + PLR {row['plr']:.3f}^2\n{row['termination']} after "
         f"{row['sim_time']:.1f} s, driven {row['path_length']:.1f} m, optimal {row['optimal_length']:.1f} m"
     )
-    plot_run(out, req, traj[:, 1:3].tolist(), title=title, removed=removed, optimal=opt.points)
+    others = []
+    if row["reference_runs"]:  # three-stack attribution: the references' paths on the same scene
+        colours = {"full": "tab:blue", "ground_truth": "tab:green"}
+        for role, run in sorted(json.loads(row["reference_runs"]).items()):
+            p = "n/a" if run.get("proxy") is None else f"{run['proxy']:.2f}"
+            others.append((f"{role}: {run['termination']}, proxy {p}", run["trajectory_xy"], colours.get(role, "0.5")))
+        title += f"\nattribution: {row['attribution']}"
+    plot_run(
+        out,
+        req,
+        traj[:, 1:3].tolist(),
+        title=title,
+        removed=removed,
+        optimal=opt.points,
+        label="under test" if others else "vehicle",
+        others=others,
+    )
 
 
 def read_export(path: str):

@@ -256,6 +256,57 @@ def _baseline_html(experiment: str) -> str:
     )
 
 
+def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: str, top: int) -> str:
+    """The three-stack attribution section (issue #36): the classes, and the findings of the
+    stack under test (flaw first) with the three paths on the scene and the replay command."""
+    from asg_agent.analysis.export import top_down
+    from asg_agent.scoring import attribution as attr
+
+    cl = s["classes"]
+    if not sum(cl.values()):
+        return ""
+    rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+    head = "".join(f"<th>{k}</th>" for k in attr.CLASSES + (attr.NOT_CANDIDATE, attr.PENDING))
+    cells = "".join(f"<td>{cl[k]}</td>" for k in attr.CLASSES + (attr.NOT_CANDIDATE, attr.PENDING))
+    order = {k: i for i, k in enumerate(attr.FINDINGS)}
+    found = sorted(
+        (dict(r) for r in store.db.execute(
+            "SELECT job, proxy, termination, reference_runs, attribution FROM scenarios WHERE campaign = ? "
+            "AND attribution IN (" + ",".join("?" * len(attr.FINDINGS)) + ")",
+            (campaign, *attr.FINDINGS),
+        )),
+        key=lambda r: (order[r["attribution"]], r["job"]),
+    )[:top]
+    items = []
+    for r in found:
+        png = f"three_job{r['job']}.png"
+        top_down(store, campaign, r["job"], os.path.join(out_dir, png))
+        runs = json.loads(r["reference_runs"] or "{}")
+        refs = "; ".join(
+            f"{k} {v['termination']} ({'n/a' if v.get('proxy') is None else format(v['proxy'], '.2f')})"
+            for k, v in sorted(runs.items())
+        )
+        cmd = f"rosrun asg_agent replay {store_path} {campaign} {r['job']}"
+        proxy = "n/a" if r["proxy"] is None else f"{r['proxy']:.2f}"
+        items.append(
+            f"<tr><td>{html.escape(r['attribution'])}</td><td>{r['job']}</td><td>{html.escape(r['termination'])} "
+            f"({proxy})</td><td>{html.escape(refs)}</td><td><a href='{png}'><img src='{png}' width='220'></a></td>"
+            f"<td><code>{html.escape(cmd)}</code></td></tr>"
+        )
+    return (
+        f"<h2>Three-stack attribution</h2><p>{rerun} of {s['scenarios']} scenarios were candidates (a failure, "
+        f"or proxy &gt;= {attr.CANDIDATE:g}) and ran again on the reference stacks; {cl[attr.NOT_CANDIDATE]} were "
+        f"not re-run. <b>flaw</b>: only the stack under test fails; <b>model</b>: the unflawed U-Net fails too; "
+        f"<b>stack</b>: ground truth fails too (docs/agent.md).</p><table><tr>{head}</tr><tr>{cells}</tr></table>"
+        + (
+            "<table><tr><th>class</th><th>job</th><th>under test</th><th>references</th><th>the three paths</th>"
+            f"<th>replay</th></tr>{''.join(items)}</table>"
+            if items
+            else ""
+        )
+    )
+
+
 def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10) -> str:
     import matplotlib
 
@@ -324,6 +375,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
             f"the perception's (the reference stack drove through the same scene), "
             f"<b>{s['stack_collisions']}</b> the stack's (the reference collided too).</p>"
         )
+    attribution += _three_stack_html(store, store_path, campaign, s, out_dir, top)
     baseline = _baseline_html(c["experiment"])
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
 <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;

@@ -70,6 +70,18 @@ def parse(argv):
         help="TD3 methods: weight of the behaviour-regularisation term (default 1, the setting of "
         "every documented campaign; 0: off, the variant that collapses to the border)",
     )
+    p.add_argument(
+        "--route-band",
+        type=float,
+        default=5.0,
+        help="[m] route-random: half-width of the band around the straight start-goal route (default 5)",
+    )
+    p.add_argument(
+        "--route-share",
+        type=float,
+        default=1.0,
+        help="[-] route-random: the share of obstacles placed in the band, the rest anywhere (default 1)",
+    )
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
     p.add_argument(
         "--reference-workers",
@@ -380,7 +392,12 @@ def main(argv=None):
     if a.updates_per_step:
         td3.updates_per_step = a.updates_per_step
     td3.bc_weight = a.bc_weight
-    method = make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3)
+    options = {"band": a.route_band, "share": a.route_share} if a.method == "route-random" else None
+    try:
+        method = make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3, options=options)
+    except ValueError as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
     checkpoint = checkpoint_path(a.store, name)
     bar = None
     if not a.no_progress:

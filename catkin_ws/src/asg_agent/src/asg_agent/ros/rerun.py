@@ -63,8 +63,10 @@ def top_requests(export: str, top: int, select: str = "proxy"):
         order = {c: k for k, c in enumerate(CLASSES)}
         keyed = [((order[c], -r["proxy"], r["job"]), r) for r in rows if (c := campaign_class(r))]
         ranked = [r for _, r in sorted(keyed, key=lambda kr: kr[0])]
+    elif select == "first":  # issue #36: the first N by job, whatever they are (the candidate rule's check)
+        ranked = sorted(rows, key=lambda r: r["job"])
     else:
-        raise ValueError(f"unknown selection {select!r} (proxy or perception)")
+        raise ValueError(f"unknown selection {select!r} (proxy, perception or first)")
     out = []
     for k, r in enumerate(ranked[:top]):
         req = scenario_of(camp, r)
@@ -111,6 +113,7 @@ def run(a) -> int:
                 "campaign_termination": row["termination"],
                 "campaign_reference_proxy": (row.get("reference") or {}).get("proxy"),
                 "campaign_class": campaign_class(row),
+                "campaign_attribution": row.get("attribution"),
                 "termination": o.termination,
                 "collision_with": o.collision_with,  # the store's "layout:instance" ('' for none)
                 "error": o.error,
@@ -199,10 +202,11 @@ def main(argv=None):
     r.add_argument("--out", required=True)
     r.add_argument(
         "--select",
-        choices=("proxy", "perception"),
+        choices=("proxy", "perception", "first"),
         default="proxy",
         help="proxy: the top by proxy; perception: the attributed campaign's perception findings, "
-        "differential findings and perception collisions, in that order",
+        "differential findings and perception collisions, in that order; first: the first N by job "
+        "(every one, candidate or not: what the candidate rule missed, analysis.candidates)",
     )
     s = sub.add_parser("summary")
     s.add_argument("files", nargs="+")

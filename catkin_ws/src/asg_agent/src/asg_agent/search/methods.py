@@ -13,7 +13,8 @@ of the episode. An episode starts from a seeded random layout and the straight s
 (what a run without obstacles drives).
 
 Methods: `td3-per-asp` (the paper's), its ablations `td3-per`, `td3-asp`, `td3`, and the
-baselines `random` (uniform layouts), `annealing` (simulated annealing, a prior method the
+baselines `random` (uniform layouts), `route-random` (random layouts with the obstacles near the
+straight start-goal route), `annealing` (simulated annealing, a prior method the
 paper names), `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an engineer
 reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `ribs` package's
 grid archive and iso+line emitter, over two behaviour descriptors).
@@ -28,7 +29,7 @@ from asg_agent.campaign.experiment import Experiment
 from asg_agent.scoring.proxy import resample_path
 from asg_agent.search.td3 import TD3Agent, TD3Config
 
-METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "annealing", "cmaes", "map-elites")
+METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "route-random", "annealing", "cmaes", "map-elites")
 
 
 def _rng(seed: int, *keys: int) -> np.random.Generator:
@@ -89,6 +90,43 @@ class RandomSearch(SearchMethod):
 
     def propose(self, job, episode, step, state):
         return _rng(self.seed, 2, job).uniform(-1.0, 1.0, self.exp.action_dim).astype(np.float32)
+
+
+class RouteRandom(SearchMethod):
+    """Route-biased random layouts (issue #37's cheapest competitor that knows where failures
+    are): each obstacle, with probability `share`, lands in a band of half-width `band` [m] around
+    the straight start-goal segment (uniform along it, beyond the safety radius around start and
+    goal, which removes obstacles there, and uniform across the band), otherwise anywhere; seeded
+    by (seed, job) as `random`. The free textural and terrain values are uniform. Stateless."""
+
+    name = "route-random"
+
+    def __init__(self, experiment, seed, band: float = 5.0, share: float = 1.0):
+        super().__init__(experiment, seed)
+        if not (band > 0.0 and 0.0 <= share <= 1.0):
+            raise ValueError(f"route-random: band {band} [m] must be > 0 and share {share} in [0, 1]")
+        self.band, self.share = float(band), float(share)
+        op = experiment.scenario["operational"]
+        a, b = np.array([op["start_x"], op["start_y"]], float), np.array([op["goal_x"], op["goal_y"]], float)
+        length = float(np.linalg.norm(b - a))
+        margin = min(0.45, float(op.get("safety_radius", 0.0)) / max(length, 1e-9))
+        self.a, self.ab, self.t = a, b - a, (margin, 1.0 - margin)
+        self.normal = np.array([-self.ab[1], self.ab[0]]) / max(length, 1e-9)
+
+    def propose(self, job, episode, step, state):
+        rng = _rng(self.seed, 3, job)
+        a = rng.uniform(-1.0, 1.0, self.exp.action_dim)
+        n = self.exp.position_dim // 2
+        size = self.exp.size
+        for k in range(n):
+            if rng.uniform() < self.share:
+                t, d = rng.uniform(*self.t), rng.uniform(-self.band, self.band)
+                xy = np.clip(self.a + t * self.ab + d * self.normal, 0.0, size)
+                a[2 * k : 2 * k + 2] = xy / size * 2.0 - 1.0
+        return a.astype(np.float32)
+
+    def config(self):
+        return {"band": self.band, "share": self.share}
 
 
 class Annealing(SearchMethod):
@@ -361,10 +399,18 @@ class MapElites(SearchMethod):
 
 
 def make_method(
-    name: str, experiment: Experiment, seed: int, budget: int = 1000, td3_config: Optional[TD3Config] = None
+    name: str,
+    experiment: Experiment,
+    seed: int,
+    budget: int = 1000,
+    td3_config: Optional[TD3Config] = None,
+    options: Optional[dict] = None,
 ) -> SearchMethod:
+    """The method `name`; `options`: its own settings (route-random: band [m], share [-])."""
     if name == "random":
         return RandomSearch(experiment, seed)
+    if name == "route-random":
+        return RouteRandom(experiment, seed, **(options or {}))
     if name == "annealing":
         return Annealing(experiment, seed, budget=budget)
     if name == "cmaes":
