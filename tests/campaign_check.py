@@ -71,6 +71,12 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertFalse(os.path.exists(path) and Store(path).campaign("exp1-channels-last-td3-per-asp-s0"))
         out = self.run_campaign(path, "first")
         self.assertIn("campaign first: 20 scenarios", out)
+        # Issue #36: the campaign stores the numerics its segmenters ran (what replay compares).
+        import json
+
+        numerics = json.loads(Store(path).campaign("first")["settings"])["numerics"]
+        self.assertEqual(numerics, rospy.get_param("/worker_0/segmenter/numerics"))
+        self.assertRegex(numerics, r"^bf16 isa=\S+ threads=1 torch=\S+$")
         self.run_campaign(path, "second")
         store = Store(path)
         a, b = store.content_digest("first"), store.content_digest("second")

@@ -18,5 +18,6 @@ for k in $(seq "$REPEATS"); do
   BENCH_ATTRIBUTION=three BENCH_EXPERIMENT=exp1-bf16 bash "$HERE/bench.sh" "$SCENARIOS" "$TAG-three-$k" 3
   files+=("results/bench/$TAG-three-$k-w3.json")
 done
-cd "$HERE/../.."
+source "$HERE/../common.sh"
+source_ros
 /usr/bin/python3 -m asg_agent.analysis.bench table "${files[@]}"

@@ -270,11 +270,14 @@ def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: s
     cells = "".join(f"<td>{cl[k]}</td>" for k in attr.CLASSES + (attr.NOT_CANDIDATE, attr.PENDING))
     order = {k: i for i, k in enumerate(attr.FINDINGS)}
     found = sorted(
-        (dict(r) for r in store.db.execute(
-            "SELECT job, proxy, termination, reference_runs, attribution FROM scenarios WHERE campaign = ? "
-            "AND attribution IN (" + ",".join("?" * len(attr.FINDINGS)) + ")",
-            (campaign, *attr.FINDINGS),
-        )),
+        (
+            dict(r)
+            for r in store.db.execute(
+                "SELECT job, proxy, termination, reference_runs, attribution FROM scenarios WHERE campaign = ? "
+                "AND attribution IN (" + ",".join("?" * len(attr.FINDINGS)) + ")",
+                (campaign, *attr.FINDINGS),
+            )
+        ),
         key=lambda r: (order[r["attribution"]], r["job"]),
     )[:top]
     items = []

@@ -1,0 +1,53 @@
+"""Issue #36: the oneDNN ISA cap and the numerics identity that replay compares (no rospy)."""
+
+import os
+
+import pytest
+
+from asg_perception import numerics as n
+
+AVX512 = {"sse4_1", "avx", "avx2", "avx512f", "avx512bw", "avx512vl", "avx512dq"}
+EPYC = AVX512 | {"avx512_vnni", "avx512_bf16"}  # AVX512-BF16, no AMX (the CI machine)
+XEON_AMX = EPYC | {"amx_bf16", "amx_tile", "amx_int8"}
+
+
+def test_best_and_effective_isa_by_cpu():
+    assert n.best_isa({"sse4_1", "avx", "avx2"}) == "AVX2"
+    assert n.best_isa(AVX512) == "AVX512_CORE"
+    assert n.best_isa(EPYC) == "AVX512_CORE_BF16"
+    assert n.best_isa(XEON_AMX) == "AVX512_CORE_AMX"
+    assert n.best_isa(set()) == ""
+    # the cap makes an AMX Xeon and an AVX512-BF16 EPYC run the same kernels
+    assert n.effective_isa(XEON_AMX, n.ISA_CAP) == n.effective_isa(EPYC, n.ISA_CAP) == "AVX512_CORE_BF16"
+    assert n.effective_isa(XEON_AMX, "ALL") == "AVX512_CORE_AMX"
+    assert n.effective_isa(AVX512, n.ISA_CAP) == "AVX512_CORE"  # below the cap: the CPU's best
+    with pytest.raises(ValueError, match="ONEDNN_MAX_CPU_ISA"):
+        n.effective_isa(EPYC, "AVX9000")
+
+
+def test_the_package_pins_the_cap_before_torch_runs_a_kernel():
+    import subprocess
+    import sys
+
+    code = "import os, asg_perception; print(os.environ['ONEDNN_MAX_CPU_ISA'], os.environ['DNNL_MAX_CPU_ISA'])"
+    env = {k: v for k, v in os.environ.items() if k not in n.ENV}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == [n.ISA_CAP, n.ISA_CAP]  # pinned at import
+    env["ONEDNN_MAX_CPU_ISA"] = "ALL"  # a user's own cap is left as it is
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["ALL", "ALL"]
+
+
+def test_identity_and_what_can_replay_what():
+    here = n.identity("bf16", 1, flags=EPYC)
+    assert here.startswith("bf16 isa=AVX512_CORE_BF16 threads=1 torch=")
+    # fp32 backends: VNNI, BF16 and AMX do not change fp32 convolutions
+    assert n.identity("channels_last", 1, flags=XEON_AMX).startswith("channels_last isa=AVX512_CORE ")
+    assert n.can_reproduce(here, here) is None
+    assert n.can_reproduce("", here) is None  # runs recorded before issue #36
+    amx = here.replace("AVX512_CORE_BF16", "AVX512_CORE_AMX")
+    why = n.can_reproduce(amx, here)
+    assert "oneDNN kernels: recorded AVX512_CORE_AMX, here AVX512_CORE_BF16" in why
+    why = n.can_reproduce(here.replace("threads=1", "threads=2"), here)
+    assert "torch threads: recorded 2, here 1" in why
+    assert "backend eager was recorded" in n.can_reproduce(here.replace("bf16", "eager", 1), here)
