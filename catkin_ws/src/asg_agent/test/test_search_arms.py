@@ -1,5 +1,6 @@
 """Issue #37's arms and statistics: route-biased random layouts, and the statistics over seeds."""
 
+import json
 import os
 
 import numpy as np
@@ -58,3 +59,124 @@ def test_statistics_over_seeds():
     assert rows[0]["p"] is None and rows[1]["ratio"] == pytest.approx(3.5) and rows[1]["effect"] == 1.0
     with pytest.raises(ValueError, match="default"):
         stats.compare({"a": [1]}, "b")
+
+
+def test_failure_modes_of_findings():
+    from asg_agent.analysis import failure_modes as fm
+    from asg_scenario.layout import with_positions
+
+    exp = load_experiment(EXP)
+    n = exp.position_dim // 2
+    # Obstacle 0 on the route's left at 60 % of it, obstacle 1 on its right at 30 %, the rest far away.
+    a, b = np.array([20.0, 20.0]), np.array([80.0, 80.0])
+    normal = np.array([-1.0, 1.0]) / np.sqrt(2.0)
+    pos = [a + 0.6 * (b - a) + 2.0 * normal, a + 0.3 * (b - a) - 3.0 * normal] + [
+        [5.0 + 3 * k, 95.0] for k in range(n - 2)
+    ]
+    pos = [list(map(float, p)) for p in pos]
+    req = with_positions(exp.scenario, pos)
+    meshes = [l["mesh_name"] for l in req["structural"]["layouts"] for _ in l["instances"]]
+    line = [list(a + s * (b - a)) for s in np.linspace(0.0, 0.58, 60)]
+    hit = {"termination": "COLLISION", "collision_with": 0, "trajectory_xy": line, "positions": pos, "meshes": meshes}
+    m = fm.mode(hit, req)
+    assert m[0] == meshes[0] and m[1] == 2 and m[2] == "left" and m[3] in ("shadow", "lit")
+    m1 = fm.mode(dict(hit, collision_with=1), req)
+    assert m1[:3] == (meshes[1], 2, "right")  # the failure point, not the obstacle, sets `along`
+    weave = [
+        list(a + s * (b - a) + (4.0 * np.sin(np.pi * s) if 0.2 < s < 0.4 else 0.0) * normal)
+        for s in np.linspace(0, 1, 80)
+    ]
+    high = {
+        "termination": "SUCCESS",
+        "collision_with": None,
+        "trajectory_xy": weave,
+        "positions": pos,
+        "meshes": meshes,
+    }
+    assert fm.mode(high, req)[:3] == ("none", 1, "none")  # farthest from the route at 30 %
+    assert fm.distinct([m, m, m1]) == 2
+    assert fm.cells(["juniper", "barberry", "juniper"]) == (2 * 3 + 1) * fm.ROUTE_BINS * 2
+    assert fm.coverage([m, m1], ["juniper", "barberry"]) == 2 / 56
+
+
+def test_dense_rewards_see_how_close_a_run_came():
+    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.campaign.loop import Campaign
+    from asg_agent.campaign.store import Store
+    from asg_agent.scoring import attribution as attr
+    from asg_agent.scoring import rewards as rw
+    from asg_scenario.layout import with_positions
+
+    exp = load_experiment(EXP)
+    n = exp.position_dim // 2
+    req = with_positions(exp.scenario, [[50.0, 50.0]] + [[5.0 + 3 * k, 95.0] for k in range(n - 1)])
+    r0 = rw._discs(req, [])[0, 2]  # the obstacle at (50, 50): its collision radius
+    # Passing it 3 m off its disc, at 5 m/s along x: clearance 3, time to collision: none ahead.
+    xy = np.stack([np.arange(30.0, 70.0, 0.5), np.full(80, 50.0 + r0 + 3.0)], axis=1)
+    assert rw.min_clearance(req, xy) == pytest.approx(3.0)
+    assert rw.min_time_to_collision(req, xy) == rw.TTC_RANGE
+    # Straight at it at 5 m/s (0.5 m a 10 Hz sample), from 12 m off its disc to contact.
+    x = np.arange(50.0 - r0 - 12.0, 50.0, 0.5)
+    head_on = np.stack([x, np.full(len(x), 50.0)], axis=1)
+    assert rw.min_clearance(req, head_on) == 0.0 and rw.min_time_to_collision(req, head_on) == 0.0
+    # its last heading sample is 12 - 4 x 0.5 = 10.5 m from the disc: 2.1 s
+    assert rw.min_time_to_collision(req, head_on[:5]) == pytest.approx(10.5 / 5.0, abs=1e-6)
+    assert rw.clearance_reward(1.0, 0.0) == 1.0 + rw.DENSE_WEIGHT and rw.clearance_reward(1.0, 9.0) == 1.0
+    assert rw.ttc_reward(1.2, 1.5) == pytest.approx(1.2 + rw.DENSE_WEIGHT * 0.5)
+    assert rw.regret_reward(1.5, 0.0, 1.0, 5.0) == pytest.approx(0.5 + rw.DENSE_WEIGHT)
+    # In a campaign: the stored reward is the proxy plus the dense term, and regret needs `full` on every run.
+    store = Store(":memory:")
+    for reward in ("clearance", "ttc"):
+        c = Campaign(
+            reward,
+            exp,
+            make_method("random", exp, 1, budget=12),
+            store,
+            FakePool(2),
+            12,
+            1,
+            "/x",
+            slots=2,
+            reward=reward,
+        )
+        c._checkpoint = lambda: None  # nothing to resume here
+        c.start()
+        c.run(poll_timeout=0.0)
+        rows = list(store.rows(reward))
+        assert len(rows) == 12 and all(r["reward"] >= r["proxy"] for r in rows)
+        assert any(r["reward"] > r["proxy"] for r in rows)
+    with pytest.raises(ValueError, match="every scenario"):
+        Campaign(
+            "g",
+            exp,
+            make_method("random", exp, 1),
+            store,
+            FakePool(1),
+            4,
+            1,
+            "/x",
+            reward="regret",
+            references={attr.FULL: FakePool(1), attr.TRUTH: FakePool(1)},
+        )
+    c = Campaign(
+        "g",
+        exp,
+        make_method("random", exp, 1, budget=8),
+        store,
+        FakePool(2),
+        8,
+        1,
+        "/x",
+        slots=2,
+        reward="regret",
+        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, prefix="g")},
+        candidates="all",
+    )
+    c._checkpoint = lambda: None
+    c.start()
+    c.run(poll_timeout=0.0)
+    rows = list(store.rows("g"))
+    assert len(rows) == 8 and all(r["reward"] is not None and r["attribution"] for r in rows)
+    # proxy - full's proxy, plus the clearance lost, at most DENSE_WEIGHT either way
+    lost = [r["reward"] - (r["proxy"] - json.loads(r["reference_runs"])["full"]["proxy"]) for r in rows]
+    assert all(abs(v) <= rw.DENSE_WEIGHT + 1e-9 for v in lost) and any(abs(v) > 1e-6 for v in lost)

@@ -29,14 +29,17 @@ from asg_agent.scoring.proxy import ProxyConfig, run_terms
 from asg_agent.search.methods import SearchMethod
 from asg_agent.campaign.store import Store, pack_trajectory, unpack_trajectory
 from asg_agent.scoring import attribution as attr
+from asg_agent.scoring import rewards
 from asg_agent.search.td3 import load_checked, save_atomic
 
 
 #: what a search can maximise (Campaign's `reward`, the campaign's --reward)
-REWARDS = ("proxy", "differential", "collision")
+REWARDS = ("proxy", "differential", "collision", "clearance", "ttc", "regret")
 #: which scenarios run on the reference stacks: "failures" (the candidates of
 #: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
 CANDIDATE_RULES = ("failures", "all")
+#: rewards that read a reference run (the search waits for it)
+REFERENCE_REWARDS = ("differential", "collision", "regret")
 
 
 def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
@@ -185,14 +188,16 @@ class Campaign:
             raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
         if reward == "differential" and not references:
             raise ValueError("the differential reward needs a reference stack")
-        if reward == "differential" and candidates != "all":
-            raise ValueError("the differential reward needs every scenario re-run (candidates 'all')")
+        if reward in ("differential", "regret") and candidates != "all":
+            raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
+        if reward == "regret" and attr.FULL not in references:
+            raise ValueError(f"the regret reward needs the {attr.FULL!r} reference stack")
         if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
             raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
         self.references, self.candidates = references, candidates
         self.reward, self.collision_bonus = reward, float(collision_bonus)
         # The single-reference mode stores each row with its reference run, as round 3 did.
-        self.wait_for_references = bool(references) and (reward != "proxy" or candidates == "all")
+        self.wait_for_references = bool(references) and (reward in REFERENCE_REWARDS or candidates == "all")
         # attributed(job, class, counts of every class): called as each candidate's references
         # are in (tensorboard_log.TensorBoardLog.attribution); out of job order.
         self.attributed: Optional[Callable[[int, str, dict], None]] = None
@@ -443,6 +448,18 @@ class Campaign:
             reward = diff
         elif self.reward == "collision" and proxy is not None:
             reward = collision_reward(proxy, row["termination"], truth["termination"], self.collision_bonus)
+        elif self.reward == "regret":
+            full = rj.got[attr.FULL]
+            reward = None
+            if proxy is not None and full["proxy"] is not None:
+                removed = json.loads(row["removed"])
+                xy = unpack_trajectory(row["trajectory"])[:: rewards.SAMPLE_EVERY, 1:3]
+                reward = rewards.regret_reward(
+                    proxy,
+                    rewards.min_clearance(rj.request, xy, removed),
+                    full["proxy"],
+                    rewards.min_clearance(rj.request, np.asarray(full["trajectory_xy"]), removed),
+                )
         t0 = time.perf_counter()
         self.store.set_references(
             self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy if truth else None, reward
@@ -473,11 +490,17 @@ class Campaign:
         reward = terms.proxy if terms else None
         if self.reward == "collision" and terms:  # with references, rewritten once they are in
             reward = collision_reward(terms.proxy, o.termination, None, self.collision_bonus)
+        elif self.reward in ("clearance", "ttc") and terms:  # scoring/rewards.py, from the 10 Hz positions
+            xy = traj[:: rewards.SAMPLE_EVERY, 1:3]
+            if self.reward == "clearance":
+                reward = rewards.clearance_reward(terms.proxy, rewards.min_clearance(job.request, xy, o.removed))
+            else:
+                reward = rewards.ttc_reward(terms.proxy, rewards.min_time_to_collision(job.request, xy, o.removed))
         label, candidate = None, False
         if self.references:
             candidate = self.candidates == "all" or attr.is_candidate(o.termination, terms.proxy if terms else None)
             label = attr.PENDING if candidate else attr.NOT_CANDIDATE
-            if candidate and self.reward != "proxy":
+            if candidate and self.reward in REFERENCE_REWARDS:
                 reward = None  # known once the references are in
         row = {
             "campaign": self.name,

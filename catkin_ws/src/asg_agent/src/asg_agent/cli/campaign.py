@@ -120,8 +120,11 @@ def parse(argv):
         default="proxy",
         choices=REWARDS,
         help="what the search maximises: the stack under test's proxy (the paper), "
-        "proxy - reference proxy (differential; needs --reference-workers), or the proxy plus "
-        "--collision-bonus when the stack under test collided and the reference reached the goal (collision)",
+        "proxy - reference proxy (differential; needs --reference-workers), the proxy plus "
+        "--collision-bonus when the stack under test collided and the reference reached the goal (collision), "
+        "the proxy plus a dense term for how close the vehicle came to an obstacle (clearance) or how soon it "
+        "would have hit one (ttc), or the proxy and clearance lost against the unflawed stack (regret; needs "
+        "--reference full=... and --candidates all); scoring/rewards.py",
     )
     p.add_argument(
         "--collision-bonus",
@@ -154,6 +157,8 @@ def parse(argv):
     a = p.parse_args(argv)
     if a.scenarios < 1:
         p.error("--scenarios must be >= 1")
+    if a.reward == "regret" and not (any(r.startswith("full=") for r in a.reference) and a.candidates == "all"):
+        p.error("--reward regret needs --reference full=WORKERS (and ground_truth) with --candidates all")
     if a.reward == "differential" and not (a.reference_workers or a.reference):
         p.error("--reward differential needs --reference-workers (the reference stack to subtract)")
     if a.reference and a.reference_workers:

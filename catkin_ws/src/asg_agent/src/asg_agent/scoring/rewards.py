@@ -1,0 +1,86 @@
+"""Dense rewards that see failures (issue #37; no ROS): what the search maximises besides the paper's
+proxy, which scores a collision like any short run.
+
+- `clearance`: the proxy plus DENSE_WEIGHT x (1 - c / CLEARANCE_RANGE), c the smallest distance
+  [m] between the vehicle's reference point and a placed obstacle's collision disc over the run
+  (0 on contact), capped at CLEARANCE_RANGE: the closer the vehicle came, the more;
+- `ttc`: the proxy plus DENSE_WEIGHT x (1 - T / TTC_RANGE), T the smallest time to collision [s]
+  over the run: at each position, how long the vehicle would take, at its speed and on its
+  heading, to reach an obstacle's disc (0 on contact), capped at TTC_RANGE;
+- `regret`: against the unflawed `full` stack on the same scene (every scenario re-run on it):
+  proxy - full's proxy + DENSE_WEIGHT x (c_full - c) / CLEARANCE_RANGE, the clearances capped as
+  above: what the flaw costs, in the paper's score and in how close the vehicle came.
+
+All distances are read at 10 Hz (every 6th sample of the 60 Hz trajectory, as attribution keeps a
+reference run's positions), so the stack under test and a reference are measured alike.
+"""
+
+from typing import Optional, Sequence
+
+import numpy as np
+
+DENSE_WEIGHT = 2.0  # [-] contact adds this: a collision on a route of PLR about 1 scores about 3
+CLEARANCE_RANGE = 5.0  # [m] clearances at or beyond this add nothing
+TTC_RANGE = 3.0  # [s] times to collision at or beyond this add nothing
+SAMPLE_EVERY = 6  # [samples] 60 Hz -> 10 Hz
+SAMPLE_DT = SAMPLE_EVERY / 60.0  # [s]
+
+
+def _discs(request: dict, removed) -> np.ndarray:
+    from asg_agent.scoring.optimal_path import obstacle_discs
+    from asg_agent.scoring.proxy import placed_mask
+
+    d = obstacle_discs(request, 0.0, placed_mask(request, removed or []))
+    return np.array([(c.x, c.y, c.r) for c in d], float).reshape(-1, 3)
+
+
+def min_clearance(request: dict, xy: np.ndarray, removed: Optional[Sequence] = None) -> float:
+    """[m] smallest distance from the 10 Hz positions `xy` (n x 2) to a placed obstacle's
+    collision disc, 0 inside one; CLEARANCE_RANGE when there is no obstacle or no position."""
+    discs, xy = _discs(request, removed), np.asarray(xy, float).reshape(-1, 2)
+    if not len(discs) or not len(xy):
+        return CLEARANCE_RANGE
+    gap = np.hypot(xy[:, None, 0] - discs[None, :, 0], xy[:, None, 1] - discs[None, :, 1]) - discs[None, :, 2]
+    return float(min(CLEARANCE_RANGE, max(0.0, gap.min())))
+
+
+def min_time_to_collision(request: dict, xy: np.ndarray, removed: Optional[Sequence] = None) -> float:
+    """[s] smallest time to collision over the 10 Hz positions `xy`: from each position, moving at
+    its speed along its heading (both from the next position), the time to enter an obstacle's
+    disc; TTC_RANGE when none is reached within it."""
+    discs, xy = _discs(request, removed), np.asarray(xy, float).reshape(-1, 2)
+    if not len(discs) or len(xy) < 2:
+        return TTC_RANGE
+    v = np.diff(xy, axis=0) / SAMPLE_DT  # [m/s]
+    p = xy[:-1]
+    speed = np.linalg.norm(v, axis=1)
+    best = TTC_RANGE
+    for cx, cy, r in discs:
+        rel = p - (cx, cy)
+        inside = np.hypot(rel[:, 0], rel[:, 1]) <= r
+        if inside.any():
+            return 0.0
+        # |rel + v t| = r: a t^2 + b t + c = 0, the earliest t >= 0
+        a = (v * v).sum(axis=1)
+        b = 2.0 * (rel * v).sum(axis=1)
+        c = (rel * rel).sum(axis=1) - r * r
+        disc = b * b - 4.0 * a * c
+        ok = (speed > 1e-6) & (disc >= 0.0)
+        t = np.where(ok, (-b - np.sqrt(np.where(ok, disc, 0.0))) / (2.0 * np.where(ok, a, 1.0)), np.inf)
+        t = t[(t >= 0.0)]
+        if t.size:
+            best = min(best, float(t.min()))
+    return best
+
+
+def clearance_reward(proxy: float, clearance: float) -> float:
+    return proxy + DENSE_WEIGHT * (1.0 - min(clearance, CLEARANCE_RANGE) / CLEARANCE_RANGE)
+
+
+def ttc_reward(proxy: float, ttc: float) -> float:
+    return proxy + DENSE_WEIGHT * (1.0 - min(ttc, TTC_RANGE) / TTC_RANGE)
+
+
+def regret_reward(proxy: float, clearance: float, full_proxy: float, full_clearance: float) -> float:
+    c, cf = min(clearance, CLEARANCE_RANGE), min(full_clearance, CLEARANCE_RANGE)
+    return proxy - full_proxy + DENSE_WEIGHT * (cf - c) / CLEARANCE_RANGE
