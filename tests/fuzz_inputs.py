@@ -41,7 +41,11 @@ SEEDS = [
     os.path.join(REPO, "scenarios", "corpus", "good", f)
     for f in sorted(os.listdir(os.path.join(REPO, "scenarios", "corpus", "good")))
 ]
-EXPERIMENTS = [os.path.join(REPO, "experiments", f) for f in sorted(os.listdir(os.path.join(REPO, "experiments")))]
+EXPERIMENTS = [  # experiment files (a study's protocol-*.yaml beside them is not one)
+    os.path.join(REPO, "experiments", f)
+    for f in sorted(os.listdir(os.path.join(REPO, "experiments")))
+    if f.endswith(".yaml") and not f.startswith("protocol-")
+]
 
 WEIRD = [
     ("nan", float("nan")),

@@ -1,0 +1,293 @@
+"""A study fixed before its data (issue #37; no ROS): the protocol file names the experiment, the
+arms, seeds and budget, the endpoint and the statistics; this module turns it into campaign plans
+and reads the campaigns' exports back against it, printing every deviation.
+
+    python3 -m asg_agent.analysis.protocol plan experiments/protocol-round4.yaml pilot > results/round4/pilot.txt
+    python3 -m asg_agent.analysis.protocol choose experiments/protocol-round4.yaml results/round4
+    python3 -m asg_agent.analysis.protocol plan experiments/protocol-round4.yaml confirmatory \\
+        --choice results/round4/pilot_choice.json > results/round4/plan.txt
+    python3 -m asg_agent.analysis.protocol analyse experiments/protocol-round4.yaml results/round4
+
+Plans are lines of scripts/repro/campaigns.sh (NAME SCENARIOS LAUNCH ARGS...); campaigns are named
+PROTOCOL-ARM-sSEED (pilot: PROTOCOL-pilot-reward-REWARD-sSEED, PROTOCOL-pilot-band-BAND-sSEED).
+`choose` applies the pilot's stated rule to the pilot's exports and writes the choice; `analyse`
+counts, per arm and seed, the endpoint class per 1,000 scenarios and the secondary scores, and
+compares the default with every other arm (analysis/stats.py).
+"""
+
+import argparse
+import json
+import os
+import sys
+from typing import Dict, List, Optional
+
+import yaml
+
+from asg_agent.scoring import attribution as attr
+
+REQUIRED = ("name", "version", "experiment", "budget", "workers", "attribution", "endpoint", "pilot", "arms", "target")
+
+
+class ProtocolError(ValueError):
+    pass
+
+
+def load(path: str) -> dict:
+    try:
+        with open(path, encoding="utf-8") as f:
+            p = yaml.safe_load(f)
+    except (OSError, yaml.YAMLError) as e:
+        raise ProtocolError(f"{path}: cannot read the protocol ({e})") from None
+    missing = [k for k in REQUIRED if not isinstance(p, dict) or k not in p]
+    if missing:
+        raise ProtocolError(f"{path}: the protocol lacks {', '.join(missing)}")
+    if p["endpoint"].get("class") not in attr.CLASSES:
+        raise ProtocolError(f"{path}: endpoint class {p['endpoint'].get('class')!r} is not one of {attr.CLASSES}")
+    if "default" not in p["arms"]:
+        raise ProtocolError(f"{path}: no 'default' arm")
+    for name, arm in p["arms"].items():
+        if not arm.get("seeds") or not arm.get("method"):
+            raise ProtocolError(f"{path}: arm {name!r} needs a method and seeds")
+        overlap = set(arm["seeds"]) & set(p["pilot"]["seeds"])
+        if overlap:
+            raise ProtocolError(f"{path}: arm {name!r} reuses pilot seeds {sorted(overlap)}")
+    p["_path"] = path
+    return p
+
+
+def _campaign(p: dict, name: str, method: str, seed: int, reward: str = "proxy", band: Optional[float] = None):
+    args = [
+        f"method:={method}",
+        f"seed:={seed}",
+        f"experiment:={p['experiment']}",
+        f"workers:={p['workers']}",
+        f"attribution:={p['attribution']}",
+        f"reward:={reward}",
+    ]
+    if band is not None:
+        args.append(f"route_band:={band:g}")
+    if reward == "regret":  # every scenario re-run on the references
+        args.append("candidates:=all")
+    return {
+        "name": name,
+        "budget": p["budget"],
+        "method": method,
+        "seed": seed,
+        "reward": reward,
+        "band": band,
+        "args": args,
+    }
+
+
+def campaigns(p: dict, stage: str, choice: Optional[dict] = None) -> List[dict]:
+    """Every campaign of a stage ('pilot' or 'confirmatory'), each with its name and settings."""
+    n = p["name"]
+    out = []
+    if stage == "pilot":
+        for reward in p["pilot"]["rewards"]:
+            for s in p["pilot"]["seeds"]:
+                out.append(
+                    dict(
+                        _campaign(p, f"{n}-pilot-reward-{reward}-s{s}", "td3-per-asp", s, reward),
+                        arm=f"reward {reward}",
+                    )
+                )
+        for band in p["pilot"]["route_bands_m"]:
+            for s in p["pilot"]["seeds"]:
+                out.append(
+                    dict(
+                        _campaign(p, f"{n}-pilot-band-{band:g}-s{s}", "route-random", s, band=float(band)),
+                        arm=f"band {band:g} m",
+                    )
+                )
+        return out
+    if stage != "confirmatory":
+        raise ProtocolError(f"stage {stage!r}: pilot or confirmatory")
+    if choice is None:
+        raise ProtocolError("the confirmatory plan needs the pilot's choice (protocol choose ...)")
+    for arm, a in p["arms"].items():
+        reward = choice["reward"] if a.get("reward") == "pilot" else a.get("reward", "proxy")
+        band = a.get("band_m")
+        band = choice["band_m"] if band == "pilot" else band
+        for s in a["seeds"]:
+            out.append(dict(_campaign(p, f"{n}-{arm}-s{s}", a["method"], s, reward, band), arm=arm))
+    return out
+
+
+def plan_lines(cs: List[dict]) -> str:
+    return "".join(f"{c['name']}  {c['budget']} train {' '.join(c['args'])}\n" for c in cs)
+
+
+def per_seed(rows: List[dict], budget: int, cls: str) -> float:
+    """Findings of class `cls` per 1,000 scenarios among the first `budget` jobs."""
+    rows = [r for r in rows if r["job"] < budget]
+    return 1000.0 * sum(r.get("attribution") == cls for r in rows) / max(1, len(rows))
+
+
+def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
+    """What the export of campaign `c` does differently from the protocol (empty: nothing)."""
+    out = []
+    s = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp.get("settings", {})
+    jobs = {r["job"] for r in rows}
+    if len(jobs & set(range(p["budget"]))) < p["budget"]:
+        out.append(f"{c['name']}: {len(jobs & set(range(p['budget'])))} of the {p['budget']} scenarios")
+    if camp.get("method") != c["method"]:
+        out.append(f"{c['name']}: method {camp.get('method')!r}, the protocol says {c['method']!r}")
+    if camp.get("seed") != c["seed"]:
+        out.append(f"{c['name']}: seed {camp.get('seed')}, the protocol says {c['seed']}")
+    if s.get("reward", "proxy") != c["reward"]:
+        out.append(f"{c['name']}: reward {s.get('reward')!r}, the protocol says {c['reward']!r}")
+    refs = sorted((s.get("references") or {}).keys())
+    if refs != sorted(attr.ROLES):
+        out.append(f"{c['name']}: reference stacks {refs}, the protocol says {sorted(attr.ROLES)}")
+    if len(s.get("workers", [])) != p["workers"]:
+        out.append(f"{c['name']}: {len(s.get('workers', []))} workers under test, the protocol says {p['workers']}")
+    if c["band"] is not None and abs(float((s.get("method_config") or {}).get("band", -1)) - c["band"]) > 1e-9:
+        out.append(f"{c['name']}: band {(s.get('method_config') or {}).get('band')}, the protocol says {c['band']}")
+    if any(r.get("attribution") == attr.PENDING for r in rows):
+        out.append(f"{c['name']}: candidates still pending attribution")
+    return out
+
+
+def read_arms(p: dict, folder: str, cs: List[dict]):
+    """({arm: {seed: rows}}, {campaign name: campaign header}, deviations)."""
+    from asg_agent.analysis.export import read_export
+
+    arms: Dict[str, Dict[int, list]] = {}
+    heads, devs = {}, []
+    for c in cs:
+        path = os.path.join(folder, c["name"] + ".jsonl.gz")
+        if not os.path.isfile(path):
+            devs.append(f"{c['name']}: no export ({path})")
+            continue
+        camp, rows = read_export(path)
+        heads[c["name"]] = camp
+        devs += deviations(p, c, camp, rows)
+        arms.setdefault(c["arm"], {})[c["seed"]] = rows
+    return arms, heads, devs
+
+
+def choose(p: dict, folder: str) -> dict:
+    """The pilot's choice by the protocol's rule: the reward and the band of largest mean endpoint
+    findings per 1,000 over the pilot seeds (ties: more distinct modes, then list order)."""
+    import numpy as np
+
+    cs = campaigns(p, "pilot")
+    arms, heads, devs = read_arms(p, folder, cs)
+    cls = p["endpoint"]["class"]
+
+    def score(arm):
+        seeds = arms.get(arm, {})
+        if not seeds:
+            return (-1.0, -1)
+        return (float(np.mean([per_seed(r, p["budget"], cls) for r in seeds.values()])), 0)
+
+    rewards = [(score(f"reward {r}"), -k, r) for k, r in enumerate(p["pilot"]["rewards"])]
+    bands = [(score(f"band {b:g} m"), -k, b) for k, b in enumerate(p["pilot"]["route_bands_m"])]
+    best_r, best_b = max(rewards), max(bands)
+    return {
+        "reward": best_r[2],
+        "band_m": float(best_b[2]),
+        "rewards": {r: s[0] for s, _, r in rewards},
+        "bands_m": {f"{b:g}": s[0] for s, _, b in bands},
+        "deviations": devs,
+        "protocol": p["_path"],
+    }
+
+
+def analyse(p: dict, folder: str, choice: dict) -> dict:
+    from asg_agent.analysis import failure_modes as fm
+    from asg_agent.analysis import stats
+
+    cs = campaigns(p, "confirmatory", choice)
+    arms, heads, devs = read_arms(p, folder, cs)
+    cls, budget = p["endpoint"]["class"], p["budget"]
+    table = {}
+    for arm, seeds in arms.items():
+        camp = heads[next(c["name"] for c in cs if c["arm"] == arm and c["seed"] in seeds)]
+        modes, meshes = [], []
+        for rows in seeds.values():
+            keep = [r for r in rows if r["job"] < budget]
+            modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
+            meshes = meshes or (keep[0]["meshes"] if keep else [])
+        table[arm] = {
+            "per_seed": {s: per_seed(r, budget, cls) for s, r in sorted(seeds.items())},
+            "model": {s: per_seed(r, budget, "model") for s, r in sorted(seeds.items())},
+            "stack": {s: per_seed(r, budget, "stack") for s, r in sorted(seeds.items())},
+            "distinct_modes": fm.distinct(modes),
+            "coverage": fm.coverage(modes, meshes) if meshes else 0.0,
+        }
+    rows = []
+    if "default" in table:
+        rows = stats.compare({a: list(t["per_seed"].values()) for a, t in table.items()}, "default")
+    t = p["target"]
+    ref = next((r for r in rows if r["arm"] == t["ratio_over"]), None)
+    met = None
+    if ref is not None and "default" in table:
+        met = bool(
+            ref["ratio"] >= t["ratio"]
+            and ref["p"] < t["p"]
+            and table["default"]["distinct_modes"] >= t["distinct_modes"]
+        )
+    return {"arms": table, "comparison": rows, "target_met": met, "deviations": devs, "choice": choice}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="protocol", description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    a = sub.add_parser("plan")
+    a.add_argument("protocol")
+    a.add_argument("stage", choices=("pilot", "confirmatory"))
+    a.add_argument("--choice", default="")
+    c = sub.add_parser("choose")
+    c.add_argument("protocol")
+    c.add_argument("folder")
+    n = sub.add_parser("analyse")
+    n.add_argument("protocol")
+    n.add_argument("folder")
+    n.add_argument("--json", default="")
+    args = ap.parse_args(argv)
+    try:
+        p = load(args.protocol)
+        if args.cmd == "plan":
+            choice = None
+            if args.choice:
+                with open(args.choice) as f:
+                    choice = json.load(f)
+            sys.stdout.write(plan_lines(campaigns(p, args.stage, choice)))
+            return 0
+        if args.cmd == "choose":
+            ch = choose(p, args.folder)
+            out = os.path.join(args.folder, "pilot_choice.json")
+            with open(out, "w") as f:
+                json.dump(ch, f, indent=1, sort_keys=True)
+                f.write("\n")
+            for d in ch["deviations"]:
+                print(f"deviation: {d}")
+            print(f"pilot choice: reward {ch['reward']}, route band {ch['band_m']:g} m ({out})")
+            return 0
+        with open(os.path.join(args.folder, "pilot_choice.json")) as f:
+            choice = json.load(f)
+        res = analyse(p, args.folder, choice)
+    except (ProtocolError, OSError, ValueError, KeyError) as e:
+        print(f"protocol: {e}", file=sys.stderr)
+        return 2
+    for d in res["deviations"]:
+        print(f"deviation: {d}")
+    for r in res["comparison"]:
+        vs = (
+            ""
+            if r["p"] is None
+            else f"; default / this {r['ratio']:.2f} ({r['ratio_lo']:.2f}-{r['ratio_hi']:.2f}), p = {r['p']:.4f}"
+        )
+        print(
+            f"{r['arm']}: {r['mean']:.2f} per 1,000 ({r['lo']:.2f}-{r['hi']:.2f}) over {r['seeds']} seeds {r['counts']}{vs}"
+        )
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=1, sort_keys=True, default=str)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
