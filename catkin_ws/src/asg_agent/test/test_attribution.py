@@ -204,6 +204,7 @@ def test_export_summary_and_report_show_the_classes(tmp_path):
     assert all(set(r["reference_runs"]) == {attr.FULL, attr.TRUTH} for r in rows if r["job"] in WANT)
     page = open(campaign_report(store.path, "e", str(tmp_path / "report"))).read()
     assert "Three-stack attribution" in page and "4 of 24 scenarios were candidates" in page
+    assert page.count("quarter of the route") == len(WANT)  # each finding with its failure mode
     for job in WANT:  # each finding with its three paths and its replay command
         assert f"three_job{job}.png" in page and os.path.isfile(tmp_path / "report" / f"three_job{job}.png")
         assert f"replay {store.path} e {job}" in page

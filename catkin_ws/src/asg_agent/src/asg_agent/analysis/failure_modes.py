@@ -85,3 +85,38 @@ def modes_of(campaign: dict, rows: List[dict], keep=lambda r: True) -> List[tupl
     from asg_agent.analysis.experiments import scenario_of
 
     return [mode(r, scenario_of(campaign, r)) for r in rows if keep(r)]
+
+
+def mode_of_stored(row) -> Tuple[str, int, str, str]:
+    """The failure mode of a store row (campaign/store.py's scenarios table)."""
+    import json
+
+    from asg_agent.analysis.export import collision_index
+    from asg_agent.campaign.store import unpack_trajectory
+
+    req = json.loads(row["request"])
+    flat = [(l["mesh_name"], (i["x"], i["y"])) for l in req["structural"]["layouts"] for i in l["instances"]]
+    xy = unpack_trajectory(row["trajectory"])[::6, 1:3]
+    export_row = {
+        "termination": row["termination"],
+        "collision_with": collision_index(req, row["collision_with"]),
+        "trajectory_xy": xy.tolist(),
+        "positions": [list(p) for _, p in flat],
+        "meshes": [m for m, _ in flat],
+    }
+    return mode(export_row, req)
+
+
+def label(m: Tuple[str, int, str, str]) -> str:
+    """A failure mode in words, e.g. 'juniper, 2nd quarter of the route, left, shadow ahead'."""
+    obstacle, along, side, shadow = m
+    quarter = ("1st", "2nd", "3rd", "4th")[along] if ROUTE_BINS == 4 else f"part {along + 1}"
+    where = f"{quarter} quarter of the route"
+    hit = (
+        "no collision"
+        if obstacle == "none"
+        else f"{obstacle} on the {side}"
+        if side != "on"
+        else f"{obstacle} on the route"
+    )
+    return f"{hit}, {where}, {'shadow' if shadow == 'shadow' else 'no shadow'} ahead"

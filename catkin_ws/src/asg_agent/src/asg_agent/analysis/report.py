@@ -269,17 +269,20 @@ def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: s
     head = "".join(f"<th>{k}</th>" for k in attr.CLASSES + (attr.NOT_CANDIDATE, attr.PENDING))
     cells = "".join(f"<td>{cl[k]}</td>" for k in attr.CLASSES + (attr.NOT_CANDIDATE, attr.PENDING))
     order = {k: i for i, k in enumerate(attr.FINDINGS)}
-    found = sorted(
-        (
-            dict(r)
-            for r in store.db.execute(
-                "SELECT job, proxy, termination, reference_runs, attribution FROM scenarios WHERE campaign = ? "
-                "AND attribution IN (" + ",".join("?" * len(attr.FINDINGS)) + ")",
-                (campaign, *attr.FINDINGS),
-            )
-        ),
-        key=lambda r: (order[r["attribution"]], r["job"]),
-    )[:top]
+    from asg_agent.analysis import failure_modes as fm
+
+    found = [
+        dict(r)
+        for r in store.db.execute(
+            "SELECT job, proxy, termination, reference_runs, attribution, request, trajectory, collision_with "
+            "FROM scenarios WHERE campaign = ? AND attribution IN (" + ",".join("?" * len(attr.FINDINGS)) + ")",
+            (campaign, *attr.FINDINGS),
+        )
+    ]
+    for r in found:
+        r["mode"] = fm.mode_of_stored(r)
+    # grouped by failure mode (analysis/failure_modes.py), flaw findings first
+    found = sorted(found, key=lambda r: (order[r["attribution"]], r["mode"], r["job"]))[:top]
     items = []
     for r in found:
         png = f"three_job{r['job']}.png"
@@ -292,7 +295,8 @@ def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: s
         cmd = f"rosrun asg_agent replay {store_path} {campaign} {r['job']}"
         proxy = "n/a" if r["proxy"] is None else f"{r['proxy']:.2f}"
         items.append(
-            f"<tr><td>{html.escape(r['attribution'])}</td><td>{r['job']}</td><td>{html.escape(r['termination'])} "
+            f"<tr><td>{html.escape(r['attribution'])}</td><td>{html.escape(fm.label(r['mode']))}</td>"
+            f"<td>{r['job']}</td><td>{html.escape(r['termination'])} "
             f"({proxy})</td><td>{html.escape(refs)}</td><td><a href='{png}'><img src='{png}' width='220'></a></td>"
             f"<td><code>{html.escape(cmd)}</code></td></tr>"
         )
@@ -302,7 +306,8 @@ def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: s
         f"not re-run. <b>flaw</b>: only the stack under test fails; <b>model</b>: the unflawed U-Net fails too; "
         f"<b>stack</b>: ground truth fails too (docs/agent.md).</p><table><tr>{head}</tr><tr>{cells}</tr></table>"
         + (
-            "<table><tr><th>class</th><th>job</th><th>under test</th><th>references</th><th>the three paths</th>"
+            "<table><tr><th>class</th><th>failure mode</th><th>job</th><th>under test</th><th>references</th>"
+            "<th>the three paths</th>"
             f"<th>replay</th></tr>{''.join(items)}</table>"
             if items
             else ""
