@@ -40,7 +40,8 @@ import numpy as np
 import yaml
 
 from asg_agent.analysis.export import counts, read_export
-from asg_agent.campaign.store import DIFFERENTIAL, FINDING, REFERENCE_CLEAR, attribute
+from asg_agent.campaign.store import DIFFERENTIAL, FINDING, REFERENCE_CLEAR
+from asg_agent.scoring import attribution as attribution_rule
 
 PAPER = {"exp1": (682, 138, 8.31), "exp2": (126, 7, 6.79), "exp3": (477, 82, 6.67), "exp4": (305, 67, 8.00)}
 PAPER_SCENARIOS = 5000
@@ -60,7 +61,7 @@ def active_hours(rows) -> float:
 def ge3_curve(rows, budget: int) -> np.ndarray:
     """Count of proxy >= 3 after each scenario, in job order, up to the budget."""
     rows = sorted(rows, key=lambda r: r["job"])[:budget]
-    return np.cumsum([(r["proxy"] or 0) >= 3 for r in rows])
+    return np.cumsum([(r["proxy"] or 0) >= FINDING for r in rows])
 
 
 def layout_distance(a, b, meshes) -> float:
@@ -122,7 +123,7 @@ def distinct(rows, top: Optional[int], threshold: float, min_proxy: float = -np.
     return sum(_is_new(ranked, threshold))
 
 
-def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = 3.0, pred=None) -> np.ndarray:
+def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = FINDING, pred=None) -> np.ndarray:
     """Count of distinct finds after each scenario, in job order up to the budget: the
     scenarios with proxy >= `min_proxy` (or for which `pred(row)` holds) taken in the order
     found (_is_new)."""
@@ -133,20 +134,14 @@ def distinct_curve(rows, budget: int, threshold: float, min_proxy: float = 3.0, 
     return np.cumsum([new.get(id(r), False) for r in rows]).astype(int)
 
 
+# Round 3's single-reference predicates live with the rule (scoring/attribution.py).
+_perception_finding = attribution_rule.perception_finding
+_differential = attribution_rule.differential_finding
+_perception_collision = attribution_rule.perception_collision
+
+
 def _ref(r):
     return r.get("reference") or {}
-
-
-def _perception_finding(r) -> bool:
-    return r["proxy"] is not None and _ref(r).get("proxy") is not None and attribute(r["proxy"], _ref(r)["proxy"])[1]
-
-
-def _differential(r) -> bool:
-    return r["proxy"] is not None and _ref(r).get("proxy") is not None and r["proxy"] - _ref(r)["proxy"] >= DIFFERENTIAL
-
-
-def _perception_collision(r) -> bool:
-    return r["termination"] == "COLLISION" and _ref(r).get("termination") == "SUCCESS"
 
 
 #: The scores of an attributed campaign (issue #25), each counted and counted distinct: (key, label, predicate)
@@ -552,7 +547,7 @@ def dynamics(campaign: dict, rows, budget: int, window: int = 100) -> List[dict]
             {
                 "from": i + 1,
                 "to": i + len(chunk),
-                "ge3": int(sum((r["proxy"] or 0) >= 3 for r in chunk)),
+                "ge3": int(sum((r["proxy"] or 0) >= FINDING for r in chunk)),
                 "at_edge": float(edge.mean()),
                 "median_to_route_m": float(np.median(dist)),
             }
@@ -729,10 +724,10 @@ def differential(campaign: dict, rows, test: str, ref: str, top_png: str, curve_
         "min_reward": float(rw.min()) if len(rw) else None,
         "mean_reward": float(rw.mean()) if len(rw) else None,
         "cross": {
-            "test_ge3_ref_lt3": int(((pt >= 3) & (pr < 3)).sum()),
-            "test_lt3_ref_ge3": int(((pt < 3) & (pr >= 3)).sum()),
-            "both_ge3": int(((pt >= 3) & (pr >= 3)).sum()),
-            "neither": int(((pt < 3) & (pr < 3)).sum()),
+            "test_ge3_ref_lt3": int(((pt >= FINDING) & (pr < FINDING)).sum()),
+            "test_lt3_ref_ge3": int(((pt < FINDING) & (pr >= FINDING)).sum()),
+            "both_ge3": int(((pt >= FINDING) & (pr >= FINDING)).sum()),
+            "neither": int(((pt < FINDING) & (pr < FINDING)).sum()),
         },
         "terminations": {},
         "windows": [],
@@ -952,7 +947,7 @@ def flaw_or_layout_attributed(load, base: str, section: dict):
     per class of the campaign's verdict, how many fail the same way again, and the collisions
     split by the obstacle the campaign's run hit. section: {file: R.json (rerun summary's; its
     re-runs in the folder R/), campaign: NAME (the heading's), export: the campaign's export}."""
-    from asg_agent.ros.rerun import CLASSES, still_failing
+    from asg_agent.scoring.attribution import RERUN_CLASSES as CLASSES, still_failing
 
     with open(os.path.join(base, section["file"])) as f:
         rows = json.load(f)["summary"]
@@ -1185,8 +1180,8 @@ def run(manifest_path: str, out: str) -> dict:
                 camp, rows = load(rel)
                 rows = sorted(rows, key=lambda r: r["job"])[:budget]
                 n = distinct(rows, top, thr)
-                ge3 = sum((r["proxy"] or 0) >= 3 for r in rows)
-                n3 = {f"{t:g}": distinct(rows, None, t, min_proxy=3.0) for t in thrs}
+                ge3 = sum((r["proxy"] or 0) >= FINDING for r in rows)
+                n3 = {f"{t:g}": distinct(rows, None, t, min_proxy=FINDING) for t in thrs}
                 summary["diversity"][arm] = {
                     "export": rel,
                     "distinct": n,

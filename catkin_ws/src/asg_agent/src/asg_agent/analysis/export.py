@@ -36,7 +36,7 @@ from asg_agent.campaign.store import (
     unpack_trajectory,
     unpark,
 )
-from asg_agent.scoring.attribution import count_classes
+from asg_agent.scoring.attribution import FINDING, FINDING_STRONG, count_classes
 
 
 def actions_of(store: Store, campaign: str, size: float) -> np.ndarray:
@@ -201,8 +201,8 @@ def counts(rows) -> dict:
     p = [r["proxy"] for r in rows if r["proxy"] is not None]
     out = {
         "scenarios": len(rows),
-        "proxy_ge_3": sum(v >= 3 for v in p),
-        "proxy_ge_4": sum(v >= 4 for v in p),
+        "proxy_ge_3": sum(v >= FINDING for v in p),
+        "proxy_ge_4": sum(v >= FINDING_STRONG for v in p),
         "max_proxy": max(p) if p else None,
         "terminations": {t: sum(r["termination"] == t for r in rows) for t in sorted({r["termination"] for r in rows})},
     }

@@ -22,6 +22,7 @@ import os
 import sys
 
 import numpy as np
+from asg_agent.scoring.attribution import FINDING, FINDING_STRONG
 
 from asg_scenario.report import yaw_of
 
@@ -348,8 +349,8 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
     axes[0].set_xlabel("scenario (job)")
     axes[0].set_ylabel("proxy")
     axes[0].legend(fontsize=8)
-    axes[1].plot(np.cumsum(np.nan_to_num(proxy) >= 3), label=">= 3")
-    axes[1].plot(np.cumsum(np.nan_to_num(proxy) >= 4), label=">= 4")
+    axes[1].plot(np.cumsum(np.nan_to_num(proxy) >= FINDING), label=f">= {FINDING:g}")
+    axes[1].plot(np.cumsum(np.nan_to_num(proxy) >= FINDING_STRONG), label=f">= {FINDING_STRONG:g}")
     axes[1].set_xlabel("scenarios spent")
     axes[1].set_ylabel("count found")
     axes[1].legend(fontsize=8)

@@ -548,7 +548,7 @@ class Campaign:
         if terms:
             self.stats["best"] = max(self.stats["best"], terms.proxy)
             self.stats["ge3"] += terms.proxy >= attr.FINDING
-            self.stats["ge4"] += terms.proxy >= 4
+            self.stats["ge4"] += terms.proxy >= attr.FINDING_STRONG
         else:
             self.stats["errors"] += 1
         if self.progress:

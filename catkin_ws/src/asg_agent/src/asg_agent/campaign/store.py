@@ -108,6 +108,7 @@ ADDED = (
 from asg_agent.scoring.attribution import (  # noqa: E402
     DIFFERENTIAL,
     FINDING,
+    FINDING_STRONG,
     PENDING,
     REFERENCE_CLEAR,
     attribute,
@@ -225,8 +226,10 @@ class Store:
     def summary(self, campaign: str, top: int = 10) -> dict:
         q = self.db.execute
         n = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ?", (campaign,)).fetchone()[0]
-        c3 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= 3", (campaign,)).fetchone()[0]
-        c4 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= 4", (campaign,)).fetchone()[0]
+        c3 = q("SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= ?", (campaign, FINDING)).fetchone()[0]
+        c4 = q(
+            "SELECT COUNT(*) FROM scenarios WHERE campaign = ? AND proxy >= ?", (campaign, FINDING_STRONG)
+        ).fetchone()[0]
         best = q("SELECT MAX(proxy) FROM scenarios WHERE campaign = ?", (campaign,)).fetchone()[0]
         terms = dict(
             q(

@@ -31,6 +31,7 @@ from asg_agent.campaign.experiment import load_experiment
 from asg_agent.scoring.proxy import run_terms
 from asg_agent.search.methods import RandomSearch
 from asg_agent.campaign.store import attribute
+from asg_agent.scoring.attribution import FINDING
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
 STACKS = (
@@ -267,7 +268,7 @@ def stack_summary(rows: List[dict]) -> dict:
     return {
         "runs": len(rows),
         "errors": len(rows) - len(ok),
-        "share_ge3": float((p >= 3).mean()) if len(p) else None,
+        "share_ge3": float((p >= FINDING).mean()) if len(p) else None,
         "median_proxy": float(np.median(p)) if len(p) else None,
         "median_yaw_term": float(np.median(y)) if len(y) else None,
         "p90_yaw_term": float(np.percentile(y, 90)) if len(y) else None,

@@ -24,27 +24,19 @@ import time
 import numpy as np
 
 from asg_agent.analysis.export import read_export
-from asg_agent.campaign.store import DIFFERENTIAL, FINDING
+from asg_agent.scoring.attribution import FINDING, RERUN_CLASSES, rerun_class, still_failing
 from asg_agent.scoring.proxy import run_terms
 
 
+MAX_ATTEMPTS = 3  # runs of a scenario before its ERROR is kept (as the campaign's max_attempts)
+
 #: What an attributed campaign blamed on the perception, in the order `--select perception` takes it.
-CLASSES = ("finding", "differential", "collision")
-
-
-def _classes():
-    """(class, predicate on an export row) for each of CLASSES (experiments' attributed scores)."""
-    from asg_agent.analysis.experiments import _differential, _perception_collision, _perception_finding
-
-    return zip(CLASSES, (_perception_finding, _differential, _perception_collision))
+CLASSES = RERUN_CLASSES
 
 
 def campaign_class(row) -> str:
     """The first of CLASSES the campaign row falls in ('' for none, or a row without a reference)."""
-    for name, pred in _classes():
-        if pred(row):
-            return name
-    return ""
+    return rerun_class(row)
 
 
 def top_requests(export: str, top: int, select: str = "proxy"):
@@ -99,7 +91,7 @@ def run(a) -> int:
             attempts[k] = attempts.get(k, 0) + 1
             pool.submit(w, k, todo[k][1])
         for o in pool.poll(0.2):
-            if o.termination == "ERROR" and attempts[o.job] < 3:
+            if o.termination == "ERROR" and attempts[o.job] < MAX_ATTEMPTS:
                 pending.insert(0, o.job)
                 continue
             row, req = todo[o.job]
@@ -136,18 +128,6 @@ def run(a) -> int:
     return 0
 
 
-def still_failing(r) -> bool:
-    """Whether a re-run fails the way its campaign row did (its `campaign_class`)."""
-    c = r.get("campaign_class") or ""
-    if c == "collision":
-        return r["termination"] == "COLLISION"
-    if r["proxy"] is None:
-        return False
-    if c == "differential":
-        return r["proxy"] - r["campaign_reference_proxy"] >= DIFFERENTIAL
-    return r["proxy"] >= FINDING
-
-
 def by_class(rows) -> dict:
     """{class: {runs, still}} over the re-runs of an attributed campaign's selection ({} for a
     round-2 file, whose rows carry no class)."""
@@ -176,8 +156,8 @@ def summary(a) -> int:
                 "stack": stack,
                 "file": os.path.basename(path),
                 "runs": len(rows),
-                "still_ge3": sum(v >= 3 for v in p),
-                "dropped": sum(v < 3 for v in p),
+                "still_ge3": sum(v >= FINDING for v in p),
+                "dropped": sum(v < FINDING for v in p),
                 "errors": len(rows) - len(p),
                 "median_proxy": float(np.median(p)) if p else None,
                 "campaign_median_proxy": float(np.median([r["campaign_proxy"] for r in rows])),

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import Dict, Mapping, Optional
 
 FINDING = 3.0  # [-] a run with proxy at or above this is a finding (the paper's count)
+FINDING_STRONG = 4.0  # [-] the paper's second count (Table 2's ">= 4")
 REFERENCE_CLEAR = 2.0  # [-] a reference run below this (and at the goal) is clear of the failure
 DIFFERENTIAL = 1.0  # [-] a differential finding: the proxy exceeds its reference run's by at least this
 # [-] a run on the stack under test at or above this proxy (or failing) is re-run on the
@@ -144,3 +145,53 @@ def count_classes(labels) -> Dict[str, int]:
         if label is not None:
             out[label] = out.get(label, 0) + 1
     return out
+
+
+# -- Round 3's single-reference scores of an export row (its `reference`: the ground-truth run) --
+
+
+def _ref(row: Mapping) -> Mapping:
+    return row.get("reference") or {}
+
+
+def perception_finding(row: Mapping) -> bool:
+    """proxy >= FINDING where the ground-truth reference stayed below REFERENCE_CLEAR."""
+    ref = _ref(row).get("proxy")
+    return row["proxy"] is not None and ref is not None and attribute(row["proxy"], ref)[1]
+
+
+def differential_finding(row: Mapping) -> bool:
+    """proxy exceeding the ground-truth reference's by at least DIFFERENTIAL."""
+    ref = _ref(row).get("proxy")
+    return row["proxy"] is not None and ref is not None and row["proxy"] - ref >= DIFFERENTIAL
+
+
+def perception_collision(row: Mapping) -> bool:
+    """a collision where the ground-truth reference reached the goal."""
+    return row["termination"] == "COLLISION" and _ref(row).get("termination") == "SUCCESS"
+
+
+#: what a single-reference campaign blamed on the perception, in the order `rerun --select
+#: perception` takes it, each with its predicate on an export row
+RERUN_CLASSES = ("finding", "differential", "collision")
+_RERUN_PREDICATES = (perception_finding, differential_finding, perception_collision)
+
+
+def rerun_class(row: Mapping) -> str:
+    """The first of RERUN_CLASSES an export row falls in ('' for none, or a row without a reference)."""
+    for name, pred in zip(RERUN_CLASSES, _RERUN_PREDICATES):
+        if pred(row):
+            return name
+    return ""
+
+
+def still_failing(r: Mapping) -> bool:
+    """Whether a re-run (a `rerun` row) fails the way its campaign row did (its `campaign_class`)."""
+    c = r.get("campaign_class") or ""
+    if c == "collision":
+        return r["termination"] == "COLLISION"
+    if r["proxy"] is None:
+        return False
+    if c == "differential":
+        return r["proxy"] - r["campaign_reference_proxy"] >= DIFFERENTIAL
+    return r["proxy"] >= FINDING
