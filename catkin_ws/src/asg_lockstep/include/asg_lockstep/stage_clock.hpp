@@ -1,6 +1,6 @@
 // Where a process's time goes: wall seconds and calls per named stage, plus the process's CPU
 // time, accumulated since it started (no ROS; the nodes publish it as asg_msgs/StageTimes and
-// `scripts/bench.sh` turns two readings into a per-scenario breakdown, docs/benchmarks.md).
+// `scripts/repro/bench.sh` turns two readings into a per-scenario breakdown, docs/benchmarks.md).
 #pragma once
 
 #include <time.h>

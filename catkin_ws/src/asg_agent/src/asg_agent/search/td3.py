@@ -3,7 +3,7 @@
 One plain class for any continuous-control problem with actions in [-1, 1]^n: `act`, `observe`,
 `update`, `save`, `load`. TD3 (Fujimoto et al. 2018): twin critics (the smaller target value),
 target policy smoothing (clipped Gaussian noise on the target action), delayed actor and target
-updates. PER (replay.py) weights the critic loss by importance weights and re-prioritises by
+updates. PER (per_buffer.py) weights the critic loss by importance weights and re-prioritises by
 the TD error.
 
 Action saturation penalty (ASP, this project's design; the paper names it without a formula).
