@@ -68,3 +68,22 @@ def test_offline_names_a_bad_planner_parameter(tmp_path):
     assert "unknown planner parameter 'follower/kpp'" in res.stderr
     res = offline(tmp_path, "--label", "bad", "--set", "follower/kp")
     assert res.returncode == 2 and "expected KEY=VALUE" in res.stderr
+
+
+def test_every_shipped_planner_yaml_loads_in_the_tool(tmp_path):
+    # Issue #38: the tool read the planner table apart from the node and failed on the terrain keys
+    # ("yaml-cpp: error at line 14, column 24: bad conversion"); every shipped YAML must load, and
+    # with the default one the documented `baseline offline --planner` runs (the test above).
+    assert os.access(TOOL, os.X_OK), f"{TOOL}: not built"
+    config = os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config")
+    missing = str(tmp_path / "no_such_scenario.yaml")
+    for name in sorted(os.listdir(config)):
+        res = subprocess.run([TOOL, "--planner", os.path.join(config, name), missing], capture_output=True, text=True)
+        # the planner file was read; only the scenario that is not there stops it
+        assert res.returncode != 0 and f"{missing}: cannot read the file" in res.stderr, (name, res.stderr)
+    res = offline(tmp_path, "--label", "paper", "--planner", os.path.join(config, "planner.yaml"))
+    assert res.returncode == 0, res.stderr
+    rows, stored = baseline.read_rows(str(tmp_path / "exp1" / "offline" / "paper.jsonl")), baseline.read_rows(STORED)
+    for k in range(LAYOUTS):  # the node's parameters, read from the file: the ROS stack's runs
+        assert rows[k]["termination"] == stored[k]["termination"], k
+        assert rows[k]["proxy"] == pytest.approx(stored[k]["proxy"], abs=1e-4), k

@@ -28,7 +28,8 @@ void setParam(PlannerParams* p, const std::string& key, double v) {
       {"replan_period", &p->replan_period},        {"astar/vehicle_spacing", &p->astar.vehicle_spacing},
       {"astar/alpha", &p->astar.alpha},            {"astar/sigma", &p->astar.sigma},
       {"astar/kernel_sigmas", &p->astar.kernel_sigmas}, {"projection/max_height", &p->projection.max_height},
-      {"projection/max_range", &p->projection.max_range}, {"follower/lookahead", &p->follower.lookahead},
+      {"projection/max_range", &p->projection.max_range}, {"projection/ground_cell", &p->projection.ground_cell},
+      {"follower/lookahead", &p->follower.lookahead},
       {"follower/kp", &p->follower.kp},            {"follower/kd", &p->follower.kd},
       {"follower/steering_lock", &p->follower.steering_lock},
       {"follower/derivative_tau", &p->follower.derivative_tau}, {"follower/speed_kp", &p->follower.speed_kp},
@@ -37,6 +38,7 @@ void setParam(PlannerParams* p, const std::string& key, double v) {
   else if (key == "astar/edge_points") p->astar.edge_points = int(v);
   else if (key == "projection/stride") p->projection.stride = int(v);
   else if (key == "follower/first_crossing") p->follower.first_crossing = v != 0;
+  else if (key == "projection/height_above_ground") p->projection.height_above_ground = v != 0;
   else if (d.count(key)) *d[key] = v;
   else if (key == "ack_name" || key == "publish_markers") return;
   else throw std::runtime_error("unknown planner parameter '" + key + "'");
@@ -47,6 +49,7 @@ void loadYaml(PlannerParams* p, const YAML::Node& n, const std::string& prefix) 
     const std::string key = prefix + kv.first.as<std::string>();
     if (kv.second.IsMap()) loadYaml(p, kv.second, key + "/");
     else if (key == "follower/first_crossing") p->follower.first_crossing = kv.second.as<bool>();
+    else if (key == "projection/height_above_ground") p->projection.height_above_ground = kv.second.as<bool>();
     else if (key != "ack_name" && key != "publish_markers") setParam(p, key, kv.second.as<double>());
   }
 }
