@@ -1,0 +1,122 @@
+"""Issue #40: findings exported as a regression suite, run against stand-in stacks: pass or fail
+per scenario, JUnit XML, a regression when a recorded stack is swapped for a worse one, identical
+results from two runs of one stack, and bad suites refused by name."""
+
+import os
+import xml.etree.ElementTree as ET
+
+import pytest
+import yaml
+
+from asg_agent.analysis.export import export
+from asg_agent.campaign.experiment import load_experiment
+from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.store import Store
+from asg_agent.campaign import suite as st
+from asg_agent.cli.suite import main as suite_cli
+from asg_agent.scoring import attribution as attr
+from asg_agent.search.methods import make_method
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
+COLLIDE = {1, 4, 6, 9, 12, 15, 17, 20}
+
+
+@pytest.fixture()
+def campaign_export(tmp_path):
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp1.yaml"))
+    store = Store(str(tmp_path / "s.sqlite"))
+    settings = {"perception": "unet", "model": "flawed", "unet_backend": "bf16", "reward": "proxy"}
+    c = Campaign(
+        "c",
+        exp,
+        make_method("route-random", exp, 3, options={"band": 4.0}),
+        store,
+        FakePool(2, gain=0.0, collide_jobs=COLLIDE),
+        24,
+        3,
+        str(tmp_path / "c.ckpt"),
+        slots=4,
+        settings=settings,
+        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+    )
+    c.start()
+    c.run(poll_timeout=0.0)
+    path = str(tmp_path / "c.jsonl.gz")
+    export(store, "c", path)
+    return path
+
+
+def test_export_run_record_and_regress(tmp_path, campaign_export):
+    out = str(tmp_path / "suite")
+    s = st.export_suite([campaign_export], out)
+    n = len(s["scenarios"])
+    assert 1 <= n <= len(COLLIDE)  # one per failure mode of the flaw findings
+    assert len({e["mode"] for e in s["scenarios"]}) == n
+    e0 = s["scenarios"][0]
+    assert e0["class"] == "flaw" and e0["outcomes"]["flawed-bf16"]["termination"] == "COLLISION"
+    assert e0["outcomes"]["full"]["termination"] == "SUCCESS" and "replay --scenario scenarios/000-" in e0["replay"]
+    suite = st.load_suite(out)
+    # A stand-in "hardened" stack that drives every scene through: all pass; recorded.
+    res = st.compare(suite, st.run_suite(suite, FakePool(1, gain=0.0), poll=0.0), "hardened")
+    assert all(not r["fails"] and r["change"] == "new" for r in res)
+    st.record(suite, res, "hardened")
+    again = st.load_suite(out)
+    res2 = st.compare(again, st.run_suite(again, FakePool(2, gain=0.0), poll=0.0), "hardened")
+    assert [r["change"] for r in res2] == ["same"] * n  # two runs of one stack: identical digests
+    # The CLI: the recorded stack again passes (exit 0); swapped for one that fails on scenario 0,
+    # a regression (exit 1, JUnit failure). The CLI's stand-in is FakePool: patched to these stacks.
+    junit = str(tmp_path / "junit.xml")
+    orig = FakePool.__init__
+
+    def stack(collide):
+        def init(self, *a, **kw):
+            orig(self, *a, **dict(kw, gain=0.0, collide_jobs=collide))
+
+        return init
+
+    try:
+        FakePool.__init__ = stack(set())
+        assert suite_cli(["run", out, "--fake-workers", "1", "--against", "hardened", "--junit", junit]) == 0
+        FakePool.__init__ = stack({0})
+        rc = suite_cli(
+            [
+                "run",
+                out,
+                "--fake-workers",
+                "1",
+                "--against",
+                "hardened",
+                "--junit",
+                junit,
+                "--json",
+                str(tmp_path / "r.json"),
+            ]
+        )
+    finally:
+        FakePool.__init__ = orig
+    assert rc == 1
+    root = ET.parse(junit).getroot()
+    assert root.get("tests") == str(n) and root.get("failures") == "1"
+    bad = [tc for tc in root.iter("testcase") if tc.find("failure") is not None]
+    assert bad[0].get("name").startswith("000-") and "regression: collision" in bad[0].find("failure").get("message")
+
+
+def test_bad_suites_are_refused_by_name(tmp_path, campaign_export):
+    out = str(tmp_path / "suite")
+    st.export_suite([campaign_export], out, limit=2)
+    meta = yaml.safe_load(open(os.path.join(out, "suite.yaml")))
+    first = os.path.join(out, meta["scenarios"][0]["file"])
+    text = open(first).read()
+    with open(first, "w") as f:
+        f.write(text.replace("speed: 5.0", "speed: -5.0"))
+    with pytest.raises(
+        st.SuiteError, match=r"(?s)scenario 0 \(scenarios/000-.*\) is rejected by the validator.*operational.speed"
+    ):
+        st.load_suite(out)
+    meta["format_version"] = 99
+    with open(os.path.join(out, "suite.yaml"), "w") as f:
+        yaml.safe_dump(meta, f)
+    with pytest.raises(st.SuiteError, match="format_version 99, this tool reads 1"):
+        st.load_suite(out)
+    assert suite_cli(["run", out, "--fake-workers", "1"]) == 2
