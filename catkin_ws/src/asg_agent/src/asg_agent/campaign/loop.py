@@ -25,7 +25,7 @@ import numpy as np
 
 
 from asg_agent.campaign.experiment import Experiment
-from asg_agent.scoring.proxy import ProxyConfig, run_terms
+from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
 from asg_agent.search.methods import SearchMethod
 from asg_agent.campaign.store import Store, pack_trajectory, unpack_trajectory
 from asg_agent.scoring import attribution as attr
@@ -417,10 +417,7 @@ class Campaign:
             "attempts": rj.attempts.get(role, 0),
             "termination": o.termination,
             "error": o.error,
-            "proxy": terms.proxy if terms else None,
-            "vis": terms.vis if terms else None,
-            "yaw_term": terms.yaw_term if terms else None,
-            "plr": terms.plr if terms else None,
+            **term_values(terms),
             "sim_time": o.sim_time,
             "collision_with": o.collision_with,
             "trajectory_xy": kept_xy(o.trajectory),
@@ -514,10 +511,7 @@ class Campaign:
             "request": json.dumps(job.request, sort_keys=True),
             "termination": o.termination,
             "error": o.error,
-            "proxy": terms.proxy if terms else None,
-            "vis": terms.vis if terms else None,
-            "yaw_term": terms.yaw_term if terms else None,
-            "plr": terms.plr if terms else None,
+            **term_values(terms),
             "path_length": terms.path_length if terms else None,
             "optimal_length": terms.optimal_length if terms else None,
             "sim_time": o.sim_time,

@@ -25,7 +25,7 @@ import numpy as np
 
 from asg_agent.analysis.export import read_export
 from asg_agent.scoring.attribution import FINDING, RERUN_CLASSES, rerun_class, still_failing
-from asg_agent.scoring.proxy import run_terms
+from asg_agent.scoring.proxy import run_terms, term_values
 
 
 MAX_ATTEMPTS = 3  # runs of a scenario before its ERROR is kept (as the campaign's max_attempts)
@@ -109,10 +109,7 @@ def run(a) -> int:
                 "termination": o.termination,
                 "collision_with": o.collision_with,  # the store's "layout:instance" ('' for none)
                 "error": o.error,
-                "proxy": terms.proxy if terms else None,
-                "vis": terms.vis if terms else None,
-                "yaw_term": terms.yaw_term if terms else None,
-                "plr": terms.plr if terms else None,
+                **term_values(terms),
                 "sim_time": o.sim_time,
             }
             print(

@@ -170,3 +170,10 @@ def run_terms(scenario: dict, run, config: ProxyConfig = ProxyConfig(), dtype=np
     return traj, compute(
         scenario, traj[:, 0], traj[:, 1:3], traj[:, 4], run.visibility, run.termination, placed, config
     )
+
+
+def term_values(terms) -> dict:
+    """The proxy and its three terms of `run_terms`' result as plain values (all None for a run
+    without terms: an ERROR), as the store, attribution and the re-run files keep them."""
+    keys = ("proxy", "vis", "yaw_term", "plr")
+    return {k: (getattr(terms, k) if terms else None) for k in keys}
