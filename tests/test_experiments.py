@@ -405,3 +405,31 @@ def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_
     assert s["collisions_by_obstacle"] == {rows[2]["meshes"][1]: {"runs": 1, "still": 1}}
     table = (tmp_path / "out" / "tables.md").read_text()
     assert f"| paper | full | 3 | 0 of 1 | 1 of 1 | 1 of 1 | {rows[2]['meshes'][1]} 1 of 1 | 0 |" in table
+
+
+def test_round3_seed_tables_are_the_exports_and_the_prose_holds():
+    # Issue #37: the intervals and tests of docs/experiments.md "Round 3 over seeds" are generated;
+    # the page's block is what the exports give now, and the prose beside it says what they say.
+    from asg_agent.analysis import seed_tables, stats
+    from asg_agent.analysis.export import read_export
+
+    assert seed_tables.main(["--check"]) == 0, "docs/experiments.md: run python3 -m asg_agent.analysis.seed_tables"
+
+    rows = {
+        (a, s): read_export(os.path.join(REPO, "results", "comparison", p.format(s) + ".jsonl.gz"))[1]
+        for a, p in seed_tables.ARMS.items()
+        for s in range(3)
+    }
+
+    def arm(name, score):
+        return [stats.per_thousand(rows[(name, s)], score, 1000) for s in range(3)]
+
+    effect = {}
+    for score in ("perception", "differential", "collisions"):
+        arms = {a: arm(a, score) for a in seed_tables.ARMS}
+        for row in stats.compare(arms, "td3-per-asp")[1:]:
+            effect[(row["arm"], score)] = row["effect"]
+            assert row["p"] >= 0.05  # three seeds cannot reach it
+    assert all(effect[("random", s)] == 1.0 for s in ("perception", "differential", "collisions"))
+    assert effect[("map-elites", "collisions")] == -1.0
+    assert -1.0 < effect[("map-elites", "perception")] < 1.0 and -1.0 < effect[("map-elites", "differential")] < 1.0

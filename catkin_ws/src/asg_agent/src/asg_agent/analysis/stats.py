@@ -58,7 +58,8 @@ def ratio_ci(
     mb = b[rng.integers(0, b.size, size=(n, b.size))].mean(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(mb > 0, ma / np.where(mb > 0, mb, 1.0), np.inf)
-    lo, hi = np.quantile(r, [(1 - level) / 2, 1 - (1 - level) / 2])
+    # "nearest": an interval end is a resampled ratio itself (inf where the arm's mean was 0)
+    lo, hi = np.quantile(r, [(1 - level) / 2, 1 - (1 - level) / 2], method="nearest")
     point = a.mean() / b.mean() if b.mean() > 0 else float("inf")
     return float(point), float(lo), float(hi)
 
@@ -92,3 +93,86 @@ def compare(arms: Dict[str, Sequence[float]], default: str, seed: int = 0) -> li
             row.update(ratio=ratio, ratio_lo=rlo, ratio_hi=rhi, p=mw["p"], effect=mw["effect"])
         rows.append(row)
     return rows
+
+
+# -- the command: arms of exports compared on one score -----------------------------------------
+
+SCORES = {
+    # key: (label, per-row predicate on an export row)
+    "flaw": ("flaw findings (three-stack attribution)", lambda r: r.get("attribution") == "flaw"),
+    "model": ("model findings", lambda r: r.get("attribution") == "model"),
+    "perception": ("perception findings (round 3: proxy >= 3, ground truth < 2)", None),
+    "differential": ("differential findings (proxy - ground truth >= 1)", None),
+    "collisions": ("perception collisions (ground truth reached the goal)", None),
+    "ge3": ("proxy >= 3", None),
+}
+
+
+def _predicate(score: str):
+    from asg_agent.scoring import attribution as attr
+
+    return {
+        "perception": attr.perception_finding,
+        "differential": attr.differential_finding,
+        "collisions": attr.perception_collision,
+        "ge3": lambda r: r["proxy"] is not None and r["proxy"] >= attr.FINDING,
+    }.get(score) or SCORES[score][1]
+
+
+def per_thousand(rows, score: str, budget: int) -> float:
+    """A score's count per 1,000 scenarios over the first `budget` jobs of an export."""
+    keep = [r for r in rows if r["job"] < budget]
+    pred = _predicate(score)
+    return 1000.0 * sum(bool(pred(r)) for r in keep) / max(1, len(keep))
+
+
+def markdown(rows: list, label: str) -> str:
+    out = [
+        f"| arm | seeds | {label} per 1,000, per seed | mean (95 % interval) | default / arm (95 % interval) | "
+        "Mann-Whitney p | effect |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        ratio = (
+            "-"
+            if r["ratio"] is None
+            else ("inf" if r["ratio"] == float("inf") else f"{r['ratio']:.2f}")
+            + (f" ({r['ratio_lo']:.2f}-{r['ratio_hi']:.2f})" if r["ratio"] is not None else "")
+        )
+        out.append(
+            f"| {r['arm']} | {r['seeds']} | {', '.join(f'{v:g}' for v in r['counts'])} | "
+            f"{r['mean']:.1f} ({r['lo']:.1f}-{r['hi']:.1f}) | {ratio} | "
+            f"{'-' if r['p'] is None else format(r['p'], '.3f')} | {'-' if r['effect'] is None else format(r['effect'], '+.2f')} |"
+        )
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    import argparse
+    import sys
+
+    from asg_agent.analysis.export import read_export
+
+    p = argparse.ArgumentParser(prog="stats", description="arms of campaign exports compared on one score, over seeds")
+    p.add_argument("arms", nargs="+", help="ARM=EXPORT[,EXPORT...] (one export per seed)")
+    p.add_argument("--default", required=True, help="the arm the others are compared with")
+    p.add_argument("--score", default="flaw", choices=sorted(SCORES))
+    p.add_argument("--budget", type=int, default=1000, help="scenarios per campaign counted (first jobs)")
+    a = p.parse_args(argv)
+    arms = {}
+    try:
+        for spec in a.arms:
+            name, _, files = spec.partition("=")
+            if not files:
+                raise ValueError(f"{spec!r}: expected ARM=EXPORT[,EXPORT...]")
+            arms[name] = [per_thousand(read_export(f)[1], a.score, a.budget) for f in files.split(",")]
+        rows = compare(arms, a.default)
+    except (OSError, ValueError, KeyError) as e:
+        print(f"stats: {e}", file=sys.stderr)
+        return 2
+    print(markdown(rows, SCORES[a.score][0]))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
