@@ -41,6 +41,13 @@ class SuiteError(ValueError):
     pass
 
 
+class _Dumper(yaml.SafeDumper):
+    """Plain YAML: every entry written out, no anchors (a suite is read by people too)."""
+
+    def ignore_aliases(self, data):
+        return True
+
+
 def digest(trajectory) -> str:
     """sha256 of the float32 trajectory (t, x, y, yaw, yaw rate): identical runs, identical digests."""
     return hashlib.sha256(np.ascontiguousarray(np.asarray(trajectory, np.float32)).tobytes()).hexdigest()[:16]
@@ -119,7 +126,7 @@ def export_suite(exports: List[str], out: str, classes=("flaw",), limit: int = 0
         "scenarios": entries,
     }
     with open(os.path.join(out, "suite.yaml"), "w", encoding="utf-8") as f:
-        yaml.safe_dump(suite, f, sort_keys=False)
+        yaml.dump(suite, f, Dumper=_Dumper, sort_keys=False)
     return suite
 
 
@@ -231,7 +238,7 @@ def record(suite: dict, results: List[dict], label: str):
         }
     tmp = os.path.join(folder, "suite.yaml.part")
     with open(tmp, "w", encoding="utf-8") as f:
-        yaml.safe_dump(raw, f, sort_keys=False)
+        yaml.dump(raw, f, Dumper=_Dumper, sort_keys=False)
     os.replace(tmp, os.path.join(folder, "suite.yaml"))
 
 

@@ -1,0 +1,51 @@
+#!/usr/bin/python3
+"""rostest (issue #40): the committed suite through `suite run` as a CI system runs it. On the stack
+it was recorded on (`full`): every scenario passes with the recorded trajectory, exit 0, a JUnit
+file without failures. With the stack under test swapped for `flawed`: exit 1, and the JUnit file
+names every scenario that regressed."""
+
+import os
+import subprocess
+import tempfile
+import unittest
+import xml.etree.ElementTree as ET
+
+import rospy
+import rostest
+
+import stack_util as su
+
+SUITE = os.path.join(su.REPO, "tests", "suites", "exp1c-flaw")
+
+
+def run(worker, junit):
+    cmd = ["/usr/bin/python3", "-m", "asg_agent.cli.suite", "run", SUITE, "--workers", worker, "--against", "full"]
+    return subprocess.run(cmd + ["--junit", junit], capture_output=True, text=True, timeout=500)
+
+
+class SuiteInCi(unittest.TestCase):
+    def test_suite_passes_on_its_stack_and_fails_on_the_flawed_one(self):
+        rospy.init_node("suite_test")
+        for ns in ("worker_0", "worker_1"):
+            su.client(ns)
+            su.wait_for_segmenter(ns)
+        d = tempfile.mkdtemp()
+        ok = run("/worker_0", os.path.join(d, "full.xml"))
+        self.assertEqual(ok.returncode, 0, ok.stdout[-3000:] + ok.stderr[-2000:])
+        root = ET.parse(os.path.join(d, "full.xml")).getroot()
+        n = int(root.get("tests"))
+        self.assertGreaterEqual(n, 10)
+        self.assertEqual(root.get("failures"), "0")
+        self.assertIn(f"{n} of {n} pass; 0 regressions or changes", ok.stdout)
+        bad = run("/worker_1", os.path.join(d, "flawed.xml"))
+        self.assertEqual(bad.returncode, 1, bad.stdout[-3000:] + bad.stderr[-2000:])
+        root = ET.parse(os.path.join(d, "flawed.xml")).getroot()
+        failures = [tc for tc in root.iter("testcase") if tc.find("failure") is not None]
+        self.assertEqual(int(root.get("failures")), len(failures))
+        self.assertGreaterEqual(len(failures), 1)
+        for tc in failures:
+            self.assertTrue(tc.find("failure").get("message").startswith("regression: "), tc.get("name"))
+
+
+if __name__ == "__main__":
+    rostest.rosrun("asg_tests", "suite", SuiteInCi)
