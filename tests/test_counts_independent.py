@@ -99,3 +99,56 @@ def test_round3_single_reference_counts_recounted(path):
     collisions = sum(1 for r in refd if r["termination"] == "COLLISION" and r["reference"]["termination"] == "SUCCESS")
     c = counts(rows)
     assert (c["perception_ge3"], c["perception_collisions"]) == (perception, collisions)
+
+
+def test_the_three_stack_campaign_prose_is_its_export():
+    # docs/experiments.md "Round 4 groundwork": its table row is the independent recount.
+    path = os.path.join(REPO, "results", "attribution", "exp1c-td3-per-asp-s0.jsonl.gz")
+    rows = rows_of(path)
+    mine = {}
+    for r in rows:
+        c = my_class(r) if r.get("reference_runs") else "not_candidate"
+        mine[c] = mine.get(c, 0) + 1
+    ge3 = sum(1 for r in rows if r["proxy"] is not None and r["proxy"] >= 3.0)
+    row = (
+        f"| {len(rows)} | {len(rows) - mine['not_candidate']} | {mine.get('flaw', 0)} | {mine.get('model', 0)} | "
+        f"{mine.get('stack', 0)} | {mine.get('unclear', 0)} | {mine.get('reverse', 0)} | {mine.get('pass', 0)} | {ge3} |"
+    )
+    assert row in open(os.path.join(REPO, "docs", "experiments.md")).read(), row
+    # and the prose beside it
+    text = open(os.path.join(REPO, "docs", "experiments.md")).read()
+
+    def hits(cls, mesh):
+        return sum(
+            1
+            for r in rows
+            if r.get("reference_runs")
+            and my_class(r) == cls
+            and r["collision_with"] is not None
+            and r["meshes"][r["collision_with"]] == mesh
+        )
+
+    found = mine["flaw"] + mine["model"] + mine["stack"]
+    assert (
+        f"Of the {found} findings" in text
+        and f"{mine['flaw']} are the flaw's ({round(100 * mine['flaw'] / found)} %)" in text
+    )
+    assert (
+        f"{hits('flaw', 'barberry')} of the flaw findings hit a barberry and {hits('flaw', 'juniper')} a juniper"
+        in text
+    )
+    assert (
+        f"{hits('model', 'barberry')} of\n  the model findings a barberry and {hits('model', 'juniper')} a juniper"
+        in text
+    )
+    single = sum(
+        1
+        for r in rows
+        if r["termination"] == "COLLISION" and (r.get("reference") or {}).get("termination") == "SUCCESS"
+    )
+    assert f"called {single} of these collisions" in text
+    per200 = [
+        sum(1 for r in rows if lo <= r["job"] < lo + 200 and r.get("attribution") == "flaw")
+        for lo in range(0, 1000, 200)
+    ]
+    assert f"{min(per200)}-{max(per200)} flaw findings in every 200 scenarios" in text
