@@ -120,3 +120,17 @@ def test_bad_suites_are_refused_by_name(tmp_path, campaign_export):
     with pytest.raises(st.SuiteError, match="format_version 99, this tool reads 1"):
         st.load_suite(out)
     assert suite_cli(["run", out, "--fake-workers", "1"]) == 2
+
+
+def test_run_each_retries_an_error_and_answers_every_request_once():
+    from asg_agent.campaign.experiment import load_experiment as load
+    from asg_agent.campaign.loop import run_each
+
+    exp = load(os.path.join(REPO, "experiments", "exp1.yaml"))
+    m = make_method("random", exp, 2)
+    requests = [exp.request(m.propose(k, 0, 0, None), scenario_id=k + 1) for k in range(7)]
+    pool = FakePool(2, fail_jobs={1, 4})  # these answer ERROR on their first run
+    got = {}
+    run_each(pool, requests, lambda k, o: got.setdefault(k, []).append(o.termination), poll=0.0)
+    assert sorted(got) == list(range(7)) and all(len(v) == 1 and v[0] != "ERROR" for v in got.values())
+    assert sorted(pool.submitted) == sorted(list(range(7)) + [1, 4])

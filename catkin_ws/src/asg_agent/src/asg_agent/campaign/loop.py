@@ -100,6 +100,36 @@ class Pool:
         raise NotImplementedError
 
 
+def run_each(
+    pool: Pool,
+    requests: List[dict],
+    on_outcome: Callable[[int, Outcome], None],
+    poll: float = 0.2,
+    max_attempts: int = 3,
+):
+    """Runs every request once on `pool`, outside any campaign (re-runs, suites): an ERROR is run
+    again, up to `max_attempts` runs; `on_outcome(k, outcome)` as request k ends, in any order.
+    A late answer of a run given up on is ignored."""
+    queue, running, attempts, done = list(range(len(requests))), {}, {}, set()
+    while len(done) < len(requests):
+        for w in pool.free():
+            if not queue:
+                break
+            k = queue.pop(0)
+            attempts[k] = attempts.get(k, 0) + 1
+            running[k] = w
+            pool.submit(w, k, requests[k])
+        for o in pool.poll(poll):
+            if running.get(o.job) != o.worker:
+                continue
+            del running[o.job]
+            if o.termination == "ERROR" and attempts[o.job] < max_attempts:
+                queue.insert(0, o.job)
+                continue
+            done.add(o.job)
+            on_outcome(o.job, o)
+
+
 @dataclass
 class Job:
     job: int

@@ -29,7 +29,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 import yaml
 
-from asg_agent.campaign.loop import Outcome, Pool
+from asg_agent.campaign.loop import Outcome, Pool, run_each
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring.proxy import run_terms
 
@@ -159,26 +159,15 @@ def load_suite(folder: str) -> dict:
 def run_suite(suite: dict, pool: Pool, poll: float = 0.2, progress=None) -> List[dict]:
     """Runs every scenario of the suite on `pool`; one result per scenario, in the suite's order."""
     todo = list(range(len(suite["scenarios"])))
-    queue, running, attempts = list(todo), {}, {}
     done: Dict[int, Outcome] = {}
-    while len(done) < len(todo):
-        for w in pool.free():
-            if not queue:
-                break
-            k = queue.pop(0)
-            attempts[k] = attempts.get(k, 0) + 1
-            running[k] = w
-            pool.submit(w, k, dict(suite["scenarios"][k]["request"], scenario_id=9000 + k))
-        for o in pool.poll(poll):
-            if running.get(o.job) != o.worker:
-                continue  # a late answer of a run given up on
-            del running[o.job]
-            if o.termination == "ERROR" and attempts[o.job] < MAX_ATTEMPTS:
-                queue.insert(0, o.job)
-                continue
-            done[o.job] = o
-            if progress:
-                progress(len(done), len(todo))
+
+    def keep(k, o):
+        done[k] = o
+        if progress:
+            progress(len(done), len(todo))
+
+    requests = [dict(e["request"], scenario_id=9000 + k) for k, e in enumerate(suite["scenarios"])]
+    run_each(pool, requests, keep, poll, MAX_ATTEMPTS)
     out = []
     for k in todo:
         e, o = suite["scenarios"][k], done[k]

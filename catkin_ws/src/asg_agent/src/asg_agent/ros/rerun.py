@@ -25,6 +25,7 @@ import numpy as np
 
 from asg_agent.analysis.export import read_export
 from asg_agent.scoring.attribution import FINDING, RERUN_CLASSES, rerun_class, still_failing
+from asg_agent.campaign.loop import run_each
 from asg_agent.scoring.proxy import run_terms, term_values
 
 
@@ -79,44 +80,35 @@ def run(a) -> int:
         return 2
     rospy.init_node("rerun", anonymous=True, disable_signals=True)
     pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
-    pending = list(range(len(todo)))
     results = {}
-    attempts = {}
     t0 = time.time()
-    while len(results) < len(todo):
-        for w in pool.free():
-            if not pending:
-                break
-            k = pending.pop(0)
-            attempts[k] = attempts.get(k, 0) + 1
-            pool.submit(w, k, todo[k][1])
-        for o in pool.poll(0.2):
-            if o.termination == "ERROR" and attempts[o.job] < MAX_ATTEMPTS:
-                pending.insert(0, o.job)
-                continue
-            row, req = todo[o.job]
-            terms = run_terms(req, o, dtype=o.trajectory.dtype)[1]
-            results[o.job] = {
-                "label": a.label,
-                "campaign": camp["name"],
-                "job": row["job"],
-                "rank": o.job + 1,
-                "campaign_proxy": row["proxy"],
-                "campaign_termination": row["termination"],
-                "campaign_reference_proxy": (row.get("reference") or {}).get("proxy"),
-                "campaign_class": campaign_class(row),
-                "campaign_attribution": row.get("attribution"),
-                "termination": o.termination,
-                "collision_with": o.collision_with,  # the store's "layout:instance" ('' for none)
-                "error": o.error,
-                **term_values(terms),
-                "sim_time": o.sim_time,
-            }
-            print(
-                f"[{len(results)}/{len(todo)}] rank {o.job + 1}: campaign proxy {row['proxy']:.2f} -> "
-                f"{a.label} {results[o.job]['proxy'] if terms else 'ERROR'}",
-                file=sys.stderr,
-            )
+
+    def keep(k, o):
+        row, req = todo[o.job]
+        terms = run_terms(req, o, dtype=o.trajectory.dtype)[1]
+        results[o.job] = {
+            "label": a.label,
+            "campaign": camp["name"],
+            "job": row["job"],
+            "rank": o.job + 1,
+            "campaign_proxy": row["proxy"],
+            "campaign_termination": row["termination"],
+            "campaign_reference_proxy": (row.get("reference") or {}).get("proxy"),
+            "campaign_class": campaign_class(row),
+            "campaign_attribution": row.get("attribution"),
+            "termination": o.termination,
+            "collision_with": o.collision_with,  # the store's "layout:instance" ('' for none)
+            "error": o.error,
+            **term_values(terms),
+            "sim_time": o.sim_time,
+        }
+        print(
+            f"[{len(results)}/{len(todo)}] rank {o.job + 1}: campaign proxy {row['proxy']:.2f} -> "
+            f"{a.label} {results[o.job]['proxy'] if terms else 'ERROR'}",
+            file=sys.stderr,
+        )
+
+    run_each(pool, [req for _, req in todo], keep, 0.2, MAX_ATTEMPTS)
     os.makedirs(os.path.dirname(os.path.abspath(a.out)) or ".", exist_ok=True)
     with open(a.out, "w") as f:
         for k in sorted(results):
