@@ -152,6 +152,10 @@ def test_the_three_stack_campaign_prose_is_its_export():
         for lo in range(0, 1000, 200)
     ]
     assert f"{min(per200)}-{max(per200)} flaw findings in every 200 scenarios" in text
+    # the rate quoted beside the table, from the export's finish times
+    t = sorted(r["finished"] for r in rows)
+    hours = (t[-1] - t[0]) / 3600
+    assert f"{round(hours * 60)}\nminutes, {round((len(t) - 1) / hours):,} scenarios an hour" in text
 
 
 def test_what_the_candidate_rule_missed_is_the_reruns():

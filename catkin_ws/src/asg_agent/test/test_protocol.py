@@ -62,7 +62,7 @@ def run(tmp_path, store, c, collide, workers=3):
     export(store, c["name"], str(tmp_path / "out" / (c["name"] + ".jsonl.gz")))
 
 
-def test_the_protocol_plans_chooses_and_analyses(tmp_path):
+def test_the_protocol_plans_chooses_and_analyses(tmp_path, monkeypatch):
     shipped = pr.load(os.path.join(REPO, "experiments", "protocol-round4.yaml"))
     confirm = pr.campaigns(shipped, "confirmatory", {"reward": "ttc", "band_m": 5.0})
     assert len(confirm) == 8 + 8 + 8 + 3 + 3
@@ -86,6 +86,16 @@ def test_the_protocol_plans_chooses_and_analyses(tmp_path):
     ch = pr.choose(p, str(tmp_path / "out"))
     assert (ch["reward"], ch["band_m"]) == ("clearance", 5.0) and ch["deviations"] == []
     assert ch["rewards"] == {"proxy": 1000 / 12, "clearance": 3000 / 12}
+    # A tie on the endpoint goes to more distinct failure modes (then to the earlier entry).
+    from asg_agent.analysis import failure_modes as fm
+
+    with monkeypatch.context() as m:
+        m.setattr(pr, "per_seed", lambda rows, budget, cls: 5.0)  # every arm ties on the endpoint
+        m.setattr(
+            fm, "modes_of", lambda camp, rows, keep: [(i,) for i in range(3 if "clearance" in camp["name"] else 1)]
+        )
+        tie = pr.choose(p, str(tmp_path / "out"))
+    assert tie["reward"] == "clearance" and tie["band_m"] == 2.5  # bands tie on modes too: the earlier one
     confirm = pr.campaigns(p, "confirmatory", ch)
     for c in confirm:
         collide = {2, 5, 8, 9} if c["arm"] == "default" else {7}

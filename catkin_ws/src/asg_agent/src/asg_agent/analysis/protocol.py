@@ -176,11 +176,19 @@ def choose(p: dict, folder: str) -> dict:
     arms, heads, devs = read_arms(p, folder, cs)
     cls = p["endpoint"]["class"]
 
+    from asg_agent.analysis import failure_modes as fm
+
     def score(arm):
+        """(mean endpoint findings per 1,000 over the seeds, distinct failure modes of them)."""
         seeds = arms.get(arm, {})
         if not seeds:
             return (-1.0, -1)
-        return (float(np.mean([per_seed(r, p["budget"], cls) for r in seeds.values()])), 0)
+        camp = heads[next(c["name"] for c in cs if c["arm"] == arm and c["seed"] in seeds)]
+        modes = []
+        for rows in seeds.values():
+            keep = [r for r in rows if r["job"] < p["budget"]]
+            modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
+        return (float(np.mean([per_seed(r, p["budget"], cls) for r in seeds.values()])), fm.distinct(modes))
 
     rewards = [(score(f"reward {r}"), -k, r) for k, r in enumerate(p["pilot"]["rewards"])]
     bands = [(score(f"band {b:g} m"), -k, b) for k, b in enumerate(p["pilot"]["route_bands_m"])]
