@@ -83,6 +83,10 @@ class Renderer {
   double shadow_ms_ = 0.0;
 };
 
+/// The depth image's returns as points in the optical frame [m] (x right, y down, z forward):
+/// every `stride`-th pixel in u and v, row by row, pixels without a return (NaN) left out.
+std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const CameraModel& camera, int stride = 1);
+
 /// T_base_optical for a camera at (x, y, z) in base_link looking along base_link +x.
 Eigen::Isometry3d cameraMount(double x, double y, double z, double pitch_down_rad = 0.0);
 

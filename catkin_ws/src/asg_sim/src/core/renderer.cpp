@@ -404,6 +404,20 @@ void topDownCamera(double lo, double hi, Mat4* view, Mat4* proj) {
 double CameraModel::fx() const { return (width / 2.0) / std::tan(fov_deg * M_PI / 360.0); }
 double CameraModel::fy() const { return fx(); }
 
+std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const CameraModel& camera, int stride) {
+  if (stride < 1) throw std::invalid_argument("backProject: stride must be >= 1 px");
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(size_t(depth.width / stride + 1) * size_t(depth.height / stride + 1));
+  const double fx = camera.fx(), fy = camera.fy(), cx = camera.cx(), cy = camera.cy();
+  for (int v = 0; v < depth.height; v += stride)
+    for (int u = 0; u < depth.width; u += stride) {
+      const float d = depth.at(u, v);
+      if (!std::isfinite(d)) continue;
+      out.emplace_back(float((u - cx) / fx * d), float((v - cy) / fy * d), d);
+    }
+  return out;
+}
+
 Eigen::Isometry3d cameraMount(double x, double y, double z, double pitch_down_rad) {
   // optical axes in base_link: z_opt = +x_base, x_opt = -y_base, y_opt = -z_base
   Eigen::Matrix3d R;

@@ -3,9 +3,12 @@
 #include <asg_msgs/ScenarioInfo.h>
 #include <asg_msgs/Tick.h>
 #include <asg_msgs/WorkerStatus.h>
+#include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
@@ -134,6 +137,7 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   RunnerConfig rc;
   rc.visibility_full_px = params_.visibility_full_px;
   runner_ = std::make_unique<ScenarioRunner>(renderer_.get(), rc);
+  twist_controller_ = std::make_unique<TwistController>(TwistControllerParams::forVehicle(rc.vehicle));
 
   image_pub_ = nh_.advertise<sensor_msgs::Image>("camera/image", 4);
   depth_pub_ = nh_.advertise<sensor_msgs::Image>("camera/depth", 4);
@@ -144,7 +148,15 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   tick_pub_ = nh_.advertise<asg_msgs::Tick>("tick", 4);
   scenario_pub_ = nh_.advertise<asg_msgs::ScenarioInfo>("scenario", 1, true);
   status_pub_ = nh_.advertise<asg_msgs::WorkerStatus>("status", 1, true);
-  cmd_sub_ = nh_.subscribe("cmd", 16, &SceneWorkerROS::onCommand, this, ros::TransportHints().tcpNoDelay());
+  goal_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("goal", 1, true);
+  if (params_.publish_points) points_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("camera/points", 4);
+  if (twist()) {  // a stack of standard messages; lockstep answers come stamped (docs/your-stack.md)
+    cmd_sub_ = nh_.subscribe("cmd_vel", 16, &SceneWorkerROS::onTwist, this, ros::TransportHints().tcpNoDelay());
+    cmd_vel_sub_ = nh_.subscribe("cmd_vel_stamped", 16, &SceneWorkerROS::onTwistStamped, this,
+                                 ros::TransportHints().tcpNoDelay());
+  } else {
+    cmd_sub_ = nh_.subscribe("cmd", 16, &SceneWorkerROS::onCommand, this, ros::TransportHints().tcpNoDelay());
+  }
   ack_sub_ = nh_.subscribe("stack_ack", 16, &SceneWorkerROS::onAck, this);
   error_sub_ = nh_.subscribe("stack_error", 16, &SceneWorkerROS::onStackError, this);
   if (!params_.labels_node.empty())
@@ -175,6 +187,9 @@ void SceneWorkerROS::readParameters() {
   pnh_.param("shadow_map_px", p.shadow_map_px, p.shadow_map_px);
   pnh_.param("visibility_full_px", p.visibility_full_px, p.visibility_full_px);
   pnh_.param("labels_node", p.labels_node, p.labels_node);
+  pnh_.param("command_interface", p.command_interface, p.command_interface);
+  pnh_.param("publish_points", p.publish_points, p.publish_points);
+  pnh_.param("points_stride", p.points_stride, p.points_stride);
   auto check = [](bool ok, const std::string& what) {
     if (!ok) throw std::runtime_error("bad parameter " + what);
   };
@@ -190,6 +205,9 @@ void SceneWorkerROS::readParameters() {
   check(p.labels_node.empty() ||
             std::find(p.stack_nodes.begin(), p.stack_nodes.end(), p.labels_node) != p.stack_nodes.end(),
         "~labels_node: must be one of ~stack_nodes (or empty)");
+  check(p.command_interface == "vehicle_command" || p.command_interface == "twist",
+        "~command_interface: must be vehicle_command or twist, not '" + p.command_interface + "'");
+  check(p.points_stride >= 1 && p.points_stride <= 64, "~points_stride: must be 1..64 px");
 }
 
 void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
@@ -207,6 +225,37 @@ void SceneWorkerROS::onCommand(const asg_msgs::VehicleCommandConstPtr& msg) {
   if (!protocol_->command(msg->scenario_id, nanos(msg->header.stamp))) return;
   latest_ = *msg;
   cv_.notify_all();
+}
+
+// A plain Twist is the latest set point; it answers a tick only when the worker runs free, since
+// nothing in it says which tick it was computed for.
+void SceneWorkerROS::onTwist(const geometry_msgs::TwistConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (params_.lockstep || !protocol_->command(scenario_id_, nanos(last_tick_))) return;
+  latest_velocity_ = {msg->linear.x, msg->angular.z};
+  cv_.notify_all();
+}
+
+// A stamped Twist answers the tick of its stamp (the lockstep client sends these).
+void SceneWorkerROS::onTwistStamped(const geometry_msgs::TwistStampedConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!protocol_->command(scenario_id_, nanos(msg->header.stamp))) return;
+  latest_velocity_ = {msg->twist.linear.x, msg->twist.angular.z};
+  latest_.header.stamp = msg->header.stamp;
+  cv_.notify_all();
+}
+
+Command SceneWorkerROS::takeCommand() {
+  if (twist()) {
+    const double dt = double(runner_->config().control_every) / runner_->config().tick_hz;
+    return twist_controller_->update(latest_velocity_, runner_->state().linear.x(), dt);
+  }
+  Command cmd;
+  cmd.throttle = latest_.throttle;
+  cmd.steering = latest_.steering;
+  cmd.brake = latest_.brake;
+  cmd.target_speed = latest_.target_speed;
+  return cmd;
 }
 
 void SceneWorkerROS::onAck(const asg_msgs::StackAckConstPtr& msg) {
@@ -276,10 +325,7 @@ bool SceneWorkerROS::waitForCommand(uint32_t /*scenario_id*/, const ros::Time& s
     }
     cv_.wait_for(lock, std::chrono::milliseconds(50));
   }
-  out->throttle = latest_.throttle;
-  out->steering = latest_.steering;
-  out->brake = latest_.brake;
-  out->target_speed = latest_.target_speed;
+  *out = takeCommand();
   return true;
 }
 
@@ -328,10 +374,34 @@ void SceneWorkerROS::publishCamera(const ros::Time& stamp, bool labels) {
     labels_pub_.publish(lab);
   }
   info_pub_.publish(info);
+  if (params_.publish_points) publishPoints(stamp);
   depth_pub_.publish(depth);
   image_pub_.publish(img);
   std::lock_guard<std::mutex> lock(mutex_);
   protocol_->cameraFrame(nanos(stamp));
+}
+
+// The depth image as a cloud in the camera's optical frame (x right, y down, z forward), every
+// points_stride-th pixel with a return.
+void SceneWorkerROS::publishPoints(const ros::Time& stamp) {
+  const std::vector<Eigen::Vector3f> pts = backProject(frame_.depth, renderer_->camera(), params_.points_stride);
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header.stamp = stamp;
+  cloud.header.frame_id = "camera";
+  sensor_msgs::PointCloud2Modifier mod(cloud);
+  mod.setPointCloud2FieldsByString(1, "xyz");
+  mod.resize(pts.size());
+  cloud.height = 1;
+  cloud.width = uint32_t(pts.size());
+  cloud.is_dense = true;
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (const auto& p : pts) {
+    *x = p.x();
+    *y = p.y();
+    *z = p.z();
+    ++x, ++y, ++z;
+  }
+  points_pub_.publish(cloud);
 }
 
 void SceneWorkerROS::finish(asg_msgs::RunScenarioResult* r, Termination t, const std::string& error) {
@@ -378,6 +448,10 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
     base_ = ros::Time(double(current_run_ % 524287u + 1u) * asg_msgs::ScenarioInfo::RUN_WINDOW);
     protocol_->begin(goal->scenario_id, current_run_,
                      {nanos(base_), nanos(ros::Time(asg_msgs::ScenarioInfo::RUN_WINDOW))});
+    scenario_id_ = goal->scenario_id;
+    last_tick_ = base_;
+    latest_velocity_ = VelocityCommand();
+    twist_controller_->reset();
   }
   const auto& op = goal->scene.operational;
   asg_msgs::ScenarioInfo info;
@@ -395,6 +469,15 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   info.start_y = op.start_y;
   info.start_yaw = op.start_yaw;
   announcement_ = info;
+  // The goal as a ROS stack expects it (latched, stamped at the run's t = 0), before the
+  // announcement: a stack that acknowledges has had the chance to hear it.
+  geometry_msgs::PoseStamped goal_pose;
+  goal_pose.header.stamp = base_;
+  goal_pose.header.frame_id = "map";
+  goal_pose.pose.position.x = op.goal_x;
+  goal_pose.pose.position.y = op.goal_y;
+  goal_pose.pose.orientation.w = 1.0;
+  goal_pub_.publish(goal_pose);
   scenario_pub_.publish(info);
   build_time.reset();
   std::string missing;
@@ -425,6 +508,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
         protocol_->await(nanos(now));
+        last_tick_ = now;
       }
       // Ticks go out in both modes: free-running stacks answer them too, the worker just does
       // not wait for the answer and applies the latest command it has.
@@ -456,11 +540,9 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
         runner_->applyCommand(cmd);
       } else {
         std::lock_guard<std::mutex> lock(mutex_);
-        if (protocol_->answered()) {
-          cmd.throttle = latest_.throttle;
-          cmd.steering = latest_.steering;
-          cmd.brake = latest_.brake;
-          cmd.target_speed = latest_.target_speed;
+        // A velocity set point holds until the next one: the controller tracks it every tick.
+        if (protocol_->answered() || twist()) {
+          cmd = takeCommand();
           protocol_->consume();
           runner_->applyCommand(cmd);
         }

@@ -12,6 +12,8 @@
 #include <asg_msgs/StackError.h>
 #include <sensor_msgs/Image.h>
 #include <asg_msgs/VehicleCommand.h>
+#include <geometry_msgs/Twist.h>
+#include <geometry_msgs/TwistStamped.h>
 #include <ros/ros.h>
 
 #include <condition_variable>
@@ -25,6 +27,7 @@
 #include "asg_sim/renderer.hpp"
 #include "asg_lockstep/ros/stage_times.hpp"
 #include "asg_sim/scenario_runner.hpp"
+#include "asg_sim/twist_controller.hpp"
 #include "asg_lockstep/stage_clock.hpp"
 
 namespace asg_sim {
@@ -48,10 +51,18 @@ class SceneWorkerROS {
     int shadow_map_px = 2048;
     double visibility_full_px = 100.0;
     std::string labels_node;               // node publishing `labels` (named when it falls silent)
+    std::string command_interface = "vehicle_command";  // or "twist" (cmd_vel, docs/your-stack.md)
+    bool publish_points = false;           // camera/points: PointCloud2 from depth
+    int points_stride = 2;                 // [px] pixel step of that cloud in u and v
   };
+  bool twist() const { return params_.command_interface == "twist"; }
   void readParameters();
   void execute(const asg_msgs::RunScenarioGoalConstPtr& goal);
   void onCommand(const asg_msgs::VehicleCommandConstPtr& msg);
+  void onTwist(const geometry_msgs::TwistConstPtr& msg);
+  void onTwistStamped(const geometry_msgs::TwistStampedConstPtr& msg);
+  /// The command of this control tick from what the stack sent last (mutex_ held).
+  Command takeCommand();
   void onAck(const asg_msgs::StackAckConstPtr& msg);
   void onStackError(const asg_msgs::StackErrorConstPtr& msg);
   void onLabels(const sensor_msgs::ImageConstPtr& msg);
@@ -61,6 +72,7 @@ class SceneWorkerROS {
   void publishStatus(uint8_t status, uint32_t scenario_id);
   void publishState(const ros::Time& stamp);
   void publishCamera(const ros::Time& stamp, bool labels);
+  void publishPoints(const ros::Time& stamp);
   bool waitForAcks(uint32_t scenario_id, std::string* missing);
   // Lockstep: waits for the command answering `stamp`; false on timeout or preemption.
   bool waitForCommand(uint32_t scenario_id, const ros::Time& stamp, Command* out, std::string* why);
@@ -71,8 +83,8 @@ class SceneWorkerROS {
   std::unique_ptr<Renderer> renderer_;
   std::unique_ptr<ScenarioRunner> runner_;
   ros::Publisher image_pub_, depth_pub_, info_pub_, labels_pub_, odom_pub_, tf_pub_, tick_pub_,
-      scenario_pub_, status_pub_;
-  ros::Subscriber cmd_sub_, ack_sub_, error_sub_, labels_sub_;
+      scenario_pub_, status_pub_, points_pub_, goal_pub_;
+  ros::Subscriber cmd_sub_, cmd_vel_sub_, ack_sub_, error_sub_, labels_sub_;
   std::unique_ptr<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>> server_;
 
   std::mutex mutex_;  // guards protocol_ and latest_ (callbacks run on other threads)
@@ -81,6 +93,12 @@ class SceneWorkerROS {
   std::unique_ptr<asg_lockstep::WorkerProtocol> protocol_;
   uint32_t current_run_ = 0;  // goals served so far
   asg_msgs::VehicleCommand latest_;  // the command the protocol accepted last
+  // command_interface twist: the velocity set point accepted last (a stop until the first), the
+  // controller turning it into throttle and steering, and the run and tick it may answer.
+  VelocityCommand latest_velocity_;
+  std::unique_ptr<TwistController> twist_controller_;
+  uint32_t scenario_id_ = 0;
+  ros::Time last_tick_;
   CameraFrame frame_;
   asg_msgs::ScenarioInfo announcement_;
   ros::Time base_;  // stamp of simulated time 0 in the current run

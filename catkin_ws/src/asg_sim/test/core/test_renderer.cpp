@@ -314,3 +314,22 @@ TEST(Renderer, AHillShadowsTheGroundBehindItUnderALowSun) {
   EXPECT_LT(brightness(hilly, u, v), 0.8 * brightness(flat, u, v));
   EXPECT_EQ(hilly.labels.at(u, v), kTraversable);
 }
+
+TEST(Renderer, BackProjectedGroundLiesOnTheGroundPlane) {
+  setScene(emptyScene());
+  CameraFrame f;
+  renderer().renderCamera(cameraAt(30, 50, 0.3), false, &f);
+  const CameraModel& c = renderer().camera();
+  const auto pts = backProject(f.depth, c, 4);
+  size_t returns = 0;
+  for (int v = 0; v < f.depth.height; v += 4)
+    for (int u = 0; u < f.depth.width; u += 4) returns += std::isfinite(f.depth.at(u, v)) ? 1 : 0;
+  ASSERT_EQ(pts.size(), returns);  // sky pixels left out, nothing else
+  ASSERT_GT(pts.size(), 1000u);
+  for (const auto& p : pts) {
+    // Optical y points down: the ground is 1.4 m below the camera wherever it is seen.
+    EXPECT_NEAR(p.y(), 1.4, 0.01 + 0.005 * p.z()) << p.transpose();
+    EXPECT_GT(p.z(), 0.0f);
+  }
+  EXPECT_THROW(backProject(f.depth, c, 0), std::invalid_argument);
+}

@@ -8,7 +8,9 @@ from [-1, 1] to its range. Keys (docs/agent.md):
 
     name: exp1
     scenario: ../scenarios/exp1.yaml   # relative to this file
-    perception: unet                   # unet or ground_truth (the stack the workers must run)
+    stack: paper                       # the stack under test: paper (segmenter + voting planner)
+                                       # or depth (asg_depth_stack, cmd_vel; docs/your-stack.md)
+    perception: unet                   # paper only: unet or ground_truth (the workers must run it)
     model: flawed                      # unet only: shipped model name or path
     unet_backend: bf16                 # unet only: inference backend (asg_perception.inference)
     planner_config: planner.yaml       # a file of asg_planner/config, or a path
@@ -44,8 +46,13 @@ class ExperimentError(ValueError):
     pass
 
 
+#: the stacks under test a campaign knows how to check on its workers: the paper's, and the depth
+#: stack of asg_depth_stack (standard messages, Twist on cmd_vel; issue #39)
+STACKS = ("paper", "depth")
+
 KEYS = {
     "name",
+    "stack",
     "scenario",
     "perception",
     "model",
@@ -72,6 +79,7 @@ LEGACY_UNET_BACKEND = "channels_last"
 class Experiment:
     name: str
     scenario: dict  #: the fixed attributes, validated
+    stack: str = "paper"  #: STACKS: which stack under test the workers run
     perception: str = "unet"
     model: str = "flawed"
     planner_config: str = "planner.yaml"
@@ -180,6 +188,8 @@ def load_experiment(path: str) -> Experiment:
     for key in ("name", "scenario"):
         if not isinstance(data.get(key), str) or not data.get(key):
             problems.append(f"{key}: required, a non-empty string")
+    if data.get("stack", "paper") not in STACKS:
+        problems.append(f"stack: {data.get('stack')!r}, must be one of {', '.join(STACKS)}")
     if data.get("perception", "unet") not in ("unet", "ground_truth"):
         problems.append(f"perception: {data.get('perception')!r}, must be unet or ground_truth")
     if data.get("unet_backend", DEFAULT_UNET_BACKEND) not in UNET_BACKENDS:
@@ -284,6 +294,7 @@ def load_experiment(path: str) -> Experiment:
     return Experiment(
         name=data["name"],
         scenario=scenario,
+        stack=data.get("stack", "paper"),
         perception=data.get("perception", "unet"),
         model=data.get("model", "flawed"),
         planner_config=data.get("planner_config", "planner.yaml"),

@@ -384,7 +384,8 @@ def main(argv=None):
         # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
         from asg_agent.ros.replay import planner_mismatch
 
-        wrong = [m for w in list(workers) + list(ref_workers) for m in planner_mismatch(w, exp.planner_config)]
+        checked = (list(workers) if exp.stack == "paper" else []) + list(ref_workers)
+        wrong = [m for w in checked for m in planner_mismatch(w, exp.planner_config)]
         if wrong:
             print(
                 f"campaign: the experiment's planner_config is {exp.planner_config}, but:\n  "
@@ -437,7 +438,9 @@ def main(argv=None):
         "reward": a.reward,
         **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
         "experiment_file": exp.source,
-        "perception": exp.perception,
+        "stack": exp.stack,
+        **({"command_interface": "twist"} if exp.stack == "depth" else {}),
+        "perception": exp.perception if exp.stack == "paper" else "depth",
         "model": exp.model,
         "unet_backend": exp.unet_backend,
         "planner_config": exp.planner_config,
@@ -478,7 +481,7 @@ def main(argv=None):
         from asg_agent.ros.stages import StageCollector
 
         collector = StageCollector(list(workers) + ref_workers)
-        nodes = (3 if exp.perception == "unet" else 2) * len(workers)
+        nodes = (1 if exp.stack != "paper" else 3 if exp.perception == "unet" else 2) * len(workers)
         nodes += sum(
             (3 if settings["references"][r]["perception"] == "unet" else 2) * len(ws) for r, ws in roles.items()
         )

@@ -62,6 +62,15 @@ def stack_mismatch(worker: str, settings: dict) -> list:
     import rospy
 
     out = []
+    interface = rospy.get_param(f"{worker}/scene_worker/command_interface", "vehicle_command")
+    if settings.get("stack", "paper") == "depth":
+        if not rospy.has_param(f"{worker}/depth_stack/arcs"):
+            out.append(f"the campaign ran the depth stack, {worker} has no depth_stack node")
+        if interface != "twist":
+            out.append(f"the depth stack drives by cmd_vel, {worker}'s scene worker takes {interface!r}")
+        return out
+    if interface != "vehicle_command":
+        out.append(f"the paper's stack sends VehicleCommand, {worker}'s scene worker takes {interface!r}")
     want = settings.get("perception")
     has_seg = rospy.has_param(f"{worker}/segmenter/model")
     if want == "unet":
