@@ -150,6 +150,7 @@ def _doc_defaults(doc, section):
     [
         ("catkin_ws/src/asg_sim/config/scene_worker.yaml", "simulator.md", "## scene_worker node"),
         ("catkin_ws/src/asg_planner/config/planner.yaml", "planner.md", "## planner node"),
+        ("catkin_ws/src/asg_depth_stack/config/depth_stack.yaml", "your-stack.md", "## depth_stack node"),
     ],
 )
 def test_every_node_default_has_one_home_and_the_docs_quote_it(config, doc, section):

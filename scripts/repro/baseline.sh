@@ -11,7 +11,8 @@
 # results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
 # with python3 -m asg_agent.cli.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks
 # (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite"; the pair trained
-# with terrain and weather, issue #27: "flawed_tw full_tw").
+# with terrain and weather, issue #27: "flawed_tw full_tw"; the depth stack of issue #39, on
+# workers launched with stack:=depth: "depth", N_UNET layouts).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -28,13 +29,14 @@ ROOT=()
 GT_ROOT=(--ground-truth-root "$REPO/results/baseline")
 trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET" flawed_lite:"$N_UNET" full_lite:"$N_UNET" \
-    flawed_tw:"$N_UNET" full_tw:"$N_UNET"; do
+    flawed_tw:"$N_UNET" full_tw:"$N_UNET" depth:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
   [[ " ${ASG_BASELINE_STACKS:-ground_truth flawed full} " == *" $stack "* ]] || continue
   args=(perception:=unet model:="$stack" unet_backend:="$BACKEND")
   root=("${ROOT[@]}")
   [ "$stack" = ground_truth ] && args=(perception:=ground_truth) && root=()
+  [ "$stack" = depth ] && args=(stack:=depth) && root=()
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"
   start_master
   start_workers 2 "${args[@]}" planner_config:="$CFG"

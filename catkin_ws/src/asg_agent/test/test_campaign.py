@@ -232,6 +232,17 @@ def test_bad_experiment_files_are_named(tmp_path):
         load_experiment(str(tmp_path / "missing.yaml"))
 
 
+def test_the_stack_under_test_is_named_by_the_experiment(tmp_path):
+    # Issue #39: the depth stack's experiment; a stack the campaign cannot check is refused.
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp1-depth.yaml"))
+    assert exp.stack == "depth"
+    assert load_experiment(os.path.join(REPO, "experiments", "exp1.yaml")).stack == "paper"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(f"name: x\nstack: lidar\nscenario: {os.path.join(REPO, 'scenarios', 'exp1.yaml')}\n")
+    with pytest.raises(ExperimentError, match="stack: 'lidar', must be one of paper, depth"):
+        load_experiment(str(bad))
+
+
 def test_export_summary_and_report_agree_with_the_store(tmp_path):
     from asg_agent.analysis.export import counts, export, read_export
     from asg_agent.analysis.report import campaign_report

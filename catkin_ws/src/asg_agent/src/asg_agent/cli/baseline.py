@@ -42,7 +42,8 @@ STACKS = (
     "full_lite",
     "flawed_tw",
     "full_tw",
-)  #: labels: ground truth, or a shipped model's name
+    "depth",
+)  #: labels: ground truth, a shipped model's name, or depth (asg_depth_stack, issue #39)
 BOUNDS = {"share_ge3": 0.01, "median_yaw_term": 0.2, "median_plr": 1.03, "collision_share": 0.005}  # issue #23
 
 
