@@ -288,9 +288,10 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
     """results/baseline/<exp>.json: per stack its summary, per layout the proxies of every stack,
     and what each U-Net stack changes against ground truth on the layouts both ran. The
     ground-truth rows come from `ground_truth_root` where given (they do not depend on the
-    U-Net's backend, so a backend's folder shares the default one's)."""
+    U-Net's backend, so a backend's folder shares the default one's); so do the depth stack's."""
+    shared = ("ground_truth", "depth")
     rows = {
-        s: read_rows(out_path(exp_name, s, ground_truth_root if s == "ground_truth" and ground_truth_root else root))
+        s: read_rows(out_path(exp_name, s, ground_truth_root if s in shared and ground_truth_root else root))
         for s in STACKS
     }
     out = {
