@@ -15,6 +15,14 @@ from asg_agent.campaign.store import Store, unpack_trajectory
 import stack_util as su
 
 SCENARIOS = 20
+# The U-Net backend the workers run (scripts/test.sh: bf16 where the CPU has it natively), the
+# experiment that names it, and one that names the other backend (refused).
+BACKEND = os.environ.get("ASG_TEST_UNET_BACKEND", "bf16")
+EXPERIMENT, OTHER, OTHER_BACKEND = (
+    ("exp1.yaml", "exp1-channels-last.yaml", "channels_last")
+    if BACKEND == "bf16"
+    else ("exp1-channels-last.yaml", "exp1.yaml", "bf16")
+)
 
 
 class CampaignEndToEnd(unittest.TestCase):
@@ -23,7 +31,7 @@ class CampaignEndToEnd(unittest.TestCase):
             "/usr/bin/python3",
             "-m",
             "asg_agent.cli.campaign",
-            os.path.join(su.REPO, "experiments", "exp1.yaml"),
+            os.path.join(su.REPO, "experiments", EXPERIMENT),
             "--workers",
             "2",
             "--scenarios",
@@ -51,7 +59,7 @@ class CampaignEndToEnd(unittest.TestCase):
                 "/usr/bin/python3",
                 "-m",
                 "asg_agent.cli.campaign",
-                os.path.join(su.REPO, "experiments", "exp1-channels-last.yaml"),
+                os.path.join(su.REPO, "experiments", OTHER),
                 "--workers",
                 "2",
                 "--scenarios",
@@ -66,9 +74,10 @@ class CampaignEndToEnd(unittest.TestCase):
         )
         self.assertEqual(p.returncode, 2, p.stdout[-2000:] + p.stderr[-2000:])
         self.assertIn(
-            "the campaign's stack runs the 'channels_last' inference backend, /worker_0 runs 'bf16'", p.stderr
+            f"the campaign's stack runs the {OTHER_BACKEND!r} inference backend, /worker_0 runs {BACKEND!r}", p.stderr
         )
-        self.assertFalse(os.path.exists(path) and Store(path).campaign("exp1-channels-last-td3-per-asp-s0"))
+        other_name = OTHER.replace(".yaml", "") + "-td3-per-asp-s0"
+        self.assertFalse(os.path.exists(path) and Store(path).campaign(other_name))
         out = self.run_campaign(path, "first")
         self.assertIn("campaign first: 20 scenarios", out)
         # Issue #36: the campaign stores the numerics its segmenters ran (what replay compares).
@@ -76,7 +85,7 @@ class CampaignEndToEnd(unittest.TestCase):
 
         numerics = json.loads(Store(path).campaign("first")["settings"])["numerics"]
         self.assertEqual(numerics, rospy.get_param("/worker_0/segmenter/numerics"))
-        self.assertRegex(numerics, r"^bf16 isa=\S+ threads=1 torch=\S+$")
+        self.assertRegex(numerics, rf"^{BACKEND} isa=\S+ threads=1 torch=\S+$")
         self.run_campaign(path, "second")
         store = Store(path)
         a, b = store.content_digest("first"), store.content_digest("second")

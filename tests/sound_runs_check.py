@@ -60,7 +60,12 @@ class SoundRuns(unittest.TestCase):
                 cls.infos.append(msg)
 
     def test_0_stored_reference_bit_for_bit(self):
-        su.check_reference(self, self.w0, su.reference_path("worker_0"), os.environ.get("ASG_WRITE_REFERENCE") == "1")
+        su.check_reference(
+            self,
+            self.w0,
+            su.reference_path("worker_0", os.environ.get("ASG_WRITE_REFERENCE") == "1"),
+            os.environ.get("ASG_WRITE_REFERENCE") == "1",
+        )
 
     def assertSameRun(self, a, b, what):
         self.assertEqual(a.termination_name, b.termination_name, what)

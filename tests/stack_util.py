@@ -1,6 +1,7 @@
 """Helpers shared by the end-to-end checks (rospy; not a test themselves)."""
 
 import math
+import re
 import os
 import signal
 import subprocess
@@ -92,11 +93,24 @@ def trajectory_digest(result):
 REFERENCE_DIR = os.path.join(os.path.dirname(os.path.realpath(__file__)), "reference")
 
 
-def reference_path(worker_ns):
+def reference_path(worker_ns, write=False):
     """The stored reference runs for the U-Net backend `worker_ns` runs: tests/reference/
-    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once)."""
+    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once), or, where the
+    segmenter's kernels here are not the ones that file was recorded with (another CPU: issue #36),
+    exp1_flawed_BACKEND.ISA.json recorded on such a CPU, when there is one (or when writing)."""
+    import json
+
     backend = rospy.get_param(f"/{worker_ns}/segmenter/backend")
-    return os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.json")
+    base = os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.json")
+    here = wait_for_numerics(f"/{worker_ns}")
+    isa = dict(kv.split("=", 1) for kv in here.split()[1:] if "=" in kv).get("isa", "unknown")
+    if os.path.isfile(base):
+        with open(base) as f:
+            recorded = json.load(f).get("numerics", "")
+        if not recorded or f"isa={isa} " in recorded + " ":
+            return base
+    other = os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.{isa.lower()}.json")
+    return other if write or os.path.isfile(other) else base
 
 
 def wait_for_numerics(worker, timeout=120.0):
@@ -116,7 +130,9 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
     the runs did instead."""
     import json
 
-    with open(path) as f:
+    # A new CPU's file is written with the requests of the backend's first one.
+    source = path if os.path.isfile(path) or not write else re.sub(r"\.[a-z0-9_]+\.json$", ".json", path)
+    with open(source) as f:
         ref = json.load(f)
     # Issue #36: before any run, whether this machine can repeat them (the segmenter's numerics:
     # oneDNN kernels, threads, torch) or why not.

@@ -85,6 +85,24 @@ def effective_isa(flags: Iterable[str], cap: Optional[str] = None) -> str:
     return min(best, cap, key=ISA_ORDER.index)
 
 
+#: [-] a CPU without native bf16 (AVX512-BF16 or AMX) runs the bf16 backend in oneDNN's reference
+#: code, measured 1.54 s a frame on an AVX2-only EPYC against 0.062 s for channels_last (2026-11-25)
+NATIVE_BF16 = ("avx512_bf16", "amx_bf16")
+
+
+def native_bf16(flags: Optional[Iterable[str]] = None) -> bool:
+    """Whether this CPU runs bf16 convolutions natively (else oneDNN emulates them, 25x slower)."""
+    flags = set(cpu_flags() if flags is None else flags)
+    return any(f in flags for f in NATIVE_BF16)
+
+
+def test_backend(flags: Optional[Iterable[str]] = None) -> str:
+    """The U-Net backend the end-to-end tests run on this CPU (scripts/test.sh exports it as
+    ASG_TEST_UNET_BACKEND): the shipped default, bf16, where it runs natively; channels_last, the
+    fp32 backend every campaign before bf16 ran, where it would be emulated."""
+    return "bf16" if native_bf16(flags) else "channels_last"
+
+
 def pin() -> str:
     """Caps oneDNN at ISA_CAP unless the environment already names a cap; call before the first
     inference (asg_perception.inference does, at import). Returns the cap in force."""
@@ -120,3 +138,11 @@ def can_reproduce(recorded: str, here: str) -> Optional[str]:
         if want.get(key) != got.get(key):
             why.append(f"{what}: recorded {want.get(key)}, here {got.get(key)}")
     return "; ".join(why) or f"recorded {recorded!r}, here {here!r}"
+
+
+if __name__ == "__main__":  # python3 -m asg_perception.numerics test-backend
+    import sys
+
+    if sys.argv[1:] != ["test-backend"]:
+        sys.exit("usage: python3 -m asg_perception.numerics test-backend")
+    print(test_backend())

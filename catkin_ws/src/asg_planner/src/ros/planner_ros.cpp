@@ -15,8 +15,6 @@
 namespace asg_planner {
 namespace {
 
-constexpr int kMaxVehicleCellsPerSide = 4096;  // [-] 16.8 M A* nodes at most
-
 Eigen::Isometry3d toIso(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
@@ -26,19 +24,26 @@ Eigen::Isometry3d toIso(const geometry_msgs::Pose& p) {
   return T;
 }
 
+asg_lockstep::Nanos nanos(const ros::Time& t) { return asg_lockstep::Nanos(t.toNSec()); }
+
+ImageIn image(const sensor_msgs::ImageConstPtr& m) {
+  ImageIn i;
+  i.encoding = m->encoding;
+  i.width = m->width;
+  i.height = m->height;
+  i.step = m->step;
+  i.data = m->data.data();
+  i.size = m->data.size();
+  i.keep = std::shared_ptr<const void>(m.get(), [m](const void*) {});  // holds the message
+  return i;
+}
+
 geometry_msgs::Point point(double x, double y, double z = 0.0) {
   geometry_msgs::Point p;
   p.x = x;
   p.y = y;
   p.z = z;
   return p;
-}
-
-// Drops entries older than `keep` before `now`.
-template <class Map>
-void trim(Map* m, const ros::Time& now, double keep) {
-  const ros::Time cut = now.toSec() > keep ? now - ros::Duration(keep) : ros::Time();
-  while (!m->empty() && m->begin()->first < cut) m->erase(m->begin());
 }
 
 }  // namespace
@@ -118,8 +123,8 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   ack.scenario_id = msg->scenario_id;
   ack.run = msg->run;
   // The worker repeats the announcement until every stack node has acked: reset once, ack always.
-  if (!protocol_.announce(msg->scenario_id, msg->run, asg_lockstep::Nanos(msg->base_stamp.toNSec()))) {
-    if (protocol_.failed()) {  // say it again: the first one may have gone out before the worker listened
+  if (!sync_.announce(msg->scenario_id, msg->run, asg_lockstep::Nanos(msg->base_stamp.toNSec()))) {
+    if (sync_.protocol().failed()) {  // say it again: the first one may have gone out before the worker listened
       error_pub_.publish(last_error_);
       return;
     }
@@ -129,20 +134,9 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   auto reset_time = clock_.time(kReset);
   stage_pub_->countRun();
   base_ = msg->base_stamp;
-  depth_.clear();
-  labels_.clear();
-  odom_.clear();
-  ticks_.clear();
-  frames_done_ = 0;
-  // The vehicle grid bounds A*'s memory: refuse a landscape it cannot hold instead of swapping.
-  const double cells = msg->landscape_size / params_.astar.vehicle_spacing;
-  if (!(cells <= kMaxVehicleCellsPerSide)) {
-    char buf[200];
-    std::snprintf(buf, sizeof(buf),
-                  "landscape of %.0f m is %.0f vehicle-grid cells per side at %.2f m spacing "
-                  "(at most %d)", msg->landscape_size, cells, params_.astar.vehicle_spacing,
-                  kMaxVehicleCellsPerSide);
-    reportError(buf);
+  std::string why;
+  if (!gridFits(msg->landscape_size, params_.astar.vehicle_spacing, &why)) {  // bounds A*'s memory
+    reportError(why);
     return;
   }
   Task task;
@@ -173,50 +167,51 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
   ack_pub_.publish(ack);
 }
 
-bool PlannerROS::current(const ros::Time& stamp, const char* what) {
-  if (protocol_.current(asg_lockstep::Nanos(stamp.toNSec()))) return true;
-  // Normal after a run ends early (late frames of the last run): counted in PlannerState, not a warning.
+// Normal after a run ends early (late frames of the last run): counted in PlannerState, not a warning.
+void PlannerROS::stale(const ros::Time& stamp, const char* what) {
   ROS_DEBUG_THROTTLE(5.0, "planner: %s stamped %.3f s is not of the current run (window from %.0f s): dropped",
-                    what, stamp.toSec(), base_.toSec());
-  return false;
+                     what, stamp.toSec(), base_.toSec());
 }
 
 void PlannerROS::reportError(const std::string& reason) {
-  protocol_.fail();
+  sync_.protocol().fail();
   asg_msgs::StackError e;
   e.node = ack_name_;
-  e.scenario_id = protocol_.scenarioId();
-  e.run = protocol_.run();
+  e.scenario_id = sync_.protocol().scenarioId();
+  e.run = sync_.protocol().run();
   e.reason = reason;
   last_error_ = e;
   error_pub_.publish(e);
-  ROS_ERROR("planner: scenario %u: %s", protocol_.scenarioId(), reason.c_str());
+  ROS_ERROR("planner: scenario %u: %s", sync_.protocol().scenarioId(), reason.c_str());
 }
 
 void PlannerROS::onDepth(const sensor_msgs::ImageConstPtr& msg) {
-  if (!current(msg->header.stamp, "depth")) return;
-  depth_[msg->header.stamp] = msg;
+  if (!sync_.addDepth(nanos(msg->header.stamp), image(msg))) return stale(msg->header.stamp, "depth");
   process();
 }
 void PlannerROS::onLabels(const sensor_msgs::ImageConstPtr& msg) {
-  if (!current(msg->header.stamp, "labels")) return;
-  labels_[msg->header.stamp] = msg;
+  if (!sync_.addLabels(nanos(msg->header.stamp), image(msg))) return stale(msg->header.stamp, "labels");
   process();
 }
 void PlannerROS::onOdom(const nav_msgs::OdometryConstPtr& msg) {
-  if (!current(msg->header.stamp, "odometry")) return;
-  odom_[msg->header.stamp] = msg;
+  OdomIn o;
+  o.pose = toIso(msg->pose.pose);
+  o.state.x = msg->pose.pose.position.x;
+  o.state.y = msg->pose.pose.position.y;
+  const auto& q = msg->pose.pose.orientation;
+  o.state.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  o.state.speed = msg->twist.twist.linear.x;
+  if (!sync_.addOdom(nanos(msg->header.stamp), o)) return stale(msg->header.stamp, "odometry");
   process();
 }
 void PlannerROS::onTick(const asg_msgs::TickConstPtr& msg) {
-  if (msg->scenario_id != protocol_.scenarioId() || !current(msg->header.stamp, "tick")) return;
-  ticks_.push_back(msg);
+  if (!sync_.addTick(msg->scenario_id, nanos(msg->header.stamp), msg->camera_frames)) return;
   process();
 }
 
 void PlannerROS::onInfo(const sensor_msgs::CameraInfoConstPtr& msg) {
   K_ = {msg->K[0], msg->K[4], msg->K[2], msg->K[5]};
-  have_info_ = msg->K[0] > 0 && msg->K[4] > 0;
+  sync_.setIntrinsicsKnown(msg->K[0] > 0 && msg->K[4] > 0);
   process();
 }
 
@@ -228,66 +223,25 @@ void PlannerROS::onTf(const tf2_msgs::TFMessageConstPtr& msg) {
     p.position.y = t.transform.translation.y;
     p.position.z = t.transform.translation.z;
     p.orientation = t.transform.rotation;
-    T_base_optical_ = toIso(p);
-    have_mount_ = true;
+    sync_.setMount(toIso(p));
   }
   process();
 }
 
-bool PlannerROS::frameValid(const sensor_msgs::Image& d, const sensor_msgs::Image& l, std::string* why) const {
-  if (d.encoding != "32FC1") *why = "depth encoding '" + d.encoding + "' (expected 32FC1)";
-  else if (l.encoding != "mono8" && l.encoding != "8UC1") *why = "labels encoding '" + l.encoding + "' (expected mono8)";
-  else if (d.width != l.width || d.height != l.height) *why = "depth and labels differ in size";
-  else if (d.step != d.width * 4 || d.data.size() != size_t(d.step) * d.height) *why = "depth step/size inconsistent";
-  else if (l.step != l.width || l.data.size() != size_t(l.step) * l.height) *why = "labels step/size inconsistent";
-  else return true;
-  return false;
-}
-
+// The frame synchroniser decides what is complete; this only calls the planner and publishes.
 void PlannerROS::process() {
-  if (!protocol_.active()) return;
-  // 1. Vote every frame whose depth, labels and odometry (same stamp) are all here.
-  while (have_mount_ && have_info_) {
-    bool progressed = false;
-    for (auto it = depth_.begin(); it != depth_.end(); ++it) {
-      const ros::Time stamp = it->first;
-      auto lit = labels_.find(stamp);
-      auto oit = odom_.find(stamp);
-      if (lit == labels_.end() || oit == odom_.end()) continue;
-      std::string why;
-      if (!frameValid(*it->second, *lit->second, &why)) {
-        char buf[64];
-        std::snprintf(buf, sizeof(buf), "cannot use the frame at t = %.3f s: ", (stamp - base_).toSec());
-        reportError(buf + why);
-        return;
-      }
-      const Eigen::Isometry3d T = toIso(oit->second->pose.pose) * T_base_optical_;
-      auto votes_time = clock_.time(kVotes);
-      planner_->addFrame((stamp - base_).toSec(), reinterpret_cast<const float*>(it->second->data.data()),
-                         lit->second->data.data(), int(it->second->width), int(it->second->height), K_, T);
-      ++frames_done_;
-      depth_.erase(it);
-      labels_.erase(lit);
-      progressed = true;
-      break;
-    }
-    if (!progressed) break;
+  std::string error;
+  while (auto f = sync_.nextFrame(&error)) {
+    auto votes_time = clock_.time(kVotes);
+    planner_->addFrame(f->t, reinterpret_cast<const float*>(f->depth.data), f->labels.data, int(f->depth.width),
+                       int(f->depth.height), K_, f->T_map_optical);
   }
-  // 2. Answer ticks in order, each once every frame up to it is voted and its odometry is here.
-  while (!ticks_.empty()) {
-    const auto& tick = *ticks_.front();
-    if (frames_done_ < tick.camera_frames) return;
-    auto oit = odom_.find(tick.header.stamp);
-    if (oit == odom_.end()) return;
-    const auto& o = *oit->second;
-    VehicleState2D s;
-    s.x = o.pose.pose.position.x;
-    s.y = o.pose.pose.position.y;
-    const auto& q = o.pose.pose.orientation;
-    s.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-    s.speed = o.twist.twist.linear.x;
+  if (!error.empty()) return reportError(error);
+  while (auto tick = sync_.nextTick()) {
+    const ros::Time stamp = ros::Time().fromNSec(uint64_t(tick->stamp));
+    const VehicleState2D& s = tick->state;
+    const double t = tick->t;
     bool replanned = false;
-    const double t = (tick.header.stamp - base_).toSec();
     ControlCommand c;
     {
       auto plan_time = clock_.time(kPlan);
@@ -295,8 +249,8 @@ void PlannerROS::process() {
     }
     auto publish_time = clock_.time(kPublish);
     asg_msgs::VehicleCommand cmd;
-    cmd.header.stamp = tick.header.stamp;
-    cmd.scenario_id = protocol_.scenarioId();
+    cmd.header.stamp = stamp;
+    cmd.scenario_id = sync_.protocol().scenarioId();
     cmd.throttle = c.throttle;
     cmd.steering = c.steering;
     cmd.brake = c.brake;
@@ -304,9 +258,9 @@ void PlannerROS::process() {
     cmd_pub_.publish(cmd);
 
     asg_msgs::PlannerState st;
-    st.header.stamp = tick.header.stamp;
+    st.header.stamp = stamp;
     st.header.frame_id = "map";
-    st.scenario_id = protocol_.scenarioId();
+    st.scenario_id = sync_.protocol().scenarioId();
     st.frames = planner_->frames();
     st.plan_count = planner_->plans();
     st.replanned = replanned;
@@ -324,17 +278,15 @@ void PlannerROS::process() {
     st.steering = c.steering;
     st.brake = c.brake;
     st.target_speed = c.target_speed;
-    st.stale_dropped = protocol_.staleInRun();
+    st.stale_dropped = sync_.protocol().staleInRun();
     state_pub_.publish(st);
     if (publish_markers_) {
       geometry_msgs::PointStamped lp;
       lp.header = st.header;
       lp.point = st.lookahead;
       lookahead_pub_.publish(lp);
-      if (replanned) publishViz(tick.header.stamp);
+      if (replanned) publishViz(stamp);
     }
-    ticks_.pop_front();
-    trim(&odom_, tick.header.stamp, 1.0);
   }
 }
 

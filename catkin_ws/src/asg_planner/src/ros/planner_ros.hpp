@@ -17,6 +17,7 @@
 #include <memory>
 #include <string>
 
+#include "asg_planner/frame_sync.hpp"
 #include "asg_planner/voting_planner.hpp"
 #include "asg_lockstep/ros/stage_times.hpp"
 #include "asg_lockstep/stack_protocol.hpp"
@@ -39,10 +40,9 @@ class PlannerROS {
   void onTick(const asg_msgs::TickConstPtr& msg);
   // Votes every complete frame, then answers pending ticks whose inputs are all in.
   void process();
-  bool frameValid(const sensor_msgs::Image& depth, const sensor_msgs::Image& labels, std::string* why) const;
   void publishViz(const ros::Time& stamp);
-  /// True if `stamp` lies in the current run's window; counts (and logs) a stale message if not.
-  bool current(const ros::Time& stamp, const char* what);
+  /// Logs (at debug level) a message dropped as not of the current run.
+  void stale(const ros::Time& stamp, const char* what);
   /// Tells the worker this run cannot go on (asg_msgs/StackError).
   void reportError(const std::string& reason);
 
@@ -54,16 +54,10 @@ class PlannerROS {
   ros::Publisher cmd_pub_, ack_pub_, error_pub_, state_pub_, path_pub_, votes_pub_, lookahead_pub_, grid_pub_;
   ros::Subscriber scenario_sub_, depth_sub_, labels_sub_, info_sub_, odom_sub_, tf_sub_, tick_sub_;
 
-  // Which run is current, which messages belong to it, whether this node failed it: the
-  // protocol core (asg_lockstep), with stamps in ns.
-  asg_lockstep::StackProtocol protocol_{asg_lockstep::Nanos(ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW).toNSec())};
-  bool have_mount_ = false, have_info_ = false;
-  Eigen::Isometry3d T_base_optical_ = Eigen::Isometry3d::Identity();
+  // Which run is current, which messages make a frame, when a tick may be answered: the
+  // frame synchroniser of the planner core (stamps in ns).
+  FrameSync sync_{asg_lockstep::Nanos(ros::Duration(asg_msgs::ScenarioInfo::RUN_WINDOW).toNSec())};
   Intrinsics K_;
-  std::map<ros::Time, sensor_msgs::ImageConstPtr> depth_, labels_;
-  std::map<ros::Time, nav_msgs::OdometryConstPtr> odom_;
-  std::deque<asg_msgs::TickConstPtr> ticks_;
-  uint32_t frames_done_ = 0;
   ros::Time base_;  // stamp of simulated time 0 in the current run
   asg_msgs::StackError last_error_;
   // Where the planner's time goes (docs/benchmarks.md).

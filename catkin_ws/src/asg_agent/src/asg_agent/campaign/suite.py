@@ -191,10 +191,12 @@ def run_suite(suite: dict, pool: Pool, poll: float = 0.2, progress=None) -> List
     return out
 
 
-def compare(suite: dict, results: List[dict], against: str = "") -> List[dict]:
+def compare(suite: dict, results: List[dict], against: str = "", numerics: str = "") -> List[dict]:
     """Adds to each result its recorded outcome under `against` and the change: 'regression'
     (passed there, fails now), 'fixed', 'same'; 'changed' when it passes or fails alike but the
-    trajectory differs from a recorded digest; 'new' without a record."""
+    trajectory differs from a recorded digest; 'new' without a record. A digest is compared only
+    where the segmenter's `numerics` here can repeat the recorded ones (asg_perception.numerics,
+    issue #36): on another CPU's kernels only pass and fail are, and the result says why."""
     bound = suite.get("bound", attr.FINDING)
     for e, r in zip(suite["scenarios"], results):
         rec = (e.get("outcomes") or {}).get(against) if against else None
@@ -207,15 +209,28 @@ def compare(suite: dict, results: List[dict], against: str = "") -> List[dict]:
             r["change"] = "fixed"
         elif r["fails"] and not was:
             r["change"] = "regression"
-        elif rec.get("digest") and rec["digest"] != r["digest"]:
+        elif rec.get("digest") and rec["digest"] != r["digest"] and not _other_numerics(rec, numerics, r):
             r["change"] = "changed"
         else:
             r["change"] = "same"
     return results
 
 
-def record(suite: dict, results: List[dict], label: str):
-    """Stores `results` as the outcomes of stack `label` in the suite's file."""
+def _other_numerics(rec: dict, numerics: str, result: dict) -> bool:
+    """True (and the result noted) when the recorded run's numerics cannot be repeated here."""
+    if not rec.get("numerics") or not numerics:
+        return False
+    from asg_perception.numerics import can_reproduce
+
+    why = can_reproduce(rec["numerics"], numerics)
+    if why:
+        result["note"] = f"trajectory not compared: {why}"
+    return bool(why)
+
+
+def record(suite: dict, results: List[dict], label: str, numerics: str = ""):
+    """Stores `results` as the outcomes of stack `label` in the suite's file (with the segmenter's
+    numerics they ran with, when it has one)."""
     folder = suite["_folder"]
     with open(os.path.join(folder, "suite.yaml"), encoding="utf-8") as f:
         raw = yaml.safe_load(f)
@@ -224,6 +239,7 @@ def record(suite: dict, results: List[dict], label: str):
             "termination": r["termination"],
             "proxy": r["proxy"],
             "digest": r["digest"],
+            **({"numerics": numerics} if numerics else {}),
         }
     tmp = os.path.join(folder, "suite.yaml.part")
     with open(tmp, "w", encoding="utf-8") as f:

@@ -65,11 +65,19 @@ def main(argv=None) -> int:
         except (RuntimeError, ValueError) as err:
             print(f"suite: {err}", file=sys.stderr)
             return 2
-    results = compare(suite, run_suite(suite, pool), a.against)
+    numerics = ""
+    if not a.fake_workers:  # the numerics the segmenter runs here (none for a ground-truth stack)
+        from asg_agent.ros.replay import segmenter_numerics
+
+        first = worker_names(a.workers)[0]
+        if rospy.has_param(f"{first}/segmenter/model"):
+            numerics = segmenter_numerics(first, timeout=60.0)
+    results = compare(suite, run_suite(suite, pool), a.against, numerics)
     name = os.path.basename(os.path.abspath(a.suite))
     for res in results:
         word = "FAIL" if res["fails"] else "pass"
-        print(f"{word}  {os.path.basename(res['file'])}: {res['reason']} [{res['change']}]")
+        note = f" ({res['note']})" if res.get("note") else ""
+        print(f"{word}  {os.path.basename(res['file'])}: {res['reason']} [{res['change']}]{note}")
     bad = sum(r["change"] in ("regression", "changed") or (r["change"] == "new" and r["fails"]) for r in results)
     if a.junit:
         junit(results, name, a.junit)
@@ -77,7 +85,7 @@ def main(argv=None) -> int:
         with open(a.json, "w") as f:
             json.dump(results, f, indent=1, default=str)
     if a.record:
-        record(suite, results, a.record)
+        record(suite, results, a.record, numerics)
         print(f"recorded as {a.record!r} in {os.path.join(a.suite, 'suite.yaml')}")
     n = len(results)
     print(f"suite {name}: {n - sum(r['fails'] for r in results)} of {n} pass; {bad} regressions or changes")
