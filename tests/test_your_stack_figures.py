@@ -1,0 +1,56 @@
+"""docs/your-stack.md's baseline figures, recomputed from the committed rows (issue #39)."""
+
+import json
+import os
+import re
+import statistics
+
+import numpy as np
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+
+
+def rows(stack):
+    with open(os.path.join(REPO, "results", "baseline", "exp1", f"{stack}.jsonl")) as f:
+        return {r["layout"]: r for r in map(json.loads, f)}
+
+
+def figures(rs):
+    ok = [r for r in rs if r["proxy"] is not None]
+    plr = sorted(r["plr"] for r in ok)
+    yaw = sorted(r["yaw_term"] for r in ok)
+
+    def p90(v):
+        return float(np.percentile(v, 90))
+
+    return [
+        len(rs),
+        sum(r["termination"] == "SUCCESS" for r in rs),
+        sum(r["termination"] == "COLLISION" for r in rs),
+        sum(r["proxy"] is not None and r["proxy"] >= 3 for r in rs),
+        f"{statistics.median(plr):.3f} / {p90(plr):.3f}",
+        f"{statistics.median(yaw):.3f} / {p90(yaw):.3f}",
+    ]
+
+
+def table_row(label):
+    text = open(os.path.join(REPO, "docs", "your-stack.md")).read()
+    m = re.search(rf"^\| {re.escape(label)} \| (.+) \|$", text, re.M)
+    assert m, label
+    cells = [c.strip() for c in m.group(1).split("|")]
+    return [int(c) for c in cells[:4]] + cells[4:]
+
+
+def test_the_depth_stack_baseline_table_is_what_the_rows_say():
+    depth = rows("depth")
+    assert sorted(depth) == list(range(300))
+    truth = rows("ground_truth")
+    same = [truth[k] for k in depth]  # the same 300 layouts
+    got_depth, got_truth = figures(list(depth.values())), figures(same)
+    assert table_row("depth (this page)") == got_depth
+    assert table_row("paper's, ground-truth labels") == got_truth
+    text = open(os.path.join(REPO, "docs", "your-stack.md")).read()
+    med = statistics.median(r["sim_time"] for r in depth.values())
+    med_truth = statistics.median(r["sim_time"] for r in same)
+    assert f"The median run took {med:.1f} s of" in text.replace("\n", " ")
+    assert f"against {med_truth:.1f} s for the paper's stack" in text.replace("\n", " ")
