@@ -102,6 +102,26 @@ def test_export_run_record_and_regress(tmp_path, campaign_export):
     assert bad[0].get("name").startswith("000-") and "regression: collision" in bad[0].find("failure").get("message")
 
 
+def test_trajectories_are_compared_only_where_the_numerics_repeat(tmp_path, campaign_export):
+    # Issue #36 on suites: outcomes recorded on one CPU's kernels are compared on another's by
+    # pass and fail only; the result says why its trajectory was not.
+    out = str(tmp_path / "suite")
+    st.export_suite([campaign_export], out)
+    suite = st.load_suite(out)
+    here = "channels_last isa=AVX512_CORE threads=1 torch=1.13.0a0"
+    st.record(suite, st.run_suite(suite, FakePool(1, gain=0.0), poll=0.0), "hardened", here)
+    again = st.load_suite(out)
+    assert again["scenarios"][0]["outcomes"]["hardened"]["numerics"] == here
+    for e in again["scenarios"]:
+        e["outcomes"]["hardened"]["digest"] = "0" * 16  # as if another trajectory had been recorded
+    runs = st.run_suite(again, FakePool(1, gain=0.0), poll=0.0)
+    same_cpu = st.compare(again, [dict(r) for r in runs], "hardened", here)
+    assert {r["change"] for r in same_cpu} == {"changed"}
+    other = st.compare(again, [dict(r) for r in runs], "hardened", here.replace("AVX512_CORE", "AVX2"))
+    assert {r["change"] for r in other} == {"same"}
+    assert other[0]["note"] == "trajectory not compared: oneDNN kernels: recorded AVX512_CORE, here AVX2"
+
+
 def test_bad_suites_are_refused_by_name(tmp_path, campaign_export):
     out = str(tmp_path / "suite")
     st.export_suite([campaign_export], out, limit=2)

@@ -66,9 +66,9 @@ def parse(argv):
     p.add_argument(
         "--bc-weight",
         type=float,
-        default=1.0,
-        help="TD3 methods: weight of the behaviour-regularisation term (default 1, the setting of "
-        "every documented campaign; 0: off, the variant that collapses to the border)",
+        default=TD3Config.bc_weight,
+        help=f"TD3 methods: weight of the behaviour-regularisation term (default {TD3Config.bc_weight:g}, the "
+        "setting of every documented campaign; 0: off, the variant that collapses to the border)",
     )
     p.add_argument(
         "--route-band",

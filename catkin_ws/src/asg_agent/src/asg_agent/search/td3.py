@@ -61,7 +61,10 @@ class TD3Config:
     asp_u0: float = 2.0  #: pre-squash magnitude where it starts
     asp_tau: float = 3000.0  #: updates over which its weight falls by e
     normalize_q: bool = True  #: divide the actor's -Q by its batch mean |Q| (scale-free); TD3Search: on with ASP only
-    bc_weight: float = 0.0  #: weight of mean((actor(s) - a)^2) over replayed (s, a): keeps the actor near its data
+    #: weight of mean((actor(s) - a)^2) over replayed (s, a): keeps the actor near its data; 1, the
+    #: setting of every documented campaign (0: off, the variant that collapses to the border). The
+    #: one home of this default: `campaign --bc-weight` takes it from here.
+    bc_weight: float = 1.0
     seed: int = 0  #: seeds torch and numpy generators of this agent
 
 
