@@ -24,16 +24,20 @@ def test_an_installed_workspace_runs_a_campaign_and_replays_its_top_scenario(tmp
             timeout=1800,
         )
     store = tmp_path / "campaign.sqlite"
+    # The U-Net backend the end-to-end tests run on this CPU (scripts/test.sh), and its experiment.
+    backend = os.environ.get("ASG_TEST_UNET_BACKEND", "bf16")
+    experiment = "exp1.yaml" if backend == "bf16" else "exp1-channels-last.yaml"
+    stack = f"unet_backend:={backend} experiment:={PREFIX}/share/asg_bringup/experiments/{experiment}"
     script = textwrap.dedent(f"""\
         set -e
         source {PREFIX}/setup.bash
         export ROS_MASTER_URI=http://127.0.0.1:11431 ROS_HOSTNAME=127.0.0.1 LP_NUM_THREADS=1 ROS_LOG_DIR={tmp_path}/log
         echo "bringup: $(rospack find asg_bringup)"
         echo "agent: $(/usr/bin/python3 -c 'import asg_agent, os; print(os.path.dirname(asg_agent.__file__))')"
-        roslaunch -p 11431 asg_bringup train.launch campaign:=false attribution:=false > {tmp_path}/launch.log 2>&1 &
+        roslaunch -p 11431 asg_bringup train.launch campaign:=false attribution:=false {stack} > {tmp_path}/launch.log 2>&1 &
         LAUNCH=$!
         trap 'kill -INT $LAUNCH; wait $LAUNCH' EXIT
-        read -ra CMD < <(roslaunch --args /campaign asg_bringup train.launch scenarios:=20 attribution:=false \\
+        read -ra CMD < <(roslaunch --args /campaign asg_bringup train.launch scenarios:=20 attribution:=false {stack} \\
             store:={store} name:=installed seed:=2 extra:=--no-progress)
         for _ in $(seq 60); do rosparam get /run_id > /dev/null 2>&1 && break; sleep 0.5; done
         "${{CMD[@]}}"
@@ -49,7 +53,7 @@ def test_an_installed_workspace_runs_a_campaign_and_replays_its_top_scenario(tmp
         "SELECT s.job, c.settings FROM scenarios s JOIN campaigns c ON c.name = s.campaign "
         "WHERE s.proxy IS NOT NULL ORDER BY s.proxy DESC LIMIT 1"
     ).fetchone()
-    assert f"{PREFIX}/share/asg_bringup/experiments/exp1.yaml" in settings
+    assert f"{PREFIX}/share/asg_bringup/experiments/{experiment}" in settings
     replay = textwrap.dedent(f"""\
         source {PREFIX}/setup.bash
         export ROS_HOSTNAME=127.0.0.1 LP_NUM_THREADS=1 ROS_LOG_DIR={tmp_path}/log
