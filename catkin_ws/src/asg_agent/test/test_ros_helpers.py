@@ -63,6 +63,7 @@ def test_planner_mismatch_names_what_a_worker_runs_against_the_experiment(monkey
         flat(yaml.safe_load(open(os.path.join(cfg, name))))
 
     load("/worker_0", "planner.yaml")
+    load("/worker_1", "planner.yaml")  # worker.launch: the base, then the variant over it
     load("/worker_1", "planner_terrain.yaml")
     params["/worker_1/planner/publish_markers"] = False  # set by worker.launch: not the stack's identity
     monkeypatch.setattr(rospy, "has_param", lambda n: n in params)
@@ -71,6 +72,12 @@ def test_planner_mismatch_names_what_a_worker_runs_against_the_experiment(monkey
     assert replay.planner_mismatch("/worker_0", os.path.join(cfg, "planner.yaml")) == []
     wrong = replay.planner_mismatch("/worker_0", os.path.join(cfg, "planner_terrain.yaml"))
     assert len(wrong) == 1 and "projection/height_above_ground = False" in wrong[0], wrong
+    # A variant is an overlay: what it leaves to planner.yaml is checked too.
+    params["/worker_1/planner/follower/kp"] = 343.7747
+    assert "follower/kp = 343.7747, planner_terrain.yaml says 10.0" in " ".join(
+        replay.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))
+    )
+    params["/worker_1/planner/follower/kp"] = 10.0
     del params["/worker_1/planner/projection/ground_cell"]
     assert (
         "has no parameter projection/ground_cell"

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "asg_planner/frame_sync.hpp"
+#include "asg_planner/parameters.hpp"
 #include "asg_planner/voting_planner.hpp"
 #include "asg_lockstep/ros/stage_times.hpp"
 #include "asg_lockstep/stack_protocol.hpp"

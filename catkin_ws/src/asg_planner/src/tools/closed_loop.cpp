@@ -1,6 +1,8 @@
 // asg_closed_loop: scenarios through the ground-truth-label stack in one process, no ROS
 // (closed_loop.hpp), for quick studies of the planner and follower on the real vehicle model.
 //   asg_closed_loop [--planner planner.yaml] [--set follower/kp=10 ...] [--out DIR] SCENARIO.yaml...
+//   asg_closed_loop --params      (the parameter table, Markdown: docs/planner.md)
+// --planner files are read in order on top of the planner's defaults (a variant is an overlay).
 // Prints one JSON line per scenario (termination, simulated time, obstacle hit, visibility,
 // removed obstacles); with --out, DIR/NAME.csv holds the trajectory (t, x, y, yaw, yaw rate).
 // Set LP_NUM_THREADS=1 for one core.
@@ -9,11 +11,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "asg_planner/parameters.hpp"
 #include "closed_loop.hpp"
 #include "asg_sim/scene_yaml.hpp"
 
@@ -21,36 +23,17 @@ using namespace asg_planner;
 
 namespace {
 
-// key -> where it lives in PlannerParams; the same names as the planner node's parameters.
-void setParam(PlannerParams* p, const std::string& key, double v) {
-  std::map<std::string, double*> d = {
-      {"vote_spacing", &p->vote_spacing},          {"first_plan_delay", &p->first_plan_delay},
-      {"replan_period", &p->replan_period},        {"astar/vehicle_spacing", &p->astar.vehicle_spacing},
-      {"astar/alpha", &p->astar.alpha},            {"astar/sigma", &p->astar.sigma},
-      {"astar/kernel_sigmas", &p->astar.kernel_sigmas}, {"projection/max_height", &p->projection.max_height},
-      {"projection/max_range", &p->projection.max_range}, {"projection/ground_cell", &p->projection.ground_cell},
-      {"follower/lookahead", &p->follower.lookahead},
-      {"follower/kp", &p->follower.kp},            {"follower/kd", &p->follower.kd},
-      {"follower/steering_lock", &p->follower.steering_lock},
-      {"follower/derivative_tau", &p->follower.derivative_tau}, {"follower/speed_kp", &p->follower.speed_kp},
-      {"follower/speed_ki", &p->follower.speed_ki}, {"follower/brake_gain", &p->follower.brake_gain}};
-  if (key == "max_votes") p->max_votes = uint32_t(v);
-  else if (key == "astar/edge_points") p->astar.edge_points = int(v);
-  else if (key == "projection/stride") p->projection.stride = int(v);
-  else if (key == "follower/first_crossing") p->follower.first_crossing = v != 0;
-  else if (key == "projection/height_above_ground") p->projection.height_above_ground = v != 0;
-  else if (d.count(key)) *d[key] = v;
-  else if (key == "ack_name" || key == "publish_markers") return;
-  else throw std::runtime_error("unknown planner parameter '" + key + "'");
-}
+// Parameters of the planner node that change what it shows, not what it decides: ignored here.
+bool displayOnly(const std::string& key) { return key == "ack_name" || key == "publish_markers"; }
 
+// A planner YAML (planner.yaml, or an overlay of it) on top of `p`, through the planner's table.
 void loadYaml(PlannerParams* p, const YAML::Node& n, const std::string& prefix) {
   for (const auto& kv : n) {
     const std::string key = prefix + kv.first.as<std::string>();
     if (kv.second.IsMap()) loadYaml(p, kv.second, key + "/");
-    else if (key == "follower/first_crossing") p->follower.first_crossing = kv.second.as<bool>();
-    else if (key == "projection/height_above_ground") p->projection.height_above_ground = kv.second.as<bool>();
-    else if (key != "ack_name" && key != "publish_markers") setParam(p, key, kv.second.as<double>());
+    else if (displayOnly(key)) continue;
+    else if (parameterSpec(key).kind == ParameterSpec::kBool) setParameter(p, key, kv.second.as<bool>());
+    else setParameter(p, key, kv.second.as<double>());
   }
 }
 
@@ -68,8 +51,15 @@ int main(int argc, char** argv) {
         const std::string kv = argv[++i];
         const auto eq = kv.find('=');
         if (eq == std::string::npos) throw std::runtime_error("--set " + kv + ": expected KEY=VALUE");
-        setParam(&params, kv.substr(0, eq), std::stod(kv.substr(eq + 1)));
+        const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
+        if (displayOnly(key)) continue;
+        const bool flag = parameterSpec(key).kind == ParameterSpec::kBool && (value == "true" || value == "false");
+        setParameter(&params, key, flag ? double(value == "true") : std::stod(value));
       } else if (a == "--out" && i + 1 < argc) out_dir = argv[++i];
+      else if (a == "--params") {  // the planner's parameter table, as docs/planner.md shows it
+        std::fputs(parameterTableMarkdown().c_str(), stdout);
+        return 0;
+      }
       else if (!a.empty() && a[0] == '-') throw std::runtime_error("unknown option " + a);
       else files.push_back(a);
     }

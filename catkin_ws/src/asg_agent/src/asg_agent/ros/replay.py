@@ -149,11 +149,14 @@ def planner_mismatch(worker: str, planner_config: str) -> list:
     import yaml
 
     path = planner_config_path(planner_config)
-    try:
-        with open(path, encoding="utf-8") as f:
-            want = _flatten(yaml.safe_load(f) or {})
-    except OSError as e:
-        return [f"planner configuration {path}: cannot read ({e.strerror})"]
+    want = {}
+    # planner.yaml holds every parameter; a variant overlays it (worker.launch loads both).
+    for file in dict.fromkeys((planner_config_path("planner.yaml"), path)):
+        try:
+            with open(file, encoding="utf-8") as f:
+                want.update(_flatten(yaml.safe_load(f) or {}))
+        except OSError as e:
+            return [f"planner configuration {file}: cannot read ({e.strerror})"]
     out = []
     for key, v in sorted(want.items()):
         if key in PLANNER_DISPLAY_KEYS:
