@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Count test cases in the JUnit XML files under a folder; print one line per failure and the
-closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or error, or if nothing ran."""
+"""Count test cases in the JUnit XML files under a folder; print one line per failure with the last
+lines of its message, and the closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or error, or if nothing ran."""
 
 import glob
 import os
@@ -18,14 +18,19 @@ def main(root):
             continue
         for case in tree.getroot().iter("testcase"):
             name = f"{os.path.relpath(path, root)}::{case.get('classname', '')}.{case.get('name')}"
-            if case.find("failure") is not None or case.find("error") is not None:
-                failed.append(name)
+            bad = case.find("failure")
+            bad = bad if bad is not None else case.find("error")
+            if bad is not None:
+                text = (bad.text or bad.get("message") or "").strip().splitlines()
+                failed.append((name, text[-3:]))
             elif case.find("skipped") is not None:
                 skipped += 1
             else:
                 passed += 1
-    for name in failed:
+    for name, why in failed:
         print(f"FAILED {name}")
+        for line in why:
+            print(f"    {line[:300]}")
     for line in bad_files:
         print(f"FAILED {line}")
     total_failed = len(failed) + len(bad_files)

@@ -1,0 +1,74 @@
+"""The CI helpers of scripts/ci: what the test console shows (issue #38: expected errors of the
+fault-injection tests out of it, every failure in it) and the closing summary."""
+
+import os
+import subprocess
+import sys
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+sys.path.insert(0, os.path.join(REPO, "scripts", "ci"))
+import console_filter  # noqa: E402
+
+RUN = """\
+[ERROR] [1795651097.2]: scene worker: goal refused: layouts[0].instances[2].x = nan: not a number
+[ WARN] [1795651097.3]: planner: scenario 4: cannot use the frame at t = 0.1
+[ROSUNIT] Outputting test results to /ws/build/test_results/asg_tests/rostest-tests_bad_input.xml
+[Testcase: testbad_input] ... ok
+[Testcase: testcampaign] ... FAILURE!
+ * RESULT: FAIL
+[  PASSED  ] 12 tests.
+[  FAILED  ] Parameters.BadValuesAreRefusedWithTheParameterNamed
+/ws/src/asg_planner/src/core/parameters.cpp:12:3: error: 'x' was not declared in this scope
+make[2]: *** [CMakeFiles/planner.dir/build.make:76] Error 1
+Traceback (most recent call last):
+"""
+
+
+def test_the_console_keeps_verdicts_and_failures_and_drops_node_logs(tmp_path):
+    log = tmp_path / "run_tests.log"
+    res = subprocess.run(
+        [sys.executable, os.path.join(REPO, "scripts", "ci", "console_filter.py"), str(log)],
+        input=RUN,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    shown = res.stdout.splitlines()
+    assert "[ERROR]" not in res.stdout and "[ WARN]" not in res.stdout
+    assert shown[0].startswith("[ROSUNIT] Outputting test results to")
+    assert "[Testcase: testcampaign] ... FAILURE!" in shown and "[Testcase: testbad_input] ... ok" not in shown
+    assert " * RESULT: FAIL" in shown
+    assert "[  FAILED  ] Parameters.BadValuesAreRefusedWithTheParameterNamed" in shown
+    assert any(": error: 'x' was not declared" in s for s in shown)
+    assert any(s.startswith("make[2]: ***") for s in shown)
+    assert shown[-1] == f"(the whole output of the tests, nodes' expected errors included: {log})"
+    assert log.read_text() == RUN  # nothing lost
+
+
+def test_shown_is_a_pure_line_rule():
+    assert console_filter.shown("[  FAILED  ] 1 test, listed below:")
+    assert not console_filter.shown("[ERROR] [1.0]: planner: error: x")
+
+
+def test_the_summary_names_each_failure_and_fails_on_it(tmp_path):
+    (tmp_path / "a.xml").write_text(
+        '<testsuite><testcase classname="A" name="ok"/><testcase classname="A" name="bad">'
+        '<failure message="boom">Traceback\nAssertionError: 1 != 2</failure></testcase>'
+        '<testcase classname="A" name="skip"><skipped/></testcase></testsuite>'
+    )
+    res = subprocess.run(
+        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(tmp_path)],
+        capture_output=True,
+        text=True,
+    )
+    assert res.returncode == 1
+    assert "FAILED a.xml::A.bad" in res.stdout
+    assert "AssertionError: 1 != 2" in res.stdout  # why, without opening the file
+    assert res.stdout.splitlines()[-1] == "tests: 1 passed, 1 failed, 1 skipped"
+    (tmp_path / "a.xml").write_text('<testsuite><testcase classname="A" name="ok"/></testsuite>')
+    res = subprocess.run(
+        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(tmp_path)],
+        capture_output=True,
+        text=True,
+    )
+    assert res.returncode == 0 and res.stdout.strip() == "tests: 1 passed, 0 failed, 0 skipped"
