@@ -316,6 +316,14 @@ def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: s
     )
 
 
+def _stack_words(settings: dict) -> str:
+    """The stack under test as the report names it: the paper's (perception / model) or another."""
+    stack = settings.get("stack", "paper")
+    if stack != "paper":
+        return f"{stack} (command interface {settings.get('command_interface', 'vehicle_command')})"
+    return f"{settings.get('perception')} / {settings.get('model')}"
+
+
 def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10) -> str:
     import matplotlib
 
@@ -391,7 +399,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
 padding:4px 8px;text-align:right}}code{{font-size:85%}}</style></head><body>
 <h1>Campaign {html.escape(campaign)}</h1>
 <p>method <b>{html.escape(c['method'])}</b>, experiment <b>{html.escape(c['experiment'])}</b>, seed {c['seed']},
-stack: {html.escape(str(settings.get('perception')))} / {html.escape(str(settings.get('model')))},
+stack: {html.escape(_stack_words(settings))},
 workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html.escape(store_path)}</code></p>
 <h2>Counts (as in the paper's Table 2)</h2>
 <table><tr><th>scenarios</th><th>proxy &gt;= 3</th><th>proxy &gt;= 4</th><th>per 1,000: &gt;= 3 / &gt;= 4</th><th>largest proxy</th></tr>
