@@ -1,0 +1,134 @@
+"""The default search against uniform random at equal budget on one stack under test, one seed an
+arm (issue #39: the depth stack). No ROS.
+
+Endpoint: scenarios whose run fails (attribution.RunOutcome.fails: a collision, a timeout, a flip,
+out of bounds, or proxy >= FINDING) per 1,000, with the exact (Clopper-Pearson) 95 % interval of
+each arm's rate and Fisher's exact test between arms. One seed an arm makes each arm's count a
+binomial draw of its own campaign; it does not sample the spread between seeds, so it can show
+that neither arm finds a failure at a rate above the interval's upper end, not that one search
+beats another in general. Secondary, descriptive: each arm's proxy distribution (median, 90th
+percentile, largest, the share of scenarios at or above CANDIDATE) and the Mann-Whitney U test
+of the proxies of the two arms' scenarios.
+
+    python3 -m asg_agent.analysis.stack_study results/depth exp1-depth-td3-per-asp-s0 exp1-depth-random-s0 \\
+        [--json results/depth/comparison.json] [--markdown]
+"""
+
+import argparse
+import json
+import os
+import sys
+from typing import Dict, List
+
+import numpy as np
+
+from asg_agent.analysis.export import read_export
+from asg_agent.analysis.stats import LEVEL, mann_whitney
+from asg_agent.scoring.attribution import CANDIDATE, RunOutcome
+
+
+def exact_interval(k: int, n: int, level: float = LEVEL) -> List[float]:
+    """Clopper-Pearson interval of a binomial rate k / n."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(k, n).proportion_ci(confidence_level=level, method="exact")
+    return [float(ci.low), float(ci.high)]
+
+
+def arm(rows: List[dict]) -> Dict:
+    """One campaign's endpoint and proxy figures."""
+    done = [r for r in rows if not RunOutcome.of(r).error]
+    fails = [r for r in done if RunOutcome.of(r).fails]
+    proxy = np.array([r["proxy"] for r in done], float)
+    lo, hi = exact_interval(len(fails), len(done))
+    terms: Dict[str, int] = {}
+    for r in rows:
+        terms[r["termination"]] = terms.get(r["termination"], 0) + 1
+    return {
+        "scenarios": len(rows),
+        "errors": len(rows) - len(done),
+        "failures": len(fails),
+        "failure_jobs": [r["job"] for r in fails],
+        "per_1000": 1000.0 * len(fails) / len(done),
+        "per_1000_interval": [1000.0 * lo, 1000.0 * hi],
+        "terminations": dict(sorted(terms.items())),
+        "proxy_median": float(np.median(proxy)),
+        "proxy_p90": float(np.quantile(proxy, 0.9)),
+        "proxy_max": float(proxy.max()),
+        "proxy_ge_candidate": int((proxy >= CANDIDATE).sum()),
+        "proxies": proxy.tolist(),
+    }
+
+
+def study(folder: str, search: str, baseline: str) -> Dict:
+    from scipy.stats import fisher_exact
+
+    arms = {}
+    for name in (search, baseline):
+        path = os.path.join(folder, f"{name}.jsonl.gz")
+        if not os.path.exists(path):
+            raise FileNotFoundError(f"{path}: no export (run scripts/repro/campaigns.sh with its plan)")
+        _, rows = read_export(path)
+        arms[name] = arm(rows)
+    a, b = arms[search], arms[baseline]
+    table = [[a["failures"], a["scenarios"] - a["errors"] - a["failures"]]]
+    table.append([b["failures"], b["scenarios"] - b["errors"] - b["failures"]])
+    _, p = fisher_exact(table, alternative="two-sided")
+    mw = mann_whitney(a["proxies"], b["proxies"])
+    for v in arms.values():
+        del v["proxies"]
+    return {
+        "search": search,
+        "baseline": baseline,
+        "arms": arms,
+        "fisher_p": float(p),
+        "proxy_mann_whitney": mw,
+        "candidate_threshold": CANDIDATE,
+        "level": LEVEL,
+    }
+
+
+def markdown(s: Dict) -> str:
+    head = (
+        "| arm | scenarios | failures | per 1,000 (95 % exact interval) | proxy median / p90 / largest "
+        f"| proxy >= {s['candidate_threshold']:g} |\n|---|---|---|---|---|---|\n"
+    )
+    rows = []
+    for name, a in s["arms"].items():
+        lo, hi = a["per_1000_interval"]
+        rows.append(
+            f"| {name} | {a['scenarios']} | {a['failures']} | {a['per_1000']:.1f} ({lo:.1f}-{hi:.1f}) "
+            f"| {a['proxy_median']:.3f} / {a['proxy_p90']:.3f} / {a['proxy_max']:.3f} | {a['proxy_ge_candidate']} |\n"
+        )
+    mw = s["proxy_mann_whitney"]
+    tail = (
+        f"\nFisher's exact test of the failure counts: p = {s['fisher_p']:.3g}. Proxies of the two arms' "
+        f"scenarios, Mann-Whitney U: p = {mw['p']:.3g}, rank-biserial effect {mw['effect']:+.3f} "
+        f"(+1: every scenario of {s['search']} scores above every one of {s['baseline']}).\n"
+    )
+    return head + "".join(rows) + tail
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("folder", help="folder of the campaigns' exports (NAME.jsonl.gz)")
+    p.add_argument("search", help="the search's campaign name")
+    p.add_argument("baseline", help="the baseline's campaign name (uniform random)")
+    p.add_argument("--json", default="", help="write the figures here")
+    p.add_argument("--markdown", action="store_true", help="print the table as docs/your-stack.md shows it")
+    a = p.parse_args(argv)
+    try:
+        s = study(a.folder, a.search, a.baseline)
+    except (FileNotFoundError, ValueError) as e:
+        print(f"stack_study: {e}", file=sys.stderr)
+        return 2
+    if a.json:
+        with open(a.json, "w", encoding="utf-8") as f:
+            json.dump(s, f, indent=1, sort_keys=True)
+            f.write("\n")
+    print(markdown(s) if a.markdown else json.dumps(s, indent=1, sort_keys=True))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,44 @@
+"""analysis.stack_study: the search against random on one stack, one seed an arm (issue #39)."""
+
+import gzip
+import json
+
+import pytest
+
+from asg_agent.analysis import stack_study
+
+
+def export(path, name, outcomes):
+    with gzip.open(path, "wt", encoding="utf-8") as f:
+        f.write(json.dumps({"campaign": {"name": name}}) + "\n")
+        for job, (term, proxy) in enumerate(outcomes):
+            f.write(json.dumps({"job": job, "termination": term, "proxy": proxy}) + "\n")
+
+
+def test_counts_failures_with_exact_intervals_and_tests_the_arms(tmp_path):
+    search = [("SUCCESS", 1.0 + 0.001 * k) for k in range(95)] + [("COLLISION", 1.2)] * 3 + [("SUCCESS", 3.5)] * 2
+    random = [("SUCCESS", 1.0)] * 99 + [("ERROR", None)]
+    export(tmp_path / "s.jsonl.gz", "s", search)
+    export(tmp_path / "r.jsonl.gz", "r", random)
+    out = tmp_path / "c.json"
+    assert stack_study.main([str(tmp_path), "s", "r", "--json", str(out)]) == 0
+    s = json.loads(out.read_text())
+    a, b = s["arms"]["s"], s["arms"]["r"]
+    assert (a["failures"], a["scenarios"], a["errors"]) == (5, 100, 0)
+    assert a["failure_jobs"] == [95, 96, 97, 98, 99]
+    assert a["per_1000"] == pytest.approx(50.0)
+    lo, hi = a["per_1000_interval"]
+    assert lo == pytest.approx(16.4, abs=0.1) and hi == pytest.approx(112.8, abs=0.1)  # Clopper-Pearson 5/100
+    # An ERROR run is no outcome: not a failure, not in the denominator.
+    assert (b["failures"], b["errors"], b["per_1000"]) == (0, 1, 0.0)
+    assert b["per_1000_interval"][0] == 0.0 and b["per_1000_interval"][1] == pytest.approx(36.6, abs=0.1)
+    assert s["fisher_p"] == pytest.approx(0.0594, abs=1e-3)
+    assert s["proxy_mann_whitney"]["effect"] > 0.9  # the search's proxies sit above random's
+    assert a["proxy_ge_candidate"] == 2 and a["terminations"] == {"COLLISION": 3, "SUCCESS": 97}
+    md = stack_study.markdown(s)
+    assert "| s | 100 | 5 | 50.0 (16.4-112.8) |" in md and "Fisher's exact test" in md
+
+
+def test_a_missing_export_is_named(tmp_path, capsys):
+    assert stack_study.main([str(tmp_path), "s", "r"]) == 2
+    assert "s.jsonl.gz: no export" in capsys.readouterr().err
