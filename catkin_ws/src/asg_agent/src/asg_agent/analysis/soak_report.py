@@ -1,19 +1,15 @@
-#!/usr/bin/python3
-"""The soak's accounting (issue #14), written to a JSON file and printed: every scenario 0..N-1
-stored exactly once, the kills by kind, the agent's restarts, the retries (from the store and, by
-reason, from the agent's log), SQLite integrity.
-    soak_report.py STORE NAME N KILLS_LOG AGENT_LOG START END OUT.json"""
+"""The soak's accounting (issue #14; asg_agent.cli.soak writes it), written to a JSON file and
+printed: every scenario 0..N-1 stored exactly once, the kills by kind, the agent's restarts, the
+retries (from the store and, by reason, from the agent's log), SQLite integrity. No ROS.
+    python3 -m asg_agent.analysis.soak_report STORE NAME N KILLS_LOG AGENT_LOG START END OUT.json"""
 
 import collections
 import json
-import os
 import re
 import sys
 
-sys.path.insert(
-    0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "catkin_ws", "src", "asg_agent", "src")
-)
-from asg_agent.campaign.store import Store  # noqa: E402
+from asg_agent.campaign.store import Store
+from asg_agent.scoring.attribution import FINDING
 
 REASONS = [
     ("scene worker died", r"scene worker died"),
@@ -25,9 +21,7 @@ REASONS = [
 ]
 
 
-def main(argv):
-    store_path, name, n, kills_path, log_path, start, end, out = argv
-    n = int(n)
+def report(store_path: str, name: str, n: int, kills_path: str, log_path: str, start: float, end: float) -> dict:
     s = Store(store_path)
     rows = list(s.rows(name))
     jobs = [r["job"] for r in rows]
@@ -49,7 +43,7 @@ def main(argv):
         "beyond_budget": sum(j >= n for j in jobs),
         "integrity_ok": s.integrity_ok(),
         "finished": bool(camp and camp["finished"]),
-        "hours": round((int(end) - int(start)) / 3600, 2),
+        "hours": round((end - start) / 3600, 2),
         "kills": dict(kills),
         "kills_total": sum(kills.values()),
         "agent_restarts": sum("restarting with --resume" in line for line in log),
@@ -60,13 +54,24 @@ def main(argv):
         # issue #36: three-stack attribution under kills: every candidate attributed once, none left pending
         "attribution": s.classes(name) if any(r["attribution"] for r in rows) else None,
         "candidates_pending": sum(1 for r in rows if r["attribution"] == "pending"),
-        "proxy_ge_3": sum((r["proxy"] or 0) >= 3 for r in rows),
+        "proxy_ge_3": sum((r["proxy"] or 0) >= FINDING for r in rows),
     }
+    return res
+
+
+def passed(res: dict) -> bool:
+    """Nothing lost or doubled, the store sound, the campaign finished, no candidate left pending."""
+    ok = res["lost"] == 0 and res["duplicates"] == 0 and res["integrity_ok"] and res["finished"]
+    return ok and res["candidates_pending"] == 0
+
+
+def main(argv):
+    store_path, name, n, kills_path, log_path, start, end, out = argv
+    res = report(store_path, name, int(n), kills_path, log_path, float(start), float(end))
     with open(out, "w") as f:
         json.dump(res, f, indent=1)
     print(json.dumps(res, indent=1))
-    ok = res["lost"] == 0 and res["duplicates"] == 0 and res["integrity_ok"] and res["finished"]
-    return 0 if ok and res["candidates_pending"] == 0 else 1
+    return 0 if passed(res) else 1
 
 
 if __name__ == "__main__":
