@@ -8,7 +8,7 @@ import sys
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_agent.analysis import experiments  # noqa: E402
+from asg_agent.analysis import campaign_metrics, experiments  # noqa: E402
 from asg_agent.analysis.export import counts, read_export  # noqa: E402
 from asg_agent.campaign.store import Store  # noqa: E402
 
@@ -162,11 +162,11 @@ def test_shadow_ahead_sees_a_cast_shadow_in_front_not_behind():
     r = dict(rows[0])
     r["positions"] = [[95.0, 95.0]] * len(r["positions"])
     r["positions"][r["meshes"].index("juniper")] = [50.0, 50.0]
-    req = experiments.scenario_of(camp, r)
+    req = campaign_metrics.scenario_of(camp, r)
     towards = np.array([[40.0 + 0.5 * k, 51.0] for k in range(30)])
     away = towards[::-1] - np.array([20.0, 0.0])
-    assert experiments.shadow_ahead(req, towards, 0)
-    assert not experiments.shadow_ahead(req, away, 0)
+    assert campaign_metrics.shadow_ahead(req, towards, 0)
+    assert not campaign_metrics.shadow_ahead(req, away, 0)
 
 
 def test_distinct_counts_clusters_of_near_copies_once():
@@ -188,13 +188,13 @@ def test_distinct_counts_clusters_of_near_copies_once():
             proxy -= 0.1
     rows.append({"proxy": 1.0, "positions": rng.uniform(0, 100, (8, 2)).tolist(), "meshes": meshes})
     rows.append({"proxy": None, "positions": rows[0]["positions"], "meshes": meshes})
-    assert experiments.distinct(rows, None, 5.0, min_proxy=3.0) == 3
-    assert experiments.distinct(rows, None, 2.0, min_proxy=3.0) == 6
-    assert experiments.distinct(rows, None, 5.0) == 4  # the low-proxy stranger counts without the floor
-    assert experiments.distinct(rows, 5, 2.0) == 2  # the top 5 are the first layout's copies
+    assert campaign_metrics.distinct(rows, None, 5.0, min_proxy=3.0) == 3
+    assert campaign_metrics.distinct(rows, None, 2.0, min_proxy=3.0) == 6
+    assert campaign_metrics.distinct(rows, None, 5.0) == 4  # the low-proxy stranger counts without the floor
+    assert campaign_metrics.distinct(rows, 5, 2.0) == 2  # the top 5 are the first layout's copies
     for a in rows[:15]:
-        fast = experiments.layout_distances(a["positions"], [r["positions"] for r in rows[:15]], meshes)
-        slow = [experiments.layout_distance(a["positions"], r["positions"], meshes) for r in rows[:15]]
+        fast = campaign_metrics.layout_distances(a["positions"], [r["positions"] for r in rows[:15]], meshes)
+        slow = [campaign_metrics.layout_distance(a["positions"], r["positions"], meshes) for r in rows[:15]]
         assert np.allclose(fast, slow)
 
 

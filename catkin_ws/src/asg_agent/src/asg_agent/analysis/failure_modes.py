@@ -43,7 +43,7 @@ def failure_point(xy: np.ndarray, a: np.ndarray, b: np.ndarray, ended_early: boo
 
 def mode(row: dict, request: dict) -> Tuple[str, int, str, str]:
     """The failure-mode cell (obstacle, along, side, shadow) of an export row and its request."""
-    from asg_agent.analysis.experiments import shadow_ahead
+    from asg_agent.analysis.campaign_metrics import shadow_ahead
 
     op = request["operational"]
     a, b = np.array([op["start_x"], op["start_y"]], float), np.array([op["goal_x"], op["goal_y"]], float)
@@ -82,7 +82,7 @@ def coverage(modes: Iterable[tuple], meshes: Sequence[str]) -> float:
 
 def modes_of(campaign: dict, rows: List[dict], keep=lambda r: True) -> List[tuple]:
     """The failure modes of the rows of an export that `keep` picks (e.g. its flaw findings)."""
-    from asg_agent.analysis.experiments import scenario_of
+    from asg_agent.analysis.campaign_metrics import scenario_of
 
     return [mode(r, scenario_of(campaign, r)) for r in rows if keep(r)]
 

@@ -71,7 +71,7 @@ def export_suite(exports: List[str], out: str, classes=("flaw",), limit: int = 0
     from asg_scenario import dump_scenario, validate_scenario
 
     from asg_agent.analysis import failure_modes as fm
-    from asg_agent.analysis.experiments import scenario_of
+    from asg_agent.analysis.campaign_metrics import scenario_of
     from asg_agent.analysis.export import read_export
 
     os.makedirs(os.path.join(out, "scenarios"), exist_ok=True)

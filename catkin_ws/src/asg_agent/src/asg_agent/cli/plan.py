@@ -26,6 +26,9 @@ from typing import Callable, List, Optional
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
 
 
+FIELDS = ("NAME", "SCENARIOS", "LAUNCH")  # the words a plan line starts with, then ARGS
+
+
 class PlanError(ValueError):
     """A plan file that cannot be run, with the line that is wrong."""
 
@@ -44,7 +47,7 @@ def parse_plan(text: str, source: str = "plan") -> List[Campaign]:
         words = line.split("#", 1)[0].split()
         if not words:
             continue
-        if len(words) < 3:
+        if len(words) < len(FIELDS):
             raise PlanError(f"{source}:{k}: expected NAME SCENARIOS LAUNCH [ARGS...], got {line.strip()!r}")
         name, n, launch, args = words[0], words[1], words[2], words[3:]
         if not n.isdigit() or int(n) < 1:

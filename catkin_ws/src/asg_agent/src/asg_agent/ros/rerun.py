@@ -44,7 +44,7 @@ def top_requests(export: str, top: int, select: str = "proxy"):
     """[(campaign row, request)] to re-run: the `top` of largest proxy, or (select 'perception')
     the perception-attributable ones, class by class. Raises ValueError for an unknown `select`
     or a 'perception' selection from an export without reference runs."""
-    from asg_agent.analysis.experiments import scenario_of
+    from asg_agent.analysis.campaign_metrics import scenario_of
 
     camp, rows = read_export(export)
     rows = [r for r in rows if r["proxy"] is not None]
