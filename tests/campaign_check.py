@@ -152,7 +152,8 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertGreater(px["plan"], 50, px)
         self.assertGreater(px["trajectory"], 100, px)
         # A planner snapshot from the bag and the campaign's HTML report.
-        from asg_agent.analysis.report import campaign_report, snapshot
+        from asg_agent.analysis.report import campaign_report
+        from asg_agent.ros.bag_figures import snapshot
 
         snap = os.path.join(os.path.dirname(path), "snapshot.png")
         snapshot(bag, snap, row["sim_time"] / 2)

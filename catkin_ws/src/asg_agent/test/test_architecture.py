@@ -80,3 +80,21 @@ def test_no_literal_finding_threshold_outside_the_attribution_module():
                 if float(number) in (3.0, 4.0):  # (2 is everywhere as "at least two points")
                     found.append(f"{os.path.relpath(path, SRC)}:{a.start[0]}: {' '.join(pair)}")
     assert not found, "literal thresholds (use scoring/attribution.py's constants): " + "; ".join(found)
+
+
+def test_analysis_reads_stores_and_exports_without_ros():
+    # analysis/ recomputes tables and figures from stores and exports; bags and replays are ros/'s.
+    found = []
+    for name, path in modules():
+        if not name.startswith("asg_agent.analysis"):
+            continue
+        tree = ast.parse(open(path, encoding="utf-8").read())
+        for node in ast.walk(tree):
+            mods = []
+            if isinstance(node, ast.Import):
+                mods = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level:
+                mods = [node.module or ""]
+            found += [f"{name}:{node.lineno}: {m}" for m in mods if m.split(".")[0] in ("rospy", "rosbag", "rosgraph")]
+            found += [f"{name}:{node.lineno}: {m}" for m in mods if m.startswith("asg_agent.ros")]
+    assert not found, "ROS in analysis/: " + "; ".join(found)
