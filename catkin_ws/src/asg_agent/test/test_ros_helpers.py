@@ -4,6 +4,7 @@ import os
 
 import rospy
 
+from asg_agent.ros import stack_identity
 from asg_agent.ros.bag_scene import scene_messages
 from asg_scenario import load_scenario
 from asg_scenario.catalogue import MESHES
@@ -47,8 +48,6 @@ def test_planner_mismatch_names_what_a_worker_runs_against_the_experiment(monkey
     # experiment's (exp6 with the flat planner.yaml, say), naming the parameter.
     import yaml
 
-    from asg_agent.ros import replay
-
     cfg = os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config")
     params = {}
 
@@ -68,18 +67,18 @@ def test_planner_mismatch_names_what_a_worker_runs_against_the_experiment(monkey
     params["/worker_1/planner/publish_markers"] = False  # set by worker.launch: not the stack's identity
     monkeypatch.setattr(rospy, "has_param", lambda n: n in params)
     monkeypatch.setattr(rospy, "get_param", lambda n: params[n])
-    assert replay.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml")) == []
-    assert replay.planner_mismatch("/worker_0", os.path.join(cfg, "planner.yaml")) == []
-    wrong = replay.planner_mismatch("/worker_0", os.path.join(cfg, "planner_terrain.yaml"))
+    assert stack_identity.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml")) == []
+    assert stack_identity.planner_mismatch("/worker_0", os.path.join(cfg, "planner.yaml")) == []
+    wrong = stack_identity.planner_mismatch("/worker_0", os.path.join(cfg, "planner_terrain.yaml"))
     assert len(wrong) == 1 and "projection/height_above_ground = False" in wrong[0], wrong
     # A variant is an overlay: what it leaves to planner.yaml is checked too.
     params["/worker_1/planner/follower/kp"] = 343.7747
     assert "follower/kp = 343.7747, planner_terrain.yaml says 10.0" in " ".join(
-        replay.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))
+        stack_identity.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))
     )
     params["/worker_1/planner/follower/kp"] = 10.0
     del params["/worker_1/planner/projection/ground_cell"]
     assert (
         "has no parameter projection/ground_cell"
-        in replay.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))[0]
+        in stack_identity.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))[0]
     )

@@ -382,7 +382,7 @@ def main(argv=None):
             return 2
         # The planner is part of the stack's identity: every worker must run the experiment's
         # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
-        from asg_agent.ros.replay import planner_mismatch
+        from asg_agent.ros.stack_identity import planner_mismatch
 
         checked = (list(workers) if exp.stack == "paper" else []) + list(ref_workers)
         wrong = [m for w in checked for m in planner_mismatch(w, exp.planner_config)]
@@ -449,7 +449,7 @@ def main(argv=None):
     if not a.fake_workers:
         # The stack identity stored with the campaign must be what the workers run (issue #24:
         # a backend left at another value than the experiment's would be recorded falsely).
-        from asg_agent.ros.replay import stack_mismatch
+        from asg_agent.ros.stack_identity import stack_mismatch
 
         wrong = [m for w in workers for m in stack_mismatch(w, settings)]
         for role, ws in roles.items():
@@ -460,7 +460,7 @@ def main(argv=None):
         for where, ws in groups:
             if where.get("perception") != "unet":
                 continue
-            from asg_agent.ros.replay import segmenter_numerics
+            from asg_agent.ros.stack_identity import segmenter_numerics
 
             seen = {w: segmenter_numerics(w, timeout=60.0) for w in ws}
             if len(set(seen.values())) > 1 or "" in seen.values():

@@ -67,7 +67,7 @@ def main(argv=None) -> int:
             return 2
     numerics = ""
     if not a.fake_workers:  # the numerics the segmenter runs here (none for a ground-truth stack)
-        from asg_agent.ros.replay import segmenter_numerics
+        from asg_agent.ros.stack_identity import segmenter_numerics
 
         first = worker_names(a.workers)[0]
         if rospy.has_param(f"{first}/segmenter/model"):
