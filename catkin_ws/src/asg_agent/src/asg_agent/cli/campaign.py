@@ -325,42 +325,26 @@ def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu, gro
     print(f"stage report: {a.stage_report} ({out['rate_per_hour']:.0f} scenarios an hour)", file=sys.stderr)
 
 
-def main(argv=None):
-    # roslaunch adds remappings (__name:=..., __log:=...): not ours to parse.
-    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv)
-    try:
-        exp = load_experiment(a.experiment)
-    except ExperimentError as e:
-        print(f"campaign: {e}", file=sys.stderr)
-        return 2
-    name = a.name or f"{exp.name}-{a.method}-s{a.seed}"
-    try:
-        workers = [f"fake_{i}" for i in range(a.fake_workers)] if a.fake_workers else worker_names(a.workers)
-    except ValueError as e:
-        print(f"campaign: {e}", file=sys.stderr)
-        return 2
-    try:
-        roles = reference_roles(a, workers)
-    except ValueError as e:
-        print(f"campaign: {e}", file=sys.stderr)
-        return 2
-    ref_workers = [w for ws in roles.values() for w in ws]
-    candidates = a.candidates or ("all" if a.reference_workers else "failures")
-    slots = a.slots or 2 * len(workers)
+class CampaignError(Exception):
+    """What stops the command before it runs (printed as `campaign: ...`, exit status 2)."""
+
+
+def open_store(a, name: str) -> Store:
     try:
         os.makedirs(os.path.dirname(os.path.abspath(a.store)), exist_ok=True)
         store = Store(a.store)
     except OSError as e:
-        print(f"campaign: --store {a.store}: cannot create its folder ({e.strerror})", file=sys.stderr)
-        return 2
+        raise CampaignError(f"--store {a.store}: cannot create its folder ({e.strerror})") from e
     except StoreError as e:
-        print(f"campaign: {e}", file=sys.stderr)
-        return 2
+        raise CampaignError(str(e)) from e
     if not a.resume and store.campaign(name) is not None:
-        print(
-            f"campaign: {name!r} already exists in {a.store}: add --resume to continue it, or --name", file=sys.stderr
-        )
-        return 2
+        raise CampaignError(f"{name!r} already exists in {a.store}: add --resume to continue it, or --name")
+    return store
+
+
+def make_pools(a, exp, workers, roles):
+    """The pool of workers under test and one pool per reference role: ROS workers, or the
+    in-process stand-in with --fake-workers. ROS workers must run the experiment's planner."""
     references = {}
     if a.fake_workers:
         from asg_agent.campaign.fake_pool import FakePool
@@ -368,43 +352,47 @@ def main(argv=None):
         pool = FakePool(a.fake_workers, seed=int(time.time()))
         for k, (role, ws) in enumerate(roles.items()):  # stand-in reference stacks that wiggle less
             references[role] = FakePool(len(ws), seed=int(time.time()) + 1 + k, gain=0.3, prefix=f"fake_{role}")
-    else:
-        import rospy
-        from asg_agent.ros.pool import WorkerPool
+        return pool, references
+    import rospy
+    from asg_agent.ros.pool import WorkerPool
 
-        rospy.init_node("campaign", anonymous=True, disable_signals=True)
-        try:
-            pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
-            for role, ws in roles.items():
-                references[role] = WorkerPool(ws, answer_timeout=a.answer_timeout)
-        except RuntimeError as e:
-            print(f"campaign: {e}", file=sys.stderr)
-            return 2
-        # The planner is part of the stack's identity: every worker must run the experiment's
-        # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
-        from asg_agent.ros.stack_identity import planner_mismatch
+    rospy.init_node("campaign", anonymous=True, disable_signals=True)
+    try:
+        pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
+        for role, ws in roles.items():
+            references[role] = WorkerPool(ws, answer_timeout=a.answer_timeout)
+    except RuntimeError as e:
+        raise CampaignError(str(e)) from e
+    # The planner is part of the stack's identity: every worker must run the experiment's
+    # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
+    from asg_agent.ros.stack_identity import planner_mismatch
 
-        checked = (list(workers) if exp.stack == "paper" else []) + list(ref_workers)
-        wrong = [m for w in checked for m in planner_mismatch(w, exp.planner_config)]
-        if wrong:
-            print(
-                f"campaign: the experiment's planner_config is {exp.planner_config}, but:\n  "
-                + "\n  ".join(wrong[:8])
-                + "\n(launch the workers with planner_config:=... of that file)",
-                file=sys.stderr,
-            )
-            return 2
+    ref_workers = [w for ws in roles.values() for w in ws]
+    checked = (list(workers) if exp.stack == "paper" else []) + ref_workers
+    wrong = [m for w in checked for m in planner_mismatch(w, exp.planner_config)]
+    if wrong:
+        raise CampaignError(
+            f"the experiment's planner_config is {exp.planner_config}, but:\n  "
+            + "\n  ".join(wrong[:8])
+            + "\n(launch the workers with planner_config:=... of that file)"
+        )
+    return pool, references
+
+
+def make_search(a, exp):
     td3 = TD3Config()
     if a.updates_per_step:
         td3.updates_per_step = a.updates_per_step
     td3.bc_weight = a.bc_weight
     options = {"band": a.route_band, "share": a.route_share} if a.method == "route-random" else None
     try:
-        method = make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3, options=options)
+        return make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3, options=options)
     except ValueError as e:
-        print(f"campaign: {e}", file=sys.stderr)
-        return 2
-    checkpoint = checkpoint_path(a.store, name)
+        raise CampaignError(str(e)) from e
+
+
+def progress_bar(a):
+    """(bar, progress callback): a tqdm bar on stderr, or none with --no-progress."""
     bar = None
     if not a.no_progress:
         from tqdm import tqdm
@@ -431,9 +419,14 @@ def main(argv=None):
             refresh=True,
         )
 
-    settings = {
+    return bar, progress
+
+
+def campaign_settings(a, exp, workers, roles, candidates) -> dict:
+    """What the store keeps of the campaign: workers, references, reward and the stack's identity."""
+    return {
         "workers": workers,
-        "reference_workers": ref_workers,
+        "reference_workers": [w for ws in roles.values() for w in ws],
         **reference_settings(a, exp, roles, candidates),
         "reward": a.reward,
         **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
@@ -446,70 +439,52 @@ def main(argv=None):
         "planner_config": exp.planner_config,
         "fake": bool(a.fake_workers),
     }
-    if not a.fake_workers:
-        # The stack identity stored with the campaign must be what the workers run (issue #24:
-        # a backend left at another value than the experiment's would be recorded falsely).
-        from asg_agent.ros.stack_identity import stack_mismatch
 
-        wrong = [m for w in workers for m in stack_mismatch(w, settings)]
-        for role, ws in roles.items():
-            wrong += [m for w in ws for m in stack_mismatch(w, settings["references"][role])]
-        # Issue #36: what decides the U-Net's numerics on each worker's machine, recorded so that a
-        # replay elsewhere can tell whether it repeats the runs; one campaign, one numerics.
-        groups = [(settings, workers)] + [(settings["references"][r], ws) for r, ws in roles.items()]
-        for where, ws in groups:
-            if where.get("perception") != "unet":
-                continue
-            from asg_agent.ros.stack_identity import segmenter_numerics
 
-            seen = {w: segmenter_numerics(w, timeout=60.0) for w in ws}
-            if len(set(seen.values())) > 1 or "" in seen.values():
-                wrong.append(
-                    "the segmenters do not all run the same numerics: "
-                    + ", ".join(f"{w}: {v or 'none reported'}" for w, v in seen.items())
-                )
-            else:
-                where["numerics"] = next(iter(seen.values()))
-        if wrong:
-            print(
-                "campaign: the workers do not run the experiment's stack (" + exp.source + "): " + "; ".join(wrong),
-                file=sys.stderr,
+def check_stacks(exp, settings: dict, workers, roles):
+    """The stack identity stored with the campaign must be what the workers run (issue #24: a
+    backend left at another value than the experiment's would be recorded falsely); the U-Net's
+    numerics on each worker's machine are recorded in `settings` (issue #36: one campaign, one
+    numerics, so that a replay elsewhere can tell whether it repeats the runs)."""
+    from asg_agent.ros.stack_identity import segmenter_numerics, stack_mismatch
+
+    wrong = [m for w in workers for m in stack_mismatch(w, settings)]
+    for role, ws in roles.items():
+        wrong += [m for w in ws for m in stack_mismatch(w, settings["references"][role])]
+    groups = [(settings, workers)] + [(settings["references"][r], ws) for r, ws in roles.items()]
+    for where, ws in groups:
+        if where.get("perception") != "unet":
+            continue
+        seen = {w: segmenter_numerics(w, timeout=60.0) for w in ws}
+        if len(set(seen.values())) > 1 or "" in seen.values():
+            wrong.append(
+                "the segmenters do not all run the same numerics: "
+                + ", ".join(f"{w}: {v or 'none reported'}" for w, v in seen.items())
             )
-            return 2
-    collector = None
-    if a.stage_report and not a.fake_workers:
-        from asg_agent.ros.stages import StageCollector
+        else:
+            where["numerics"] = next(iter(seen.values()))
+    if wrong:
+        raise CampaignError(f"the workers do not run the experiment's stack ({exp.source}): " + "; ".join(wrong))
 
-        collector = StageCollector(list(workers) + ref_workers)
-        nodes = (1 if exp.stack != "paper" else 3 if exp.perception == "unet" else 2) * len(workers)
-        nodes += sum(
-            (3 if settings["references"][r]["perception"] == "unet" else 2) * len(ws) for r, ws in roles.items()
+
+def stage_collector(exp, settings: dict, workers, roles):
+    """--stage-report: the collector of every node's stage times, once each has published."""
+    from asg_agent.ros.stages import StageCollector
+
+    collector = StageCollector(list(workers) + [w for ws in roles.values() for w in ws])
+    nodes = (1 if exp.stack != "paper" else 3 if exp.perception == "unet" else 2) * len(workers)
+    nodes += sum((3 if settings["references"][r]["perception"] == "unet" else 2) * len(ws) for r, ws in roles.items())
+    if not collector.wait_for(nodes, timeout=15.0):
+        print(
+            "campaign: --stage-report: not every worker, segmenter and planner published stage_times "
+            "within 15 s; the breakdown will lack them",
+            file=sys.stderr,
         )
-        if not collector.wait_for(nodes, timeout=15.0):
-            print(
-                "campaign: --stage-report: not every worker, segmenter and planner published stage_times "
-                "within 15 s; the breakdown will lack them",
-                file=sys.stderr,
-            )
-    c = Campaign(
-        name,
-        exp,
-        method,
-        store,
-        pool,
-        a.scenarios,
-        a.seed,
-        checkpoint,
-        slots=slots,
-        checkpoint_every=a.checkpoint_every,
-        progress=progress,
-        settings=settings,
-        early_dispatch=not a.no_early_dispatch,
-        references=references,
-        candidates=candidates if references else None,
-        reward=a.reward,
-        collision_bonus=a.collision_bonus,
-    )
+    return collector
+
+
+def run(a, c: Campaign, store: Store, name: str, bar, progress, collector, workers, roles) -> int:
+    """Starts or resumes the campaign and runs it to its budget; the summary at the end."""
     tb = None
     try:
         if a.resume and store.campaign(name) is None:
@@ -550,8 +525,49 @@ def main(argv=None):
         tb.close()
         print(f"tensorboard: {tb.logdir} (tensorboard --logdir {os.path.dirname(tb.logdir)})")
     print_summary(store, name)
-    print(f"checkpoint: {checkpoint}")
+    print(f"checkpoint: {c.checkpoint_path}")
     return 0
+
+
+def main(argv=None):
+    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv)
+    try:
+        exp = load_experiment(a.experiment)
+        name = a.name or f"{exp.name}-{a.method}-s{a.seed}"
+        workers = [f"fake_{i}" for i in range(a.fake_workers)] if a.fake_workers else worker_names(a.workers)
+        roles = reference_roles(a, workers)
+        candidates = a.candidates or ("all" if a.reference_workers else "failures")
+        store = open_store(a, name)
+        pool, references = make_pools(a, exp, workers, roles)
+        method = make_search(a, exp)
+        settings = campaign_settings(a, exp, workers, roles, candidates)
+        if not a.fake_workers:
+            check_stacks(exp, settings, workers, roles)
+    except (ExperimentError, ValueError, CampaignError) as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
+    bar, progress = progress_bar(a)
+    collector = stage_collector(exp, settings, workers, roles) if a.stage_report and not a.fake_workers else None
+    c = Campaign(
+        name,
+        exp,
+        method,
+        store,
+        pool,
+        a.scenarios,
+        a.seed,
+        checkpoint_path(a.store, name),
+        slots=a.slots or 2 * len(workers),
+        checkpoint_every=a.checkpoint_every,
+        progress=progress,
+        settings=settings,
+        early_dispatch=not a.no_early_dispatch,
+        references=references,
+        candidates=candidates if references else None,
+        reward=a.reward,
+        collision_bonus=a.collision_bonus,
+    )
+    return run(a, c, store, name, bar, progress, collector, workers, roles)
 
 
 if __name__ == "__main__":
