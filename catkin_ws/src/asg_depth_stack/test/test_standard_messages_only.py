@@ -13,6 +13,7 @@ ALLOWED_ROOTS = {
     "tf2_ros",
     "geometry_msgs",
     "nav_msgs",
+    "visualization_msgs",  # standard: its rviz markers
     "sensor_msgs",
     "dataclasses",
     "typing",

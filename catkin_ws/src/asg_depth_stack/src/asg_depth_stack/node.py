@@ -11,7 +11,7 @@ from geometry_msgs.msg import PoseStamped, Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 
-from asg_depth_stack.arcs import ArcParams, ArcPlanner
+from asg_depth_stack.arcs import ArcParams, ArcPlanner, rollout
 from asg_depth_stack.grid import ElevationGrid, GridParams
 
 #: A jump of the vehicle this large between two odometry messages is a new run (free-running
@@ -47,6 +47,7 @@ class DepthStack:
         self.grid_params, self.planner = grid, ArcPlanner(arcs)
         self.camera_frame, self.base_frame = camera_frame, base_frame
         self.cmd = None  # set by main(): the cmd_vel publisher
+        self.show = None  # set by main() with ~publish_markers: show(stamp, arc_xy, obstacles_xy)
         self.mount = None  # 4 x 4 base_link <- camera, from tf
         self.reset()
 
@@ -76,7 +77,7 @@ class DepthStack:
         if self.cloud is not None and self.cloud.header.stamp <= msg.header.stamp:
             self.insert(self.cloud)
             self.cloud = None
-        self.control()
+        self.control(msg.header.stamp)
 
     def on_points(self, msg: PointCloud2):
         self.cloud = msg
@@ -93,7 +94,7 @@ class DepthStack:
         self.grid.insert(world, T[:3, 3])
 
     # --- output ---------------------------------------------------------------------------------
-    def control(self):
+    def control(self, stamp=None):
         if self.goal is None or self.pose is None:
             return
         x, y, _, yaw, _ = self.pose
@@ -103,6 +104,49 @@ class DepthStack:
         t.linear.x, t.angular.z = c.speed, c.yaw_rate
         if self.cmd is not None:
             self.cmd.publish(t)
+        if self.show is not None:  # what it decided on, for rviz and replay bags (not an input)
+            arc = (
+                np.zeros((0, 2))
+                if c.blocked
+                else rollout(x, y, yaw, c.curvature, self.planner.p.horizon, self.planner.p.step)
+            )
+            self.show(stamp, np.vstack([[x, y], arc]), np.zeros((0, 2)) if obs is None else obs)
+
+
+class Markers:
+    """The chosen arc (nav_msgs/Path `depth_stack/arc`) and the obstacle cells of the grid
+    (visualization_msgs/Marker `depth_stack/obstacles`), in the map frame, for rviz."""
+
+    def __init__(self):
+        from nav_msgs.msg import Path
+        from visualization_msgs.msg import Marker
+
+        self.Path, self.Marker = Path, Marker
+        self.arc = rospy.Publisher("depth_stack/arc", Path, queue_size=4)
+        self.obstacles = rospy.Publisher("depth_stack/obstacles", Marker, queue_size=4)
+
+    def __call__(self, stamp, arc_xy, obstacles_xy):
+        from geometry_msgs.msg import Point
+
+        path = self.Path()
+        path.header.frame_id = "map"
+        path.header.stamp = stamp or rospy.Time()
+        for px, py in arc_xy:
+            p = PoseStamped()
+            p.header = path.header
+            p.pose.position.x, p.pose.position.y, p.pose.position.z = px, py, 0.2
+            p.pose.orientation.w = 1.0
+            path.poses.append(p)
+        self.arc.publish(path)
+        m = self.Marker()
+        m.header = path.header
+        m.ns, m.type = "depth_stack_obstacles", self.Marker.CUBE_LIST
+        m.action = self.Marker.ADD if len(obstacles_xy) else self.Marker.DELETE
+        m.pose.orientation.w = 1.0
+        m.scale.x = m.scale.y = m.scale.z = 0.4
+        m.color.r, m.color.g, m.color.b, m.color.a = 1.0, 0.4, 0.0, 0.8
+        m.points = [Point(float(px), float(py), 0.2) for px, py in obstacles_xy]
+        self.obstacles.publish(m)
 
 
 def read_params():
@@ -153,6 +197,8 @@ def main():
     stack.cmd = pub("cmd_vel", Twist, queue_size=1)
     # In lockstep, messages of one stamp reach the callbacks in this order: the cloud is held
     # until the odometry of its instant places it.
+    if rospy.get_param("~publish_markers", True):
+        stack.show = Markers()
     sub("goal", PoseStamped, stack.on_goal)
     sub("camera/points", PointCloud2, on_points)
     sub("odom", Odometry, stack.on_odom)

@@ -1,8 +1,9 @@
 #pragma once
 // SceneWorkerROS: the thin ROS adapter around asg_sim::ScenarioRunner. Serves the RunScenario
 // action, announces each scenario to the autonomy stack and waits for every stack node's ack,
-// then runs the lockstep loop: publish odometry/tf every tick and camera frames when due, and at
-// each control tick publish a Tick and wait for the VehicleCommand stamped with it.
+// then runs the simulator core's lockstep run loop (run_loop.hpp) as its stack side: odometry/tf
+// and camera frames out when due, and at each control tick a Tick out and the command stamped
+// with it in. Message conversions: scene_worker_messages.hpp; parameters: scene_worker_params.cpp.
 // Topics, parameters and the protocol: docs/simulator.md.
 
 #include <actionlib/server/simple_action_server.h>
@@ -16,6 +17,7 @@
 #include <geometry_msgs/TwistStamped.h>
 #include <ros/ros.h>
 
+#include <chrono>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -26,13 +28,14 @@
 #include "asg_lockstep/worker_protocol.hpp"
 #include "asg_sim/renderer.hpp"
 #include "asg_lockstep/ros/stage_times.hpp"
+#include "asg_sim/run_loop.hpp"
 #include "asg_sim/scenario_runner.hpp"
 #include "asg_sim/twist_controller.hpp"
 #include "asg_lockstep/stage_clock.hpp"
 
 namespace asg_sim {
 
-class SceneWorkerROS {
+class SceneWorkerROS : private LoopStack {
  public:
   SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh);
 
@@ -71,11 +74,17 @@ class SceneWorkerROS {
   static asg_lockstep::Nanos nanos(const ros::Time& t) { return asg_lockstep::Nanos(t.toNSec()); }
   void publishStatus(uint8_t status, uint32_t scenario_id);
   void publishState(const ros::Time& stamp);
-  void publishCamera(const ros::Time& stamp, bool labels);
-  void publishPoints(const ros::Time& stamp);
+  void publishCamera(const ros::Time& stamp);
   bool waitForAcks(uint32_t scenario_id, std::string* missing);
   // Lockstep: waits for the command answering `stamp`; false on timeout or preemption.
-  bool waitForCommand(uint32_t scenario_id, const ros::Time& stamp, Command* out, std::string* why);
+  bool waitForCommand(const ros::Time& stamp, Command* out, std::string* why);
+  // The run loop's stack side (LoopStack).
+  bool stateEveryTick() const override { return params_.odom_every_tick; }
+  void onState(double t) override;
+  void onCamera(double t) override;
+  bool onControl(double t, Command* cmd, bool* apply, std::string* error) override;
+  void beforeStep() override;
+  bool afterStep(std::string* error) override;
   void finish(asg_msgs::RunScenarioResult* result, Termination t, const std::string& error);
 
   ros::NodeHandle nh_, pnh_;
@@ -106,6 +115,8 @@ class SceneWorkerROS {
   enum Stage { kBuild, kAcks, kRender, kPublish, kWait, kPhysics, kResult };
   asg_lockstep::StageClock clock_{{"build", "acks", "render", "publish", "wait", "physics", "result"}};
   std::unique_ptr<asg_lockstep::StageTimesPublisher> stage_pub_;
+  std::unique_ptr<asg_lockstep::StageClock::Section> physics_time_;  // open during a physics tick
+  std::chrono::steady_clock::time_point run_start_;  // free-running: wall time of simulated t = 0
 };
 
 }  // namespace asg_sim

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "asg_sim/renderer.hpp"
+#include "asg_sim/run_loop.hpp"
 #include "asg_sim/scenario_runner.hpp"
 #include "asg_sim/scene_yaml.hpp"
 
@@ -39,6 +40,28 @@ static Command scripted(const ScenarioRunner& r) {
   c.brake = v > op.speed + 0.5 ? 0.3 : 0.0;
   return c;
 }
+
+// The scripted driver as the run loop's stack side; `frame` null: no camera renders; `max_ticks`
+// > 0 ends the run there (as ERROR, which the physics-only timing ignores).
+class ScriptedStack : public LoopStack {
+ public:
+  ScriptedStack(ScenarioRunner* r, CameraFrame* frame, bool labels, uint64_t max_ticks)
+      : r_(r), frame_(frame), labels_(labels), max_ticks_(max_ticks) {}
+  void onCamera(double) override {
+    if (frame_) r_->renderCamera(labels_, frame_);
+  }
+  bool onControl(double, Command* cmd, bool*, std::string*) override {
+    *cmd = scripted(*r_);
+    return true;
+  }
+  bool afterStep(std::string*) override { return max_ticks_ == 0 || r_->tick() < max_ticks_; }
+
+ private:
+  ScenarioRunner* r_;
+  CameraFrame* frame_;
+  bool labels_;
+  uint64_t max_ticks_;
+};
 
 int main(int argc, char** argv) {
   if (argc < 2) {
@@ -79,26 +102,20 @@ int main(int argc, char** argv) {
       plain.push_back(ms(t0, t1) / frames);
       labelled.push_back(ms(t1, t2) / frames);
 
-      // Physics only.
+      // Physics only (the first 600 ticks at most).
       ScenarioRunner phys(nullptr);
       phys.reset(f.spec);
       auto t3 = Clock::now();
-      int ticks = 0;
-      for (; ticks < 600; ++ticks) {
-        if (phys.controlDue()) phys.applyCommand(scripted(phys));
-        if (phys.step() != Termination::kNone) break;
-      }
-      physics.push_back(ms(t3, Clock::now()) / std::max(1, ticks));
+      ScriptedStack physics_only(&phys, nullptr, false, 600);
+      runLoop(&phys, &physics_only);
+      physics.push_back(ms(t3, Clock::now()) / std::max<double>(1.0, double(phys.tick())));
 
-      // Whole run: scripted driver, cameras at 15 Hz with labels (as the worker runs it).
+      // Whole run: scripted driver, cameras at 15 Hz with labels (as the worker runs it), through
+      // the worker's run loop.
       runner.reset(f.spec);
       auto t4 = Clock::now();
-      Termination term = Termination::kNone;
-      while (term == Termination::kNone) {
-        if (runner.cameraDue()) runner.renderCamera(f.record_labels, &frame);
-        if (runner.controlDue()) runner.applyCommand(scripted(runner));
-        term = runner.step();
-      }
+      ScriptedStack driver(&runner, &frame, f.record_labels, 0);
+      const Termination term = runLoop(&runner, &driver).termination;
       const double wall = ms(t4, Clock::now()) / 1000.0;
       rate.push_back(runner.time() / wall);
       if (rep == 0)

@@ -10,10 +10,7 @@ using namespace asg_sim;
 
 namespace {
 
-Renderer& renderer() {
-  static Renderer r;  // one OSMesa context for the whole test binary
-  return r;
-}
+Renderer& renderer() { return sharedRenderer(); }
 
 // Camera at (x, y) on the ground plane, heading yaw, mounted as on the vehicle.
 Eigen::Isometry3d cameraAt(double x, double y, double yaw) {

@@ -1,5 +1,12 @@
 #pragma once
+#include "asg_sim/renderer.hpp"
 #include "asg_sim/scene.hpp"
+
+// One OSMesa context for the whole test binary, shared by every test file.
+inline asg_sim::Renderer& sharedRenderer() {
+  static asg_sim::Renderer r;
+  return r;
+}
 
 // An empty 100 m scene, vehicle at (20, 50) heading +x, goal far to the east.
 inline asg_sim::SceneSpec emptyScene() {

@@ -49,6 +49,12 @@ BAG_TOPICS = [
     "planner/lookahead",
     "planner/vehicle_grid",
     "scenario",
+    # a stack of standard messages (docs/your-stack.md): its goal, commands and what it shows
+    "goal",
+    "cmd_vel",
+    "cmd_vel_stamped",
+    "depth_stack/arc",
+    "depth_stack/obstacles",
 ]
 
 
