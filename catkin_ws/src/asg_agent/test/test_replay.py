@@ -110,3 +110,20 @@ def test_sampling_a_partly_filled_buffer_gives_finite_weights():
     for _ in range(300):
         b = buf.sample(128, rng)
         assert np.all(b["index"] < 333) and np.all(np.isfinite(b["weight"])) and np.all(b["weight"] > 0)
+
+
+def test_a_replay_brings_up_the_stack_the_campaign_ran(monkeypatch):
+    # Issue #39: a depth-stack campaign's scenario replays on a depth-stack worker, and its
+    # markers are recorded (they change nothing the stack decides).
+    import subprocess
+
+    from asg_agent.ros import replay
+
+    launched = []
+    monkeypatch.setattr(subprocess, "Popen", lambda cmd, **kw: launched.append(cmd))
+    stack = {"stack": "depth", "perception": "ground_truth", "model": "flawed", "planner_config": "planner.yaml"}
+    replay.bring_up_worker(stack, 11499)
+    cmd = launched[-1]
+    assert "stack:=depth" in cmd and "markers:=true" in cmd and "odom_every_tick:=true" in cmd
+    replay.bring_up_worker({**stack, "stack": "paper", "perception": "unet"}, 11499)
+    assert "stack:=paper" in launched[-1] and "perception:=unet" in launched[-1]

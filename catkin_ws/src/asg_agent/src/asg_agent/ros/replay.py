@@ -197,8 +197,12 @@ def main(argv=None):
     )
     launched = None
     if not a.worker:
+        # --perception replays a run of the paper's stack (the reference run of an attribution)
+        under_test = "paper" if a.perception else settings.get("stack", "paper")
         stack = {
-            "perception": a.perception or settings.get("perception", "unet"),
+            "stack": under_test,
+            "perception": a.perception
+            or (settings.get("perception", "unet") if under_test == "paper" else "ground_truth"),
             "model": a.model or settings.get("model", "flawed"),
             "unet_backend": settings.get("unet_backend", LEGACY_UNET_BACKEND),
             "planner_config": settings.get("planner_config", "planner.yaml"),
@@ -234,12 +238,14 @@ def bring_up_worker(stack: dict, port: int):
         str(port),
         worker_launch,
         "ns:=replay_worker",
+        f"stack:={stack.get('stack', 'paper')}",
         f"perception:={stack['perception']}",
         f"model:={stack['model']}",
         f"unet_backend:={stack.get('unet_backend', LEGACY_UNET_BACKEND)}",
         f"planner_config:={planner}",
         "odom_every_tick:=true",
-    ]  # a replay is for looking at: every tick's pose in the bag
+        "markers:=true",
+    ]  # a replay is for looking at: every tick's pose and the stack's markers in the bag
     print(f"replay: bringing up a worker: {' '.join(cmd[3:])}", file=sys.stderr)
     return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
 
