@@ -121,6 +121,7 @@ def test_a_replay_brings_up_the_stack_the_campaign_ran(monkeypatch):
 
     launched = []
     monkeypatch.setattr(subprocess, "Popen", lambda cmd, **kw: launched.append(cmd))
+    monkeypatch.setenv("ROS_MASTER_URI", "http://127.0.0.1:11311")  # bring_up_worker points it at its port
     stack = {"stack": "depth", "perception": "ground_truth", "model": "flawed", "planner_config": "planner.yaml"}
     replay.bring_up_worker(stack, 11499)
     cmd = launched[-1]
