@@ -54,3 +54,25 @@ def test_the_depth_stack_baseline_table_is_what_the_rows_say():
     med_truth = statistics.median(r["sim_time"] for r in same)
     assert f"The median run took {med:.1f} s of" in text.replace("\n", " ")
     assert f"against {med_truth:.1f} s for the paper's stack" in text.replace("\n", " ")
+
+
+def test_the_search_against_random_table_is_what_the_exports_say():
+    # Issue #39: the depth stack's two 1,000-scenario campaigns (results/depth/plan.txt), the
+    # figures of analysis.stack_study, as docs/your-stack.md and results/depth/comparison.json hold them.
+    import sys
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_agent.analysis import stack_study
+
+    s = stack_study.study(os.path.join(REPO, "results", "depth"), SEARCH, BASELINE)
+    for arm in (SEARCH, BASELINE):
+        assert s["arms"][arm]["scenarios"] == 1000, arm
+    text = open(os.path.join(REPO, "docs", "your-stack.md")).read()
+    assert stack_study.markdown(s) in text
+    with open(os.path.join(REPO, "results", "depth", "comparison.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(s))
+    a = s["arms"][SEARCH]
+    assert f"{a['failures']} of its 1,000 scenarios" in text.replace("\n", " ")
+
+
+SEARCH, BASELINE = "exp1-depth-td3-per-asp-s0", "exp1-depth-random-s0"
