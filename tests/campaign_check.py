@@ -13,15 +13,17 @@ import rostest
 from asg_agent.campaign.store import Store, unpack_trajectory
 
 import stack_util as su
+from asg_perception.numerics import DEFAULT_BACKEND
 
 SCENARIOS = 20
 # The U-Net backend the workers run (scripts/test.sh: bf16 where the CPU has it natively), the
 # experiment that names it, and one that names the other backend (refused).
-BACKEND = os.environ.get("ASG_TEST_UNET_BACKEND", "bf16")
+# exp1.yaml names no backend (the shipped default); exp1-channels-last.yaml names channels_last.
+BACKEND = os.environ.get("ASG_TEST_UNET_BACKEND") or DEFAULT_BACKEND
 EXPERIMENT, OTHER, OTHER_BACKEND = (
     ("exp1.yaml", "exp1-channels-last.yaml", "channels_last")
-    if BACKEND == "bf16"
-    else ("exp1-channels-last.yaml", "exp1.yaml", "bf16")
+    if BACKEND == DEFAULT_BACKEND
+    else ("exp1-channels-last.yaml", "exp1.yaml", DEFAULT_BACKEND)
 )
 
 

@@ -14,11 +14,12 @@ import rospy
 import rostest
 
 import stack_util as su
+from asg_perception.numerics import DEFAULT_BACKEND
 
 SUITE = os.path.join(su.REPO, "tests", "suites", "exp1c-flaw")
 # The outcomes the `full` stack recorded on the backend the workers run (scripts/test.sh: bf16
 # where the CPU has it natively; channels_last, recorded separately, where it would be emulated).
-BACKEND = os.environ.get("ASG_TEST_UNET_BACKEND", "bf16")
+BACKEND = os.environ.get("ASG_TEST_UNET_BACKEND") or DEFAULT_BACKEND
 AGAINST = "full" if BACKEND == "bf16" else f"full-{BACKEND}"
 
 

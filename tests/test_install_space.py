@@ -25,8 +25,10 @@ def test_an_installed_workspace_runs_a_campaign_and_replays_its_top_scenario(tmp
         )
     store = tmp_path / "campaign.sqlite"
     # The U-Net backend the end-to-end tests run on this CPU (scripts/test.sh), and its experiment.
-    backend = os.environ.get("ASG_TEST_UNET_BACKEND", "bf16")
-    experiment = "exp1.yaml" if backend == "bf16" else "exp1-channels-last.yaml"
+    from asg_perception.numerics import DEFAULT_BACKEND
+
+    backend = os.environ.get("ASG_TEST_UNET_BACKEND") or DEFAULT_BACKEND
+    experiment = "exp1.yaml" if backend == DEFAULT_BACKEND else "exp1-channels-last.yaml"
     stack = f"unet_backend:={backend} experiment:={PREFIX}/share/asg_bringup/experiments/{experiment}"
     script = textwrap.dedent(f"""\
         set -e

@@ -6,9 +6,9 @@
 #   bash scripts/repro/baseline.sh EXPERIMENT [N_GROUND_TRUTH=500] [N_UNET=300]
 #   e.g. bash scripts/repro/baseline.sh exp1      (experiments/exp1.yaml)
 # ASG_PLANNER_CONFIG=FILE: another planner configuration. ASG_UNET_BACKEND: the U-Net stacks'
-# inference backend, default bf16 (the shipped one since issue #24); channels_last rows (every
-# baseline before it) are in results/baseline/<exp>/, another backend's in
-# results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
+# inference backend, default the shipped one (asg_perception.numerics.DEFAULT_BACKEND, bf16 since
+# issue #24); channels_last rows (every baseline before it) are in results/baseline/<exp>/, another
+# backend's in results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
 # with python3 -m asg_agent.cli.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks
 # (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite"; the pair trained
 # with terrain and weather, issue #27: "flawed_tw full_tw"; the depth stack of issue #39, on
@@ -23,7 +23,7 @@ install_packages
 build_workspace ON
 use_local_master "${ASG_BASELINE_PORT:-11395}" "$REPO/runs/baseline/logs"
 CFG="${ASG_PLANNER_CONFIG:-$WS/src/asg_planner/config/planner.yaml}"
-BACKEND="${ASG_UNET_BACKEND:-bf16}"
+BACKEND="${ASG_UNET_BACKEND:-$(/usr/bin/python3 -c 'from asg_perception.numerics import DEFAULT_BACKEND as d; print(d)')}"
 ROOT=()
 [ "$BACKEND" = channels_last ] || ROOT=(--root "$REPO/results/baseline/backend_$BACKEND")
 GT_ROOT=(--ground-truth-root "$REPO/results/baseline")

@@ -16,7 +16,7 @@ opts=(--only "${2:-.}")
 [ -n "${ASG_PARK:-}" ] && opts+=(--park)
 if [ -n "${ASG_DRY:-}" ]; then
   opts+=(--dry)
-  export PYTHONPATH="$WS/src/asg_agent/src:$WS/src/asg_scenario/src:${PYTHONPATH:-}"
+  export PYTHONPATH="$WS/src/asg_agent/src:$WS/src/asg_perception/src:$WS/src/asg_scenario/src:${PYTHONPATH:-}"
 else
   install_packages
   build_workspace ON

@@ -60,3 +60,15 @@ def test_the_tests_run_bf16_only_where_the_cpu_has_it():
     assert n.native_bf16(XEON_AMX) and n.test_backend(XEON_AMX) == "bf16"
     avx2 = frozenset({"sse4_1", "avx", "avx2", "fma"})
     assert not n.native_bf16(avx2) and n.test_backend(avx2) == "channels_last"
+
+
+def test_an_empty_backend_is_the_one_default_and_a_wrong_one_is_named():
+    # issue #38: the default has one home; launch files pass "" for it
+    assert n.DEFAULT_BACKEND in n.BACKENDS
+    assert n.resolve_backend("") == n.resolve_backend(None) == n.DEFAULT_BACKEND
+    assert [n.resolve_backend(b) for b in n.BACKENDS] == list(n.BACKENDS)
+    with pytest.raises(ValueError, match=r"unknown U-Net backend 'fp16': one of eager, channels_last"):
+        n.resolve_backend("fp16")
+    from asg_perception import inference
+
+    assert inference.BACKENDS is n.BACKENDS and inference.DEFAULT_BACKEND is n.DEFAULT_BACKEND

@@ -18,12 +18,8 @@ the tests):
 import numpy as np
 import torch
 
+from .numerics import BACKENDS, DEFAULT_BACKEND  # noqa: F401 (the backends' one home; re-exported)
 from .train import load_model
-
-BACKENDS = ("eager", "channels_last", "frozen", "bf16")
-#: The shipped backend (the segmenter node's ~backend default; launch files and
-#: asg_agent.campaign.experiment state it too, and a test keeps them equal).
-DEFAULT_BACKEND = "bf16"
 
 
 class Segmenter:

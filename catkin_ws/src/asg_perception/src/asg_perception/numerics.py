@@ -31,6 +31,12 @@ ISA_ORDER = (
 #: were recorded with (tests/reference); AMX machines then run the same kernels.
 ISA_CAP = "AVX512_CORE_BF16"
 ENV = ("ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA")
+#: the U-Net inference backends (asg_perception.inference.Segmenter), and the shipped one: the
+#: one home of the default, read by the segmenter node (an empty ~backend), the launch files (an
+#: empty unet_backend), asg_agent's experiments (a file without unet_backend) and the tests. Here,
+#: in a module without torch, so that asg_agent reads it without loading the U-Net's code.
+BACKENDS = ("eager", "channels_last", "frozen", "bf16")
+DEFAULT_BACKEND = "bf16"
 #: backends whose convolutions run in bf16 (the others run fp32, whose kernels VNNI, BF16 and AMX
 #: do not change: their numerics are those of FP32_TOP on any CPU at or above it)
 BF16_BACKENDS = ("bf16",)
@@ -90,6 +96,15 @@ def effective_isa(flags: Iterable[str], cap: Optional[str] = None) -> str:
 NATIVE_BF16 = ("avx512_bf16", "amx_bf16")
 
 
+def resolve_backend(name: Optional[str]) -> str:
+    """The backend a ~backend / unet_backend value means: empty or None is DEFAULT_BACKEND; an
+    unknown name is a ValueError naming the known ones."""
+    backend = name or DEFAULT_BACKEND
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown U-Net backend {backend!r}: one of {', '.join(BACKENDS)} (empty: {DEFAULT_BACKEND})")
+    return backend
+
+
 def native_bf16(flags: Optional[Iterable[str]] = None) -> bool:
     """Whether this CPU runs bf16 convolutions natively (else oneDNN emulates them, 25x slower)."""
     flags = set(cpu_flags() if flags is None else flags)
@@ -98,9 +113,11 @@ def native_bf16(flags: Optional[Iterable[str]] = None) -> bool:
 
 def test_backend(flags: Optional[Iterable[str]] = None) -> str:
     """The U-Net backend the end-to-end tests run on this CPU (scripts/test.sh exports it as
-    ASG_TEST_UNET_BACKEND): the shipped default, bf16, where it runs natively; channels_last, the
-    fp32 backend every campaign before bf16 ran, where it would be emulated."""
-    return "bf16" if native_bf16(flags) else "channels_last"
+    ASG_TEST_UNET_BACKEND): the shipped default, DEFAULT_BACKEND, unless it is a bf16 one and this
+    CPU would emulate it; then channels_last, the fp32 backend every campaign before bf16 ran."""
+    if DEFAULT_BACKEND not in BF16_BACKENDS or native_bf16(flags):
+        return DEFAULT_BACKEND
+    return "channels_last"
 
 
 def pin() -> str:

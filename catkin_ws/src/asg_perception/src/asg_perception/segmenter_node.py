@@ -18,7 +18,8 @@ from asg_msgs.msg import ScenarioInfo, StackAck, StackError, StageTimes
 from sensor_msgs.msg import Image
 
 from . import numerics
-from .inference import BACKENDS, DEFAULT_BACKEND, Segmenter
+from .inference import Segmenter
+from .numerics import resolve_backend
 from .stage_clock import StageClock
 
 MODELS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "models"))
@@ -39,13 +40,16 @@ def resolve_model(name: str) -> str:
 class SegmenterNode:
     def __init__(self):
         model = rospy.get_param("~model", "flawed")
-        backend = rospy.get_param("~backend", DEFAULT_BACKEND)
+        # empty or unset: the shipped default (asg_perception.numerics, its one home)
+        try:
+            backend = resolve_backend(rospy.get_param("~backend", ""))
+        except ValueError as e:
+            raise ValueError(f"~backend: {e}") from None
         threads = int(rospy.get_param("~threads", 1))
         width = int(rospy.get_param("~width", 256))
         height = int(rospy.get_param("~height", 256))
         self.ack_name = rospy.get_param("~ack_name", "segmenter")
-        if backend not in BACKENDS:
-            raise ValueError(f"~backend = {backend!r}: one of {', '.join(BACKENDS)}")
+        rospy.set_param("~backend", backend)  # the one it runs, for whoever reads the parameter
         if not 1 <= threads <= 64:
             raise ValueError(f"~threads = {threads}: must be 1..64")
         path = resolve_model(model)

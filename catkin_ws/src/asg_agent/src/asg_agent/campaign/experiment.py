@@ -36,7 +36,7 @@ from typing import Optional
 
 import numpy as np
 import yaml
-
+from asg_perception.numerics import BACKENDS, DEFAULT_BACKEND
 from asg_scenario import ScenarioError, load_scenario
 from asg_scenario.schema import TEXTURAL_FIELDS, strict_yaml_load
 from asg_scenario.layout import instance_count, with_positions
@@ -67,10 +67,9 @@ KEYS = {
 TERRAIN_FREE_KEYS = ("amplitude_m", "hill_height_m", "hill_positions")
 #: textural attributes a search may set (a number with a range; not the ground texture's seed)
 FREE_TEXTURAL = {f.key: f for f in TEXTURAL_FIELDS if f.kind is float}
-#: asg_perception.inference.BACKENDS (a test keeps the two equal; asg_agent does not import torch models)
-UNET_BACKENDS = ("eager", "channels_last", "frozen", "bf16")
-#: asg_perception.inference.DEFAULT_BACKEND: what a file without `unet_backend` means
-DEFAULT_UNET_BACKEND = "bf16"
+#: the U-Net backends, and what a file without `unet_backend` means: asg_perception.numerics's
+#: (their one home, a module without torch)
+UNET_BACKENDS, DEFAULT_UNET_BACKEND = BACKENDS, DEFAULT_BACKEND
 #: what a campaign whose settings lack `unet_backend` ran (every one before the key existed)
 LEGACY_UNET_BACKEND = "channels_last"
 

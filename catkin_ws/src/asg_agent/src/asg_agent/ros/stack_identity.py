@@ -8,7 +8,7 @@ parameter server; the comparisons are plain functions of what it returns.
 import os
 import time
 
-from asg_agent.campaign.experiment import LEGACY_UNET_BACKEND
+from asg_agent.campaign.experiment import DEFAULT_UNET_BACKEND, LEGACY_UNET_BACKEND
 
 
 def stack_mismatch(worker: str, settings: dict) -> list:
@@ -37,9 +37,9 @@ def stack_mismatch(worker: str, settings: dict) -> list:
             ):
                 out.append(f"the campaign ran model {settings.get('model')!r}, {worker} runs {model!r}")
             # Campaigns from before the backend was recorded ran the then default, channels_last;
-            # a segmenter without the parameter predates bf16 too.
+            # a segmenter without the parameter predates bf16 too; an empty one runs the default.
             backend, ran = (
-                rospy.get_param(f"{worker}/segmenter/backend", LEGACY_UNET_BACKEND),
+                rospy.get_param(f"{worker}/segmenter/backend", LEGACY_UNET_BACKEND) or DEFAULT_UNET_BACKEND,
                 settings.get("unet_backend", LEGACY_UNET_BACKEND),
             )
             if backend != ran:
