@@ -142,6 +142,18 @@ def test_park_and_unpark_refuse_bad_input_by_name(tmp_path):
         unpark(store, str(junk))
 
 
+def test_readers_of_a_store_that_is_not_there_say_so_and_make_none(tmp_path, capsys):
+    from asg_agent.analysis import export, report
+
+    missing = tmp_path / "typo.sqlite"
+    with pytest.raises(StoreError, match="typo.sqlite: no such scenario store"):
+        Store(str(missing), create=False)
+    assert report.main(["campaign", str(missing), "c", str(tmp_path / "out")]) == 2
+    assert export.main(["export", str(missing), "c", str(tmp_path / "c.jsonl.gz")]) == 2
+    assert "no such scenario store" in capsys.readouterr().err
+    assert not missing.exists()  # no empty store left behind for the next reader
+
+
 def test_resume_with_a_cut_budget_stores_every_job_below_it_once(tmp_path):
     """The soak's ending: a campaign with a large budget is interrupted, then resumed with its
     budget cut to the scenarios begun; it finishes with jobs 0..T-1 stored exactly once."""

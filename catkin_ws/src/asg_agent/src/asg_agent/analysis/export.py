@@ -329,12 +329,17 @@ def main(argv=None):
             print(f"error: {e}", file=sys.stderr)
             return 2
         return 0
+    if args.cmd in ("export", "figure"):
+        try:
+            store = Store(args.store, create=False)
+        except StoreError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
     if args.cmd == "export":
-        n = export(Store(args.store), args.campaign, args.out)
+        n = export(store, args.campaign, args.out)
         print(f"{args.out}: {n} scenarios")
         return 0
     if args.cmd == "figure":
-        store = Store(args.store)
         os.makedirs(args.out, exist_ok=True)
         for r in store.summary(args.campaign, top=args.top)["top"]:
             path = os.path.join(args.out, f"{args.campaign}_job{r['job']}.png")

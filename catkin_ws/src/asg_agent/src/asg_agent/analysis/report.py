@@ -16,6 +16,7 @@ import os
 import sys
 
 import numpy as np
+from asg_agent.campaign.store import StoreError
 from asg_agent.scoring.attribution import FINDING, FINDING_STRONG
 
 
@@ -119,7 +120,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
     from asg_agent.analysis.export import top_down
     from asg_agent.campaign.store import Store
 
-    store = Store(store_path)
+    store = Store(store_path, create=False)
     c = store.campaign(campaign)
     if c is None:
         raise ValueError(f"no campaign {campaign!r} in {store_path}")
@@ -216,7 +217,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     try:
         print(campaign_report(args.store, args.campaign, args.out_dir, args.top))
-    except (ValueError, OSError) as e:
+    except (ValueError, OSError, StoreError) as e:
         print(f"report: {e}", file=sys.stderr)
         return 2
     return 0

@@ -22,7 +22,7 @@ REASONS = [
 
 
 def report(store_path: str, name: str, n: int, kills_path: str, log_path: str, start: float, end: float) -> dict:
-    s = Store(store_path)
+    s = Store(store_path, create=False)
     rows = list(s.rows(name))
     jobs = [r["job"] for r in rows]
     with open(kills_path) as f:

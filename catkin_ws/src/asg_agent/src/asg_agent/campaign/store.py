@@ -132,8 +132,12 @@ def unpack_trajectory(blob: bytes) -> np.ndarray:
 
 
 class Store:
-    def __init__(self, path: str):
+    def __init__(self, path: str, create: bool = True):
+        """Opens (create=True: or makes) the store at `path`. Readers pass create=False: a path
+        that names no file is then a StoreError, not a new empty store left behind."""
         self.path = path
+        if not create and not os.path.isfile(path):
+            raise StoreError(f"{path}: no such scenario store")
         folder = os.path.dirname(os.path.abspath(path))
         os.makedirs(folder, exist_ok=True)
         try:

@@ -212,7 +212,7 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
     times = [max(0.5, end - d) for d in (5.0, 2.5, 0.5)]
     from asg_agent.campaign.store import Store
 
-    row = next(r for r in Store(store).rows(campaign, job - 1) if r["job"] == job)
+    row = next(r for r in Store(store, create=False).rows(campaign, job - 1) if r["job"] == job)
     ref = json.loads(row["reference"]) if row["reference"] else {}
     title = (
         f"{campaign} job {job}: under test {row['termination']} (proxy {row['proxy']:.2f}"
