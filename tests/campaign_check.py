@@ -149,7 +149,7 @@ class CampaignEndToEnd(unittest.TestCase):
         from asg_agent.ros.replay_view import screenshot
 
         shot = os.path.join(os.path.dirname(path), "replay.png")
-        px = screenshot(bag, shot, "worker_0", at=0.7)
+        px = screenshot(bag, shot, at=0.7)  # the namespace found in the bag (worker_0)
         self.assertGreater(px["votes"], 300, px)
         self.assertGreater(px["plan"], 50, px)
         self.assertGreater(px["trajectory"], 100, px)

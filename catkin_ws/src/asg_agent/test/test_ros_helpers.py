@@ -2,6 +2,8 @@
 
 import os
 
+import pytest
+
 import rospy
 
 from asg_agent.ros import stack_identity
@@ -82,3 +84,25 @@ def test_planner_mismatch_names_what_a_worker_runs_against_the_experiment(monkey
         "has no parameter projection/ground_cell"
         in stack_identity.planner_mismatch("/worker_1", os.path.join(cfg, "planner_terrain.yaml"))[0]
     )
+
+
+def test_a_replay_bag_names_its_worker_namespace():
+    # rviz/replay.rviz names topics relative; replay_view runs rviz in the bag's namespace
+    from asg_agent.ros.replay_view import bag_namespace
+
+    assert bag_namespace(["/replay_worker/planner/votes", "/replay_worker/odom", "/rosout"]) == "replay_worker"
+    assert bag_namespace({"/worker_3/camera/image": None, "/worker_3/scenario": None}) == "worker_3"
+    with pytest.raises(ValueError, match="not a replay bag"):
+        bag_namespace(["/rosout", "/chatter"])
+
+
+def test_the_rviz_configs_name_topics_relative_and_the_launch_files_set_the_namespace():
+    import re
+
+    repo = os.path.join(os.path.dirname(__file__), "..", "..", "..", "..")
+    for cfg in ("worker.rviz", "replay.rviz"):
+        text = open(os.path.join(repo, "rviz", cfg)).read()
+        topics = re.findall(r"^\s*(?:\w+ )?Topic: (\S+)$", text, flags=re.M)
+        assert topics and all(not t.startswith("/") for t in topics), (cfg, topics)
+    for launch in ("rviz.launch", "replay.launch"):
+        assert 'ns="$(arg ns)"' in open(os.path.join(repo, "launch", launch)).read(), launch

@@ -117,7 +117,7 @@ def replayed_proxy(request, o: Outcome):
     return terms.proxy if terms else None
 
 
-def report_match(what: str, diff: float, samples: str, proxy, stored_proxy, bag) -> bool:
+def report_match(what: str, diff: float, samples: str, proxy, stored_proxy, bag, ns: str = "") -> bool:
     """Prints the position and proxy comparison of a replay with a stored run; True if the proxies agree."""
     print(f"largest position difference to the stored {what}: {diff:.6f} m ({samples})")
     print(
@@ -126,6 +126,7 @@ def report_match(what: str, diff: float, samples: str, proxy, stored_proxy, bag)
     )
     if bag:
         print(f"bag: {os.path.abspath(bag)}")
+        print(f"view it: roslaunch asg_bringup replay.launch bag:={os.path.abspath(bag)} ns:={ns.strip('/')}")
     return (proxy is None and stored_proxy is None) or (
         proxy is not None and stored_proxy is not None and abs(proxy - stored_proxy) <= 1e-6
     )
@@ -139,7 +140,7 @@ def check_reference_run(a, request, ref: dict, o: Outcome) -> int:
     stored = np.asarray(ref.get("trajectory_xy") or [], float).reshape(-1, 2)
     diff = float(np.abs(kept - stored).max()) if kept.shape == stored.shape and len(stored) else float("inf")
     samples = f"{len(kept)} vs {len(stored)} kept samples"
-    same_proxy = report_match("reference run", diff, samples, proxy, ref.get("proxy"), a.bag)
+    same_proxy = report_match("reference run", diff, samples, proxy, ref.get("proxy"), a.bag, a.worker)
     ok = diff <= 0.011 and same_proxy and o.termination == ref.get("termination")
     print("REPRODUCED (the reference run)" if ok else "NOT REPRODUCED (the reference run)")
     return 0 if ok else 1
@@ -332,7 +333,7 @@ def run_replay(a, request, row, settings) -> int:
     stored = unpack_trajectory(row["trajectory"])
     diff = compare(stored, o.trajectory)
     samples = f"{len(o.trajectory)} vs {len(stored)} samples"
-    same_proxy = report_match("run", diff, samples, replayed_proxy(request, o), row["proxy"], a.bag)
+    same_proxy = report_match("run", diff, samples, replayed_proxy(request, o), row["proxy"], a.bag, a.worker)
     ok = diff < 0.01 and same_proxy and o.termination == row["termination"]
     print("REPRODUCED" if ok else "NOT REPRODUCED")
     return 0 if ok else 1

@@ -1,6 +1,6 @@
 """Screenshot of a replay bag in rviz without a display (Xvfb), and the pixel check the tests use.
 
-    python3 -m asg_agent.ros.replay_view RUN.bag OUT.png [--ns worker_0] [--at 0.8]
+    python3 -m asg_agent.ros.replay_view RUN.bag OUT.png [--ns NS] [--at 0.8]
 
 Plays the bag into rviz with rviz/replay.rviz on a virtual display and grabs the screen when
 the given fraction of the bag has played (default: the end). Needs a ROS master (roscore).
@@ -39,14 +39,24 @@ def colour_counts(png: str) -> dict:
     }
 
 
-def screenshot(
-    bag: str, out: str, ns: str = "worker_0", at: float = 1.0, display: str = ":71", size=(1280, 860)
-) -> dict:
+def bag_namespace(topics) -> str:
+    """The worker namespace of a replay bag: the first name of its planner's or worker's topics
+    (/replay_worker/odom -> replay_worker). ValueError when the bag has none of them."""
+    for t in sorted(topics):
+        parts = t.strip("/").split("/")
+        if len(parts) >= 2 and parts[1] in ("odom", "scenario", "camera"):
+            return parts[0]
+    raise ValueError("no worker topics (NS/odom, NS/scenario, NS/camera/...) in the bag: not a replay bag")
+
+
+def screenshot(bag: str, out: str, ns: str = "", at: float = 1.0, display: str = ":71", size=(1280, 860)) -> dict:
+    """rviz on `bag` in the worker namespace `ns` (empty: the bag's own, bag_namespace)."""
     import rosbag
     from PIL import ImageGrab
 
     with rosbag.Bag(bag) as b:
         duration = b.get_end_time() - b.get_start_time()
+        ns = ns or bag_namespace(b.get_type_and_topic_info().topics)
     xvfb = subprocess.Popen(
         ["Xvfb", display, "-screen", "0", f"{size[0]}x{size[1]}x24", "-nolisten", "tcp"],
         stdout=subprocess.DEVNULL,
@@ -57,7 +67,17 @@ def screenshot(
         time.sleep(1.5)
         env = dict(os.environ, DISPLAY=display, LIBGL_ALWAYS_SOFTWARE="1")
         rviz = subprocess.Popen(
-            ["rosrun", "rviz", "rviz", "-d", rviz_config(), f"/tf:=/{ns}/tf", "__name:=replay_view_rviz"],
+            # rviz/replay.rviz names its topics relative: rviz in the worker's namespace shows them
+            [
+                "rosrun",
+                "rviz",
+                "rviz",
+                "-d",
+                rviz_config(),
+                f"/tf:=/{ns}/tf",
+                "__name:=replay_view_rviz",
+                f"__ns:=/{ns}",
+            ],
             env=env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -97,13 +117,17 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="asg_agent.ros.replay_view", description=__doc__.split("\n\n")[0])
     p.add_argument("bag")
     p.add_argument("out")
-    p.add_argument("--ns", default="worker_0")
+    p.add_argument("--ns", default="", help="the worker namespace in the bag (default: found in it)")
     p.add_argument("--at", type=float, default=1.0, help="fraction of the bag played when the picture is taken")
     a = p.parse_args(argv)
     if shutil.which("Xvfb") is None:
         print("replay_view: Xvfb is not installed (Debian package xvfb)", file=sys.stderr)
         return 2
-    counts = screenshot(a.bag, a.out, a.ns, a.at)
+    try:
+        counts = screenshot(a.bag, a.out, a.ns, a.at)
+    except ValueError as e:
+        print(f"replay_view: {a.bag}: {e}", file=sys.stderr)
+        return 2
     print(f"{a.out}: {counts}")
     return 0
 
