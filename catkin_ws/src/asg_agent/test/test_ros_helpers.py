@@ -106,3 +106,35 @@ def test_the_rviz_configs_name_topics_relative_and_the_launch_files_set_the_name
         assert topics and all(not t.startswith("/") for t in topics), (cfg, topics)
     for launch in ("rviz.launch", "replay.launch"):
         assert 'ns="$(arg ns)"' in open(os.path.join(repo, "launch", launch)).read(), launch
+
+
+def test_what_replay_adds_to_a_bag_keeps_it_in_time_order(tmp_path):
+    # A depth-stack replay bag had its scene appended in a last chunk at the start time; rosbag
+    # took that chunk's time as the end, and `rosbag info` read 0 s for a 27 s run.
+    import rosbag
+    import rospy
+    from asg_agent.ros.replay import merge_into_bag
+    from std_msgs.msg import String
+
+    path = str(tmp_path / "run.bag")
+    latched = {"topic": "/w/scenario", "type": "std_msgs/String", "md5sum": String._md5sum}
+    latched.update(message_definition=String._full_text, callerid="/rec", latching="1")
+    with rosbag.Bag(path, "w") as bag:
+        for k in range(1, 4):
+            bag.write("/w/odom", String(data=f"odom {k}"), rospy.Time(k))
+        bag.write("/w/scenario", String(data="scenario"), rospy.Time(1), connection_header=latched)
+    merge_into_bag(
+        path,
+        [
+            (rospy.Time(2.5), "/w/replay/late", String(data="late")),
+            (rospy.Time(1), "/w/replay/scene", String(data="scene")),
+        ],
+    )
+    with rosbag.Bag(path) as bag:
+        assert (bag.get_start_time(), bag.get_end_time()) == (1.0, 3.0)
+        got = [(t.to_sec(), topic, m.data) for topic, m, t in bag.read_messages()]
+        headers = {c.topic: c.header for c in bag._get_connections()}
+    assert [g[2] for g in got] == ["odom 1", "scenario", "scene", "odom 2", "late", "odom 3"]
+    assert [g[0] for g in got] == sorted(g[0] for g in got)
+    assert headers["/w/scenario"].get("latching") in ("1", b"1")
+    assert not os.path.exists(path + ".sorting")

@@ -66,7 +66,10 @@ def compare(stored: np.ndarray, replayed: np.ndarray) -> float:
 
 
 def add_scene_to_bag(path, worker, request, o: Outcome):
-    """Writes the scene, optimal path, driven trajectory and fading earlier plans into the bag."""
+    """Adds the scene, optimal path, driven trajectory, fading earlier plans and coloured labels
+    to the bag. The bag is written anew in time order (not appended to): rosbag takes a bag's end
+    time from its last chunk, so a chunk appended at the start time made `rosbag info` read 0 s
+    and tools that use the duration misjudge the run."""
     import rosbag
     import rospy
     from asg_agent.ros.bag_scene import plans_fading, scene_messages
@@ -74,7 +77,8 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
 
     removed = {(l, i) for l, i, _ in o.removed}
     opt = optimal_path(request, placed_mask(request, o.removed))
-    with rosbag.Bag(path, "a") as bag:
+    extra = []  # (bag time, topic, message)
+    with rosbag.Bag(path) as bag:
         start = bag.get_start_time()
         plans, first_stamp, times = [], None, {}
         for _, msg, t in bag.read_messages(topics=[f"{worker}/planner/path"]):
@@ -87,10 +91,9 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
         for suffix, msg in scene_messages(
             request, removed, opt.points, o.trajectory[::6, 1:3].tolist(), first_stamp or rospy.Time()
         ):
-            bag.write(f"{worker}/{suffix}", msg, when)
+            extra.append((when, f"{worker}/{suffix}", msg))
         # Labels in colour (ground tan, obstacle red, sky blue, void grey) for the image panel.
         palette = np.array([[170, 150, 110], [220, 40, 40], [110, 160, 230], [128, 128, 128]], np.uint8)
-        coloured = []
         for _, msg, t in bag.read_messages(topics=[f"{worker}/labels", f"{worker}/camera/labels_gt"]):
             lab = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width)
             img = type(msg)(
@@ -102,12 +105,35 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
                 step=msg.width * 3,
                 data=palette[np.minimum(lab, 3)].tobytes(),
             )
-            coloured.append((img, t))
-        for img, t in coloured:
-            bag.write(f"{worker}/replay/labels_rgb", img, t)
+            extra.append((t, f"{worker}/replay/labels_rgb", img))
         # Earlier plans: written at the bag time of the plan they accompany.
         for stamp, arr in plans_fading(plans):
-            bag.write(f"{worker}/replay/earlier_plans", arr, times.get(stamp, when))
+            extra.append((times.get(stamp, when), f"{worker}/replay/earlier_plans", arr))
+    merge_into_bag(path, extra)
+
+
+def merge_into_bag(path: str, extra) -> None:
+    """Writes the bag at `path` again with the messages `extra` ((bag time, topic, message)) in
+    it, every chunk in time order, each recorded connection's header (latching) kept; the
+    recorded messages come first among equal times. Replaces the file only once it is whole."""
+    import heapq
+
+    import rosbag
+
+    extra = sorted(extra, key=lambda e: e[0])  # stable: equal times keep their order
+    tmp = path + ".sorting"
+    with rosbag.Bag(path) as bag, rosbag.Bag(tmp, "w", compression=rosbag.Compression.LZ4) as out:
+        recorded = (
+            (t, topic, msg, header)
+            for topic, msg, t, header in bag.read_messages(raw=True, return_connection_header=True)
+        )
+        added = ((t, topic, msg, None) for t, topic, msg in extra)
+        for t, topic, msg, header in heapq.merge(recorded, added, key=lambda e: e[0]):
+            if header is None:
+                out.write(topic, msg, t)
+            else:
+                out.write(topic, msg, t, raw=True, connection_header=header)
+    os.replace(tmp, path)
 
 
 def replayed_proxy(request, o: Outcome):
