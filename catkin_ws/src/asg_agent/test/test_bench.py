@@ -90,3 +90,20 @@ def test_campaign_times_its_own_stages(tmp_path):
     for stage in ("propose", "proxy", "store", "dispatch", "wait", "checkpoint"):
         assert rep["per_scenario_s"][f"agent.{stage}"] > 0, stage
     assert rep["cpu_per_scenario_s"]["agent"] > 0
+
+
+def test_before_after_takes_medians_and_ranges_of_each_side():
+    from asg_agent.analysis.bench import before_after, before_after_sentence
+
+    def run(rate, cpu):
+        return {"rate_per_hour": rate, "stacks": {"under test": {"cpu_per_scenario_s": cpu}}}
+
+    c = before_after(
+        [run(3000, 1.5), run(2700, 1.4), run(3100, 1.3)], [run(2900, 1.45), run(2800, 1.6), run(3200, 1.2)]
+    )
+    assert c["before"]["rate"] == (3000, 2700, 3100) and c["after"]["rate"] == (2900, 2800, 3200)
+    assert c["before"]["cpu"] == (1.4, 1.3, 1.5) and abs(c["cpu_ratio"] - 1.45 / 1.4) < 1e-12
+    assert abs(c["rate_ratio"] - 2900 / 3000) < 1e-12
+    assert before_after_sentence(c).startswith(
+        "scenarios an hour, median (range): before 3,000 (2,700-3,100), after 2,900 (2,800-3,200), after / before 0.967"
+    )

@@ -11,6 +11,7 @@ U-Net alone sets; `table` renders one or several breakdowns as Markdown.
 import argparse
 import json
 import os
+import statistics
 import platform
 import sys
 from typing import Dict, List, Tuple
@@ -210,11 +211,38 @@ def table(runs: List[dict], labels: List[str]) -> str:
     return "\n".join(lines)
 
 
+def before_after(before: List[dict], after: List[dict]) -> dict:
+    """Two sets of runs of one bench (code before and after a change, taken in turn): the median
+    and range of each side's scenarios an hour and CPU [s] of the stack under test a scenario, and
+    the ratio of the medians (after / before)."""
+
+    def side(runs):
+        rate = sorted(r["rate_per_hour"] for r in runs)
+        cpu = sorted(r["stacks"]["under test"]["cpu_per_scenario_s"] for r in runs)
+        return {"rate": (statistics.median(rate), rate[0], rate[-1]), "cpu": (statistics.median(cpu), cpu[0], cpu[-1])}
+
+    b, a = side(before), side(after)
+    return {"before": b, "after": a, "rate_ratio": a["rate"][0] / b["rate"][0], "cpu_ratio": a["cpu"][0] / b["cpu"][0]}
+
+
+def before_after_sentence(c: dict) -> str:
+    """The figures of before_after as docs/benchmarks.md states them (a test compares the two)."""
+    b, a = c["before"], c["after"]
+    return (
+        f"scenarios an hour, median (range): before {b['rate'][0]:,.0f} ({b['rate'][1]:,.0f}-{b['rate'][2]:,.0f}), "
+        f"after {a['rate'][0]:,.0f} ({a['rate'][1]:,.0f}-{a['rate'][2]:,.0f}), after / before {c['rate_ratio']:.3f}; "
+        f"CPU of the stack under test a scenario [s]: before {b['cpu'][0]:.3f} ({b['cpu'][1]:.3f}-{b['cpu'][2]:.3f}), "
+        f"after {a['cpu'][0]:.3f} ({a['cpu'][1]:.3f}-{a['cpu'][2]:.3f}), after / before {c['cpu_ratio']:.3f}"
+    )
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="bench", description="Markdown table of bench breakdowns (docs/benchmarks.md)")
     sub = p.add_subparsers(dest="cmd", required=True)
     t = sub.add_parser("table", help="one column per breakdown JSON")
     t.add_argument("files", nargs="+")
+    ba = sub.add_parser("before-after", help="medians of runs before and after a change (TAG-before-K, TAG-after-K)")
+    ba.add_argument("files", nargs="+", help="breakdown JSONs; a name with -before- is a run of the code before")
     a = p.parse_args(argv)
     runs, labels = [], []
     for path in a.files:
@@ -225,6 +253,14 @@ def main(argv=None):
             print(f"bench: {path}: {e}", file=sys.stderr)
             return 2
         labels.append(runs[-1].get("label") or os.path.splitext(os.path.basename(path))[0])
+    if a.cmd == "before-after":
+        sides = ["-before-" in os.path.basename(f) for f in a.files]
+        if all(sides) or not any(sides):
+            print("bench: before-after needs runs of both sides (names with -before- and without)", file=sys.stderr)
+            return 2
+        c = before_after([r for r, s in zip(runs, sides) if s], [r for r, s in zip(runs, sides) if not s])
+        print(before_after_sentence(c))
+        return 0
     print(table(runs, labels))
     return 0
 
