@@ -42,3 +42,30 @@ def test_counts_failures_with_exact_intervals_and_tests_the_arms(tmp_path):
 def test_a_missing_export_is_named(tmp_path, capsys):
     assert stack_study.main([str(tmp_path), "s", "r"]) == 2
     assert "s.jsonl.gz: no export" in capsys.readouterr().err
+
+
+def test_several_seeds_an_arm_compare_the_per_seed_rates(tmp_path):
+    for seed, k in enumerate((5, 8, 3)):  # the search: k failures in 100
+        export(
+            tmp_path / f"x-search-s{seed}.jsonl.gz", "s", [("SUCCESS", 1.1)] * (100 - k) + [("IDLING_TIMEOUT", 1.0)] * k
+        )
+    for seed, k in enumerate((0, 1, 0)):
+        export(tmp_path / f"x-random-s{seed}.jsonl.gz", "r", [("SUCCESS", 1.0)] * (100 - k) + [("COLLISION", 1.2)] * k)
+    searches = ",".join(f"x-search-s{i}" for i in range(3))
+    randoms = ",".join(f"x-random-s{i}" for i in range(3))
+    out = tmp_path / "seeds.json"
+    assert stack_study.main([str(tmp_path), searches, randoms, "--json", str(out)]) == 0
+    s = json.loads(out.read_text())
+    assert (s["search"], s["baseline"]) == ("x-search", "x-random")
+    assert [s["campaigns"][f"x-search-s{i}"]["failures"] for i in range(3)] == [5, 8, 3]
+    head, other = s["compare"]
+    assert head["arm"] == "x-search" and head["counts"] == [50.0, 80.0, 30.0]
+    assert head["mean"] == pytest.approx(160 / 3) and head["lo"] <= head["mean"] <= head["hi"]
+    # 3 against 3, with ties: the normal approximation (no exact p with ties)
+    assert other["counts"] == [0.0, 10.0, 0.0] and other["p"] == pytest.approx(0.0765, abs=1e-3)
+    assert s["pooled"] == [[16, 284], [1, 299]] and s["pooled_fisher_p"] < 1e-3
+    md = stack_study.markdown_seeds(s)
+    assert "| x-search-s1 | 100 | 8 | 80.0 (" in md and "Pooled over the seeds: 16 failures in 300" in md
+    # a name given twice, or both arms with one stem, is refused by name
+    assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s0", randoms]) == 2
+    assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s1", "x-search-s2,x-search-s2"]) == 2

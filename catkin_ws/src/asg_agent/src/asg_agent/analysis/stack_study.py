@@ -1,5 +1,5 @@
 """The default search against uniform random at equal budget on one stack under test, one seed an
-arm (issue #39: the depth stack). No ROS.
+arm or several (issue #39: the depth stack). No ROS.
 
 Endpoint: scenarios whose run fails (attribution.RunOutcome.fails: a collision, a timeout, a flip,
 out of bounds, or proxy >= FINDING) per 1,000, with the exact (Clopper-Pearson) 95 % interval of
@@ -12,6 +12,16 @@ of the proxies of the two arms' scenarios.
 
     python3 -m asg_agent.analysis.stack_study results/depth exp1-depth-td3-per-asp-s0 exp1-depth-random-s0 \\
         [--json results/depth/comparison.json] [--markdown]
+
+Several seeds an arm (comma-separated campaign names, one per seed; results/depth/plan-seeds.txt):
+the endpoint per seed with its exact interval, and between arms the per-seed rates compared as
+the round-4 protocol compares arms (asg_agent.analysis.stats.compare: each arm's mean with a
+bootstrap 95 % interval, the ratio of the means, the Mann-Whitney U test of the per-seed rates),
+with Fisher's exact test of the pooled counts beside it.
+
+    python3 -m asg_agent.analysis.stack_study results/depth \\
+        exp1-depth-td3-per-asp-s0,exp1-depth-td3-per-asp-s1,exp1-depth-td3-per-asp-s2 \\
+        exp1-depth-random-s0,exp1-depth-random-s1,exp1-depth-random-s2 --json results/depth/seeds.json --markdown
 """
 
 import argparse
@@ -88,6 +98,71 @@ def study(folder: str, search: str, baseline: str) -> Dict:
     }
 
 
+def arm_name(names: List[str]) -> str:
+    """The arm's name: its campaigns' names without their seed suffix (exp1-depth-random-s2)."""
+    stems = {n.rsplit("-s", 1)[0] if n.rsplit("-s", 1)[-1].isdigit() else n for n in names}
+    return stems.pop() if len(stems) == 1 else "+".join(sorted(stems))
+
+
+def study_seeds(folder: str, searches: List[str], baselines: List[str]) -> Dict:
+    """study() over several seeds an arm: every campaign's figures, and the arms compared on their
+    per-seed failures per 1,000 (stats.compare, the search the default), pooled Fisher beside it."""
+    from scipy.stats import fisher_exact
+
+    from asg_agent.analysis.stats import compare
+
+    if len(set(searches + baselines)) != len(searches + baselines):
+        raise ValueError("a campaign is named twice")
+    campaigns, arms = {}, {}
+    for names in (searches, baselines):
+        for name in names:
+            path = os.path.join(folder, f"{name}.jsonl.gz")
+            if not os.path.exists(path):
+                raise FileNotFoundError(f"{path}: no export (run scripts/repro/campaigns.sh with its plan)")
+            campaigns[name] = arm(read_export(path)[1])
+            del campaigns[name]["proxies"]
+        arms[arm_name(names)] = names
+    if len(arms) != 2:
+        raise ValueError(f"the search's and the baseline's campaigns share a name: {sorted(arms)}")
+    pooled = []
+    for names in arms.values():
+        fails = sum(campaigns[n]["failures"] for n in names)
+        pooled.append([fails, sum(campaigns[n]["scenarios"] - campaigns[n]["errors"] for n in names) - fails])
+    rows = compare({a: [campaigns[n]["per_1000"] for n in names] for a, names in arms.items()}, arm_name(searches))
+    return {
+        "search": arm_name(searches),
+        "baseline": arm_name(baselines),
+        "arms": arms,
+        "campaigns": campaigns,
+        "compare": rows,
+        "pooled": pooled,
+        "pooled_fisher_p": float(fisher_exact(pooled, alternative="two-sided")[1]),
+        "level": LEVEL,
+    }
+
+
+def markdown_seeds(s: Dict) -> str:
+    from asg_agent.analysis.stats import markdown as compare_table
+
+    head = "| campaign | scenarios | failures | per 1,000 (95 % exact interval) | proxy median / p90 / largest |\n"
+    head += "|---|---|---|---|---|\n"
+    rows = []
+    for names in s["arms"].values():
+        for n in names:
+            a = s["campaigns"][n]
+            lo, hi = a["per_1000_interval"]
+            rows.append(
+                f"| {n} | {a['scenarios']} | {a['failures']} | {a['per_1000']:.1f} ({lo:.1f}-{hi:.1f}) "
+                f"| {a['proxy_median']:.3f} / {a['proxy_p90']:.3f} / {a['proxy_max']:.3f} |\n"
+            )
+    (f_s, n_s), (f_b, n_b) = s["pooled"]
+    tail = (
+        f"\nPooled over the seeds: {f_s} failures in {f_s + n_s:,} against {f_b} in {f_b + n_b:,}, "
+        f"Fisher's exact test p = {s['pooled_fisher_p']:.3g}.\n"
+    )
+    return head + "".join(rows) + "\n" + compare_table(s["compare"], "failures") + "\n" + tail
+
+
 def markdown(s: Dict) -> str:
     head = (
         "| arm | scenarios | failures | per 1,000 (95 % exact interval) | proxy median / p90 / largest "
@@ -112,13 +187,15 @@ def markdown(s: Dict) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("folder", help="folder of the campaigns' exports (NAME.jsonl.gz)")
-    p.add_argument("search", help="the search's campaign name")
-    p.add_argument("baseline", help="the baseline's campaign name (uniform random)")
+    p.add_argument("search", help="the search's campaign name (several seeds: comma-separated)")
+    p.add_argument("baseline", help="the baseline's campaign name, uniform random (several seeds: comma-separated)")
     p.add_argument("--json", default="", help="write the figures here")
     p.add_argument("--markdown", action="store_true", help="print the table as docs/your-stack.md shows it")
     a = p.parse_args(argv)
+    searches, baselines = a.search.split(","), a.baseline.split(",")
+    seeds = len(searches) > 1 or len(baselines) > 1
     try:
-        s = study(a.folder, a.search, a.baseline)
+        s = study_seeds(a.folder, searches, baselines) if seeds else study(a.folder, a.search, a.baseline)
     except (FileNotFoundError, ValueError) as e:
         print(f"stack_study: {e}", file=sys.stderr)
         return 2
@@ -126,7 +203,7 @@ def main(argv=None) -> int:
         with open(a.json, "w", encoding="utf-8") as f:
             json.dump(s, f, indent=1, sort_keys=True)
             f.write("\n")
-    print(markdown(s) if a.markdown else json.dumps(s, indent=1, sort_keys=True))
+    print((markdown_seeds(s) if seeds else markdown(s)) if a.markdown else json.dumps(s, indent=1, sort_keys=True))
     return 0
 
 
