@@ -769,3 +769,34 @@ def test_an_experiment_with_free_terrain_sets_it_from_the_action(tmp_path):
     )
     with pytest.raises(ExperimentError, match="need hills in the scenario"):
         load_experiment(str(flat))
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_ends_the_campaign_as_ctrl_c_does_even_in_the_background(tmp_path, sig):
+    # A campaign started with `&` by a non-interactive shell inherits SIGINT ignored; kill's
+    # SIGTERM ended it at once. Both now save its state and end it with status 130.
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+        + os.pathsep
+        + os.environ.get("PYTHONPATH", ""),
+    )
+    cmd = [sys.executable, "-m", "asg_agent.cli.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
+    cmd += ["--store", str(tmp_path / "s.sqlite"), "--name", "s", "--no-progress"]
+    store = Store(str(tmp_path / "s.sqlite"))
+    p = subprocess.Popen(
+        cmd,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),  # as a background job
+    )
+    deadline = time.time() + 120
+    while store.count("s") < 20 and time.time() < deadline and p.poll() is None:
+        time.sleep(0.01)
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err[-2000:]
+    assert "interrupted; `--resume` continues it" in err
+    assert 20 <= store.count("s") < 400 and store.integrity_ok()

@@ -150,3 +150,42 @@ def test_dry_lists_and_main_names_a_bad_plan(tmp_path, capsys):
     assert "bad.txt:1: expected NAME SCENARIOS LAUNCH" in capsys.readouterr().err
     assert plan.main([str(tmp_path / "none.txt")]) == 2
     assert "none.txt: cannot read" in capsys.readouterr().err
+
+
+def test_a_stopped_plan_stops_its_campaign_and_everything_under_it(tmp_path):
+    # `kill PLAN_PID` left train.sh, its master, workers and campaign running; now the plan sends
+    # SIGTERM to the campaign's process group, waits for it, and ends with status 130.
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    fake = tmp_path / "repo"
+    (fake / "scripts").mkdir(parents=True)
+    log = tmp_path / "log"
+    (fake / "scripts" / "train.sh").write_text(
+        f"trap 'echo stopped >> {log}; exit 143' TERM\n"
+        f"(trap 'echo child stopped >> {log}; exit 143' TERM; echo child up >> {log}; sleep 300 & wait) &\n"
+        f"echo up >> {log}\nsleep 300 & wait\n"
+    )
+    code = (
+        "import sys\nfrom asg_agent.cli import plan\nfrom asg_agent.cli.signals import stop_on_signals\n"
+        "stop_on_signals()\n"
+        f"sys.exit(plan.train(plan.Campaign('c', 10, 'train'), 's.sqlite', [], {str(fake)!r}))\n"
+    )
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+        + os.pathsep
+        + os.environ.get("PYTHONPATH", ""),
+    )
+    p = subprocess.Popen(
+        [sys.executable, "-c", code], env=env, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)
+    )
+    deadline = time.time() + 60
+    while not (log.exists() and "child up" in log.read_text() and "up\n" in log.read_text()) and time.time() < deadline:
+        time.sleep(0.05)
+    p.send_signal(signal.SIGTERM)
+    assert p.wait(timeout=60) == 130
+    lines = log.read_text().splitlines()
+    assert "stopped" in lines and "child stopped" in lines, lines

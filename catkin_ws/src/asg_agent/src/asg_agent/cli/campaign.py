@@ -18,6 +18,7 @@ import sys
 import time
 
 from asg_agent.campaign.loop import CANDIDATE_RULES, REWARDS, Campaign
+from asg_agent.cli.signals import stop_on_signals
 from asg_agent.scoring import attribution as attr
 from asg_agent.campaign.experiment import ExperimentError, load_experiment
 from asg_agent.search.methods import METHODS, make_method
@@ -531,6 +532,7 @@ def run(a, c: Campaign, store: Store, name: str, bar, progress, collector, worke
 
 def main(argv=None):
     a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv)
+    stop_on_signals()
     try:
         exp = load_experiment(a.experiment)
         name = a.name or f"{exp.name}-{a.method}-s{a.seed}"

@@ -4,8 +4,9 @@ A plan is a text file, one campaign a line: `NAME SCENARIOS LAUNCH ARGS...` (LAU
 of asg_bringup without `.launch`, normally `train`; ARGS: its `key:=value` arguments; `#` starts a
 comment). For each line, in order: a campaign whose committed export is finished at its budget is
 skipped (also on a fresh clone without the store); else it is run, or resumed where it stopped,
-through scripts/train.sh, then exported to EXPORTS/NAME.jsonl.gz. Stop it at any moment; run it
-again to go on. `--park` packs each unfinished campaign into EXPORTS/parked/NAME.tar.xz (a few MB,
+through scripts/train.sh, then exported to EXPORTS/NAME.jsonl.gz. Stop it at any moment (Ctrl-C,
+or `kill` of the plan's process: the campaign under way saves its state and is exported as far as
+it went); run it again to go on. `--park` packs each unfinished campaign into EXPORTS/parked/NAME.tar.xz (a few MB,
 to commit); the next run, here or on another clone, unparks it first and goes on from there.
 
     python3 -m asg_agent.cli.plan PLAN [--only REGEX] [--exports results/depth] [--dry] [--park]
@@ -18,10 +19,13 @@ results/campaigns and the store is results/campaigns/exp11.sqlite (issue #11's p
 import argparse
 import os
 import re
+import signal
 import subprocess
 import sys
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional
+
+from asg_agent.cli.signals import stop_on_signals
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
 
@@ -108,7 +112,14 @@ def train(c: Campaign, store: str, args: List[str], repo: str) -> int:
     """The campaign through scripts/train.sh (its master, workers and campaign node), resumed."""
     env = dict(os.environ, ASG_LAUNCH=c.launch, ASG_STORE=store)
     cmd = ["bash", os.path.join(repo, "scripts", "train.sh"), str(c.scenarios), f"name:={c.name}", "resume:=true"]
-    return subprocess.run(cmd + args, env=env, stdin=subprocess.DEVNULL).returncode
+    # its own process group: a stopped plan stops the campaign, its workers and its master with it
+    p = subprocess.Popen(cmd + args, env=env, stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        return p.wait()
+    except KeyboardInterrupt:  # the plan was stopped (stop_on_signals): the campaign saves and ends
+        os.killpg(p.pid, signal.SIGTERM)
+        p.wait()
+        return 130
 
 
 def run_plan(
@@ -180,7 +191,12 @@ def main(argv: Optional[List[str]] = None) -> int:
     except PlanError as e:
         print(f"plan: {e}", file=sys.stderr)
         return 2
-    return run_plan(plan, Places.of(REPO, a.exports), only=a.only, dry=a.dry, park_only=a.park)
+    stop_on_signals()
+    try:
+        return run_plan(plan, Places.of(REPO, a.exports), only=a.only, dry=a.dry, park_only=a.park)
+    except KeyboardInterrupt:
+        print("plan: stopped; run it again to go on", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":
