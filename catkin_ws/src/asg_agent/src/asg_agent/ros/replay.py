@@ -166,7 +166,7 @@ def check_reference_run(a, request, ref: dict, o: Outcome) -> int:
     stored = np.asarray(ref.get("trajectory_xy") or [], float).reshape(-1, 2)
     diff = float(np.abs(kept - stored).max()) if kept.shape == stored.shape and len(stored) else float("inf")
     samples = f"{len(kept)} vs {len(stored)} kept samples"
-    same_proxy = report_match("reference run", diff, samples, proxy, ref.get("proxy"), a.bag, a.worker)
+    same_proxy = report_match("reference run", diff, samples, proxy, ref.get("proxy"), a.bag, getattr(a, "worker", ""))
     ok = diff <= 0.011 and same_proxy and o.termination == ref.get("termination")
     print("REPRODUCED (the reference run)" if ok else "NOT REPRODUCED (the reference run)")
     return 0 if ok else 1
@@ -359,7 +359,9 @@ def run_replay(a, request, row, settings) -> int:
     stored = unpack_trajectory(row["trajectory"])
     diff = compare(stored, o.trajectory)
     samples = f"{len(o.trajectory)} vs {len(stored)} samples"
-    same_proxy = report_match("run", diff, samples, replayed_proxy(request, o), row["proxy"], a.bag, a.worker)
+    same_proxy = report_match(
+        "run", diff, samples, replayed_proxy(request, o), row["proxy"], a.bag, getattr(a, "worker", "")
+    )
     ok = diff < 0.01 and same_proxy and o.termination == row["termination"]
     print("REPRODUCED" if ok else "NOT REPRODUCED")
     return 0 if ok else 1
