@@ -6,8 +6,9 @@ comment). For each line, in order: a campaign whose committed export is finished
 skipped (also on a fresh clone without the store); else it is run, or resumed where it stopped,
 through scripts/train.sh, then exported to EXPORTS/NAME.jsonl.gz. Stop it at any moment (Ctrl-C,
 or `kill` of the plan's process: the campaign under way saves its state and is exported as far as
-it went); run it again to go on. `--park` packs each unfinished campaign into EXPORTS/parked/NAME.tar.xz (a few MB,
-to commit); the next run, here or on another clone, unparks it first and goes on from there.
+it went); run it again to go on. `--park` packs each unfinished campaign into
+EXPORTS/parked/NAME.tar.xz (a few MB, to commit); the next run, here or on another clone, unparks
+it first and goes on from there.
 
     python3 -m asg_agent.cli.plan PLAN [--only REGEX] [--exports results/depth] [--dry] [--park]
 
