@@ -67,6 +67,25 @@ def test_one_epoch_lowers_the_loss(tiny_dataset, tmp_path):
     assert [h["epoch"] for h in again["history"]] == [1, 2]
 
 
+def test_fine_tuning_starts_from_the_init_model_and_keeps_its_width(tiny_dataset, tmp_path):
+    """Issue #40: `--init` starts from a model's weights (a lite model stays lite whatever
+    `--width` says); one step of fine-tuning moves the weights away from them; a bad file is named."""
+    init = os.path.join(MODELS, "flawed_lite.pt")
+    start = load_model(init)
+    cfg = TrainConfig(data=tiny_dataset, out=str(tmp_path / "a"), epochs=0, init=init, width=1.0, threads=1)
+    same = train(cfg, progress=False)["model"]
+    assert parameter_count(same) == parameter_count(start) == 147259
+    assert all(torch.equal(a, b) for a, b in zip(start.state_dict().values(), same.state_dict().values()))
+    assert load_model(str(tmp_path / "a" / "model.pt")).down[0].out_channels == 8  # width 0.5 recorded
+    cfg = TrainConfig(
+        data=tiny_dataset, out=str(tmp_path / "b"), epochs=1, batch_size=16, crop=64, init=init, threads=1
+    )
+    moved = train(cfg, progress=False)["model"]
+    assert not torch.equal(start.state_dict()["down.0.weight"], moved.state_dict()["down.0.weight"])
+    with pytest.raises(ValueError, match="no such model file"):
+        train(TrainConfig(data=tiny_dataset, out=str(tmp_path / "c"), init=str(tmp_path / "none.pt")), progress=False)
+
+
 def test_checkpoint_round_trip_gives_identical_outputs(tmp_path):
     torch.manual_seed(3)
     m = UNet().eval()

@@ -36,6 +36,7 @@ class TrainConfig:
     threads: int = 2  #: torch CPU threads
     limit: int = 0  #: use only the first N frames (0: all)
     width: float = 1.0  #: [fraction] channel multiplier of the U-Net (model.unet); the lite models use 0.5
+    init: str = ""  #: model file whose weights start the training (fine-tuning, issue #40); its width replaces `width`
 
 
 def save_model(path: str, model: UNet, config: TrainConfig, history: list, extra: dict = None):
@@ -132,7 +133,11 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
     val_idx, train_idx = np.sort(order[:n_val]), order[n_val:]
     if len(train_idx) == 0:
         raise DatasetError(f"{cfg.data}: {n} frames leave none for training")
-    model = unet(cfg.width)
+    if cfg.init:  # fine-tuning: the weights (and so the width) of an existing model
+        model = load_model(cfg.init).train()
+        cfg.width = float(torch.load(cfg.init, map_location="cpu").get("config", {}).get("width", 1.0))
+    else:
+        model = unet(cfg.width)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     history, start = [], 0
     os.makedirs(cfg.out, exist_ok=True)
@@ -229,7 +234,7 @@ def main(argv=None):
     cfg = TrainConfig(**{f.name: getattr(a, f.name) for f in fields(TrainConfig)})
     try:
         train(cfg, resume=a.resume)
-    except DatasetError as e:
+    except ValueError as e:  # DatasetError, or an unusable --init model
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0

@@ -10,6 +10,11 @@
 // camera standing on it and tilted with it; --weather P a share P random weather (fog of 25..500 m
 // visibility on half of them, cloud cover 0..1). Their draws come from a generator of their own,
 // so with both at 0 (the default) the files are those of before.
+// Issue #40: --poses FILE.csv renders given scenes at given poses instead of random ones: frames
+// for hardening a model on found failure scenes (asg_agent.campaign.hardening writes the file).
+// FILE.csv has the header scenario,x,y,yaw: a scenario YAML (relative to FILE.csv's folder) and
+// the vehicle's pose on its ground ([m], [m], [rad]); perturbed scenes are scenario files of their
+// own. The manifest gets a last column, source: the scenario file of each frame.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -25,6 +30,7 @@
 #include "asg_sim/meshes.hpp"
 #include "asg_sim/renderer.hpp"
 #include "asg_sim/scene.hpp"
+#include "asg_sim/scene_yaml.hpp"
 
 using namespace asg_sim;
 
@@ -39,12 +45,20 @@ struct Args {
   double size = 100.0;
   double terrain = 0.0;  ///< [-] share of scenes with terrain
   double weather = 0.0;  ///< [-] share of scenes with weather
+  std::string poses;     ///< CSV of scenario poses (issue #40); empty: random scenes
+};
+
+/// One row of a --poses file.
+struct PoseRow {
+  std::string scenario;  ///< path of the scenario YAML, resolved against the poses file's folder
+  double x = 0, y = 0, yaw = 0;  ///< [m], [m], [rad]
 };
 
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
                "error: %s\nusage: asg_sim_dataset --out DIR --count N [--seed S] "
-               "[--meshes juniper,barberry] [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]\n",
+               "[--meshes juniper,barberry] [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]\n"
+               "       asg_sim_dataset --out DIR --poses FILE.csv\n",
                why.c_str());
   std::exit(2);
 }
@@ -63,6 +77,7 @@ Args parse(int argc, char** argv) {
       else if (k == "--size") a.size = std::stod(v);
       else if (k == "--terrain") a.terrain = std::stod(v);
       else if (k == "--weather") a.weather = std::stod(v);
+      else if (k == "--poses") a.poses = v;
       else if (k == "--meshes") {
         a.meshes.clear();
         std::stringstream ss(v);
@@ -76,6 +91,7 @@ Args parse(int argc, char** argv) {
     }
   }
   if (a.out.empty()) usage("--out is required");
+  if (!a.poses.empty()) return a;  // the rows give everything else
   if (a.count <= 0) usage("--count must be > 0");
   if (a.frames_per_scene <= 0) usage("--frames-per-scene must be > 0");
   if (a.meshes.empty()) usage("--meshes must name at least one mesh");
@@ -94,6 +110,121 @@ void writePng(const std::string& path, const cv::Mat& m) {
   if (!cv::imwrite(path, m)) throw std::runtime_error("cannot write " + path);
 }
 
+const char* kManifestHeader =
+    "index,scene,rgb,labels,lit,sun_inclination_deg,sun_yaw_deg,meshes,obstacles,"
+    "cam_x,cam_y,cam_yaw,terrain_amplitude_m,hills,fog_visibility_m,cloud_cover";
+
+/// Renders the camera of a vehicle standing at (x, y, yaw) on the scene's ground and writes the
+/// frame's three PNG files and its manifest row (without a line end).
+void renderFrame(Renderer& renderer, const SceneSpec& spec, size_t obstacles, const std::string& meshes,
+                 int index, int scene, double x, double y, double yaw, const std::string& img_dir,
+                 std::ostream& manifest) {
+  const Terrain ground(spec.terrain);
+  Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+  base.translation() << x, y, ground.height(x, y);
+  base.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  if (!ground.flat())  // the vehicle stands on the slope: tilted with the ground's normal
+    base.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), ground.normal(x, y))
+                        .toRotationMatrix() * base.linear();
+  CameraFrame frame;
+  renderer.renderCamera(base * cameraMount(1.5, 0.0, 1.4), true, &frame);
+  const int w = frame.rgb.width, h = frame.rgb.height;
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06d", index);
+  cv::Mat rgb(h, w, CV_8UC3, frame.rgb.data.data()), bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  writePng(img_dir + "/" + name + "_rgb.png", bgr);
+  writePng(img_dir + "/" + name + "_labels.png", cv::Mat(h, w, CV_8UC1, frame.labels.data.data()));
+  writePng(img_dir + "/" + name + "_lit.png", cv::Mat(h, w, CV_8UC1, frame.lit.data.data()));
+  manifest << index << "," << scene << ",images/" << name << "_rgb.png,images/" << name
+           << "_labels.png,images/" << name << "_lit.png," << spec.textural.sun_inclination_deg << ","
+           << spec.textural.sun_yaw_deg << "," << meshes << "," << obstacles << "," << x << "," << y << ","
+           << yaw << "," << spec.terrain.amplitude_m << "," << spec.terrain.hills.size() << ","
+           << spec.textural.fog_visibility_m << "," << spec.textural.cloud_cover;
+}
+
+void progress(int index, int count) {
+  if (index % 25 == 0 || index == count) {
+    const int bar = 30 * index / count;
+    std::fprintf(stderr, "\r[%.*s%*s] %d/%d frames", bar, "##############################", 30 - bar, "",
+                 index, count);
+  }
+}
+
+std::vector<PoseRow> readPoses(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  const std::string header = "scenario,x,y,yaw";
+  std::string line;
+  if (!std::getline(in, line) || line.substr(0, header.size()) != header)
+    throw std::runtime_error(path + ": the first line must be " + header);
+  const std::string dir = path.find('/') == std::string::npos ? "." : path.substr(0, path.rfind('/'));
+  std::vector<PoseRow> rows;
+  for (int n = 2; std::getline(in, line); ++n) {
+    if (line.empty()) continue;
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) f.push_back(c);
+    if (line.back() == ',') f.push_back("");
+    const std::string where = path + " line " + std::to_string(n);
+    if (f.size() != 4) throw std::runtime_error(where + ": " + std::to_string(f.size()) + " fields, 4 expected");
+    PoseRow r;
+    r.scenario = f[0].empty() || f[0][0] == '/' ? f[0] : dir + "/" + f[0];
+    try {
+      auto num = [&](const std::string& v) {
+        size_t used = 0;
+        const double d = std::stod(v, &used);
+        if (used != v.size() || !std::isfinite(d)) throw std::invalid_argument(v);
+        return d;
+      };
+      r.x = num(f[1]);
+      r.y = num(f[2]);
+      r.yaw = num(f[3]);
+    } catch (const std::logic_error&) {
+      throw std::runtime_error(where + ": x, y and yaw must be finite numbers");
+    }
+    if (f[0].empty()) throw std::runtime_error(where + ": no scenario file");
+    rows.push_back(r);
+  }
+  if (rows.empty()) throw std::runtime_error(path + ": no poses");
+  return rows;
+}
+
+/// The frames of a --poses file; consecutive rows of one scenario share its scene.
+int renderPoses(const Args& a, const std::string& img_dir, std::ostream& manifest) {
+  const std::vector<PoseRow> rows = readPoses(a.poses);
+  Renderer renderer;
+  std::string key, meshes;
+  SceneSpec spec;
+  size_t obstacles = 0;
+  int scene = -1;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const PoseRow& r = rows[i];
+    if (r.scenario != key) {
+      key = r.scenario;
+      ++scene;
+      ScenarioFile f;
+      try {
+        f = loadScenarioYaml(r.scenario);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(a.poses + " row " + std::to_string(i + 1) + ": " + e.what());
+      }
+      spec = f.spec;
+      std::vector<PlacedObstacle> placed;
+      std::vector<RemovedObstacle> removed;
+      placeObstacles(spec, &placed, &removed);
+      renderer.setScene(spec, placed);
+      obstacles = placed.size();
+      meshes.clear();
+      for (const auto& l : spec.layouts) meshes += (meshes.empty() ? "" : "+") + l.mesh_name;
+    }
+    renderFrame(renderer, spec, obstacles, meshes, int(i), scene, r.x, r.y, r.yaw, img_dir, manifest);
+    manifest << "," << rows[i].scenario.substr(rows[i].scenario.rfind('/') + 1) << "\n";
+    progress(int(i) + 1, int(rows.size()));
+  }
+  return int(rows.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -104,12 +235,16 @@ int main(int argc, char** argv) {
     mkdir(img_dir.c_str(), 0755);
     std::ofstream manifest(a.out + "/manifest.csv");
     if (!manifest) throw std::runtime_error("cannot write " + a.out + "/manifest.csv");
-    manifest << "index,scene,rgb,labels,lit,sun_inclination_deg,sun_yaw_deg,meshes,obstacles,"
-                "cam_x,cam_y,cam_yaw,terrain_amplitude_m,hills,fog_visibility_m,cloud_cover\n";
+    if (!a.poses.empty()) {
+      manifest << kManifestHeader << ",source\n";
+      const int n = renderPoses(a, img_dir, manifest);
+      std::fprintf(stderr, "\nwrote %d frames to %s\n", n, a.out.c_str());
+      return 0;
+    }
+    manifest << kManifestHeader << "\n";
     std::mt19937_64 rng(a.seed);
     std::mt19937_64 env(a.seed ^ 0x7E44A1A5EA7Eull);  // terrain and weather draws only
     Renderer renderer;
-    CameraFrame frame;
     int index = 0;
     for (int scene = 0; index < a.count; ++scene) {
       SceneSpec spec;
@@ -149,7 +284,6 @@ int main(int argc, char** argv) {
         if (uniform(env, 0, 1) < 0.5) spec.textural.fog_visibility_m = uniform(env, 25.0, 500.0);
         spec.textural.cloud_cover = uniform(env, 0.0, 1.0);
       }
-      const Terrain ground(spec.terrain);
       spec.operational.safety_radius = 0.0;
       std::vector<PlacedObstacle> placed;
       std::vector<RemovedObstacle> removed;
@@ -174,35 +308,12 @@ int main(int argc, char** argv) {
           for (const auto& o : placed) clear = clear && std::hypot(o.pose.x - x, o.pose.y - y) > o.radius + 2.0;
           if (clear) break;
         }
-        Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-        base.translation() << x, y, ground.height(x, y);
-        base.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-        if (!ground.flat())  // the vehicle stands on the slope: tilted with the ground's normal
-          base.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), ground.normal(x, y))
-                              .toRotationMatrix() * base.linear();
-        renderer.renderCamera(base * cameraMount(1.5, 0.0, 1.4), true, &frame);
-        const int w = frame.rgb.width, h = frame.rgb.height;
-        char name[32];
-        std::snprintf(name, sizeof(name), "%06d", index);
-        cv::Mat rgb(h, w, CV_8UC3, frame.rgb.data.data()), bgr;
-        cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-        writePng(img_dir + "/" + name + "_rgb.png", bgr);
-        writePng(img_dir + "/" + name + "_labels.png", cv::Mat(h, w, CV_8UC1, frame.labels.data.data()));
-        writePng(img_dir + "/" + name + "_lit.png", cv::Mat(h, w, CV_8UC1, frame.lit.data.data()));
         std::string meshes;
         for (const auto& m : a.meshes) meshes += (meshes.empty() ? "" : "+") + m;
-        manifest << index << "," << scene << ",images/" << name << "_rgb.png,images/" << name
-                 << "_labels.png,images/" << name << "_lit.png," << spec.textural.sun_inclination_deg
-                 << "," << spec.textural.sun_yaw_deg << "," << meshes << "," << placed.size() << ","
-                 << x << "," << y << "," << yaw << "," << spec.terrain.amplitude_m << ","
-                 << spec.terrain.hills.size() << "," << spec.textural.fog_visibility_m << ","
-                 << spec.textural.cloud_cover << "\n";
+        renderFrame(renderer, spec, placed.size(), meshes, index, scene, x, y, yaw, img_dir, manifest);
+        manifest << "\n";
         ++index;
-        if (index % 25 == 0 || index == a.count) {
-          const int bar = 30 * index / a.count;
-          std::fprintf(stderr, "\r[%.*s%*s] %d/%d frames", bar, "##############################",
-                       30 - bar, "", index, a.count);
-        }
+        progress(index, a.count);
       }
     }
     std::fprintf(stderr, "\nwrote %d frames to %s\n", index, a.out.c_str());
