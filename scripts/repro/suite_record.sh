@@ -4,6 +4,7 @@
 # e.g. bash scripts/repro/suite_record.sh tests/suites/exp1c-flaw "full=perception:=unet model:=full" \
 #          "flawed=perception:=unet model:=flawed"
 # Each label's outcomes (termination, proxy, trajectory digest) go into SUITE/suite.yaml.
+# ASG_SUITE_WORKERS=N runs N workers a stack (default 1; runs are deterministic either way).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 SUITE="$1"
 shift
@@ -16,7 +17,7 @@ for spec in "$@"; do
   label="${spec%%=*}"
   read -ra args <<< "${spec#*=}"
   log "suite $SUITE on $label (${args[*]})"
-  start_workers 1 "${args[@]}"
-  /usr/bin/python3 -m asg_agent.cli.suite run "$SUITE" --workers 1 --record "$label"
+  start_workers "${ASG_SUITE_WORKERS:-1}" "${args[@]}"
+  /usr/bin/python3 -m asg_agent.cli.suite run "$SUITE" --workers "${ASG_SUITE_WORKERS:-1}" --record "$label"
   stop_workers
 done

@@ -250,3 +250,19 @@ def test_datasets_with_terrain_and_weather(tmp_path, tiny_dataset):
     for r in read_manifest(z):
         assert filecmp.cmp(os.path.join(z, r["rgb"]), os.path.join(tiny_dataset, r["rgb"]), shallow=False)
         assert (r["terrain_amplitude_m"], r["fog_visibility_m"], r["cloud_cover"]) == ("0", "0", "0")
+
+
+def test_several_dataset_folders_load_as_one_set(tiny_dataset, tmp_path):
+    """Issue #40's rehearsal: `--data A,B` trains on both folders' frames, in order, each row
+    naming its folder; sizes that differ are refused by name."""
+    from asg_perception.data import load_sets
+
+    one = load_frames(tiny_dataset)
+    two = load_sets(f"{tiny_dataset},{tiny_dataset}")
+    assert len(two) == 2 * len(one) and np.array_equal(two.rgb[len(one) :], one.rgb)
+    assert {r["set"] for r in two.rows} == {tiny_dataset}
+    assert len(load_sets(f"{tiny_dataset},{tiny_dataset}", limit=5)) == 5
+    with pytest.raises(DatasetError, match="no dataset folder"):
+        load_sets(",")
+    with pytest.raises(DatasetError, match="no manifest.csv"):
+        load_sets(f"{tiny_dataset},{tmp_path}")

@@ -77,6 +77,31 @@ def load_frames(folder: str, limit: Optional[int] = None, progress: bool = False
     return Frames(np.stack(rgb), np.stack(labels), np.stack(lit), rows)
 
 
+def load_sets(folders: str, limit: Optional[int] = None, progress: bool = False) -> Frames:
+    """The frames of one dataset folder, or of several separated by commas, in that order (issue
+    #40: fine-tuning on new frames with a rehearsal set of the original ones); each manifest row
+    gets `set`, its folder. `limit` keeps the first N frames of the whole."""
+    parts = [f for f in folders.split(",") if f]
+    if not parts:
+        raise DatasetError("no dataset folder named")
+    sets = [load_frames(f, None if len(parts) > 1 else limit, progress) for f in parts]
+    for f, fs in zip(parts, sets):
+        for r in fs.rows:
+            r["set"] = f
+    if len(sets) == 1:
+        return sets[0]
+    shapes = {fs.rgb.shape[1:] for fs in sets}
+    if len(shapes) > 1:
+        raise DatasetError(f"{folders}: frame sizes differ between the folders ({sorted(shapes)})")
+    n = limit or sum(len(fs) for fs in sets)
+    return Frames(
+        np.concatenate([fs.rgb for fs in sets])[:n],
+        np.concatenate([fs.labels for fs in sets])[:n],
+        np.concatenate([fs.lit for fs in sets])[:n],
+        [r for fs in sets for r in fs.rows][:n],
+    )
+
+
 def to_tensor(rgb: np.ndarray):
     """N x H x W x 3 uint8 -> N x 3 x H x W float32 in [0, 1]."""
     import torch

@@ -13,7 +13,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .data import VOID, DatasetError, load_frames, to_tensor
+from .data import VOID, DatasetError, load_sets, to_tensor
 from .metrics import Confusion
 from .model import UNet, parameter_count, unet
 
@@ -24,7 +24,7 @@ FORMAT = "asg_unet/1"
 class TrainConfig:
     """Hyper-parameters of one training run (REFERENCE.md values unless noted)."""
 
-    data: str = ""  #: dataset folder (asg_sim_dataset output)
+    data: str = ""  #: dataset folder (asg_sim_dataset output), or several separated by commas
     out: str = "runs/unet"  #: output folder: checkpoint.pt, model.pt, history.json
     epochs: int = 4  #: passes over the training split
     batch_size: int = 16  #: frames per step
@@ -125,7 +125,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> dict
 
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
-    frames = load_frames(cfg.data, cfg.limit or None, progress)
+    frames = load_sets(cfg.data, cfg.limit or None, progress)
     n = len(frames)
     rng = np.random.default_rng(cfg.seed)
     order = rng.permutation(n)
