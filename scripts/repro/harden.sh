@@ -8,8 +8,8 @@
 # Round 2 and later search the model of the round before first: ASG_HARDEN_FINDINGS names that
 # campaign's export (and ASG_HARDEN_RANDOM a random campaign's, seeds unused so far).
 # Steps whose output exists are skipped, so a stopped run continues. About an hour on 2 idle
-# cores (the two trainings, one core each, take most of it). Writes results/hardening/:
-# models/flawed_{hf,hr}ROUND.pt, evaluation-SET-ROUND.json (per-pixel figures), suite outcomes recorded
+# cores (the two trainings, one core each, take most of it). Writes the models to
+# asg_perception/models/flawed_{hf,hr}ROUND.pt and to results/hardening/: evaluation-SET-ROUND.json (per-pixel figures), suite outcomes recorded
 # in the suites (labels flawed-cl, full-cl, hardened-findings-ROUND, hardened-random-ROUND).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 WORK="$(realpath -m "${1:-$REPO/runs/harden}")"
@@ -22,7 +22,8 @@ FRAMES=1664
 install_packages
 build_workspace ON
 export LP_NUM_THREADS=1
-mkdir -p "$WORK" "$OUT/models"
+MODELS="$WS/src/asg_perception/models"  # the hardened models ship beside flawed.pt: model:=flawed_hf1
+mkdir -p "$WORK" "$OUT"
 harden() { /usr/bin/python3 -m asg_agent.cli.harden frames "$@"; }
 
 log "frame sets in $WORK"
@@ -42,9 +43,9 @@ SCENES=$(/usr/bin/python3 -c "import json,sys; print(len(json.load(open(sys.argv
 log "fine-tuning flawed.pt (round 1) or each arm's model of the round before on each frame set ($FRAMES frames and $FRAMES of rehearsal, 4 epochs, Adam 1e-4, one core each)"
 for arm in findings random; do
   tag=h${arm:0:1}$ROUND
-  [ -f "$OUT/models/flawed_$tag.pt" ] && continue
+  [ -f "$MODELS/flawed_$tag.pt" ] && continue
   START="$WS/src/asg_perception/models/flawed.pt"
-  [ "$ROUND" = 1 ] || START="$OUT/models/flawed_h${arm:0:1}$((ROUND - 1)).pt"  # each arm hardens its own
+  [ "$ROUND" = 1 ] || START="$MODELS/flawed_h${arm:0:1}$((ROUND - 1)).pt"  # each arm hardens its own
   /usr/bin/python3 -m asg_perception.train --data "$WORK/$arm$ROUND/frames,$WORK/rehearsal" --out "$WORK/train_$arm$ROUND" \
     --init "$START" --epochs 4 --lr 0.0001 --batch-size 16 --threads 1 --seed 0 --resume \
     > "$WORK/train_$arm$ROUND.log" 2>&1 &
@@ -52,13 +53,12 @@ done
 wait
 for arm in findings random; do
   tag=h${arm:0:1}$ROUND
-  [ -f "$OUT/models/flawed_$tag.pt" ] || cp "$WORK/train_$arm$ROUND/model.pt" "$OUT/models/flawed_$tag.pt"
+  [ -f "$MODELS/flawed_$tag.pt" ] || cp "$WORK/train_$arm$ROUND/model.pt" "$MODELS/flawed_$tag.pt"
 done
 
 log "per-pixel figures on the held-apart sets"
-MODELS="$WS/src/asg_perception/models"
 ARMS=("flawed=$MODELS/flawed.pt" "full=$MODELS/full.pt")
-for r in $(seq 1 "$ROUND"); do ARMS+=("hardened-findings-$r=$OUT/models/flawed_hf$r.pt" "hardened-random-$r=$OUT/models/flawed_hr$r.pt"); done
+for r in $(seq 1 "$ROUND"); do ARMS+=("hardened-findings-$r=$MODELS/flawed_hf$r.pt" "hardened-random-$r=$MODELS/flawed_hr$r.pt"); done
 for set in test heldout-findings; do
   data="$WORK/$set"
   [ -f "$data/manifest.csv" ] || data="$WORK/$set/frames"
@@ -74,8 +74,8 @@ log "suite pass rates (one worker a stack, U-Net in fp32 channels_last)"
 STACKS=("flawed-cl=perception:=unet model:=flawed unet_backend:=channels_last"
   "full-cl=perception:=unet model:=full unet_backend:=channels_last")
 for r in $(seq 1 "$ROUND"); do
-  STACKS+=("hardened-findings-$r=perception:=unet model:=$OUT/models/flawed_hf$r.pt unet_backend:=channels_last"
-    "hardened-random-$r=perception:=unet model:=$OUT/models/flawed_hr$r.pt unet_backend:=channels_last")
+  STACKS+=("hardened-findings-$r=perception:=unet model:=flawed_hf$r unet_backend:=channels_last"
+    "hardened-random-$r=perception:=unet model:=flawed_hr$r unet_backend:=channels_last")
 done
 for suite in "$OUT/suite-exp1c" "$OUT/suite-r4pilot"; do
   todo=()
