@@ -12,7 +12,8 @@
 # with python3 -m asg_agent.cli.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks
 # (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite"; the pair trained
 # with terrain and weather, issue #27: "flawed_tw full_tw"; the depth stack of issue #39, on
-# workers launched with stack:=depth: "depth", N_UNET layouts).
+# workers launched with stack:=depth: "depth", N_UNET layouts; the hardened models of issue #40:
+# "flawed_hf1 flawed_hr1").
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -29,7 +30,7 @@ ROOT=()
 GT_ROOT=(--ground-truth-root "$REPO/results/baseline")
 trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET" flawed_lite:"$N_UNET" full_lite:"$N_UNET" \
-    flawed_tw:"$N_UNET" full_tw:"$N_UNET" depth:"$N_UNET"; do
+    flawed_tw:"$N_UNET" full_tw:"$N_UNET" depth:"$N_UNET" flawed_hf1:"$N_UNET" flawed_hr1:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
   [[ " ${ASG_BASELINE_STACKS:-ground_truth flawed full} " == *" $stack "* ]] || continue

@@ -23,9 +23,13 @@ SETS = ("test", "heldout-findings")
 ARM_ORDER = ("flawed", "hardened-findings", "hardened-random", "full")
 
 
-def arm_of(label: str) -> str:
-    """The arm a suite label or evaluation name stands for: flawed-cl -> flawed."""
-    return label[:-3] if label.endswith("-cl") else label
+def arm_of(label: str):
+    """The arm a suite label recorded by scripts/repro/harden.sh stands for (flawed-cl -> flawed,
+    hardened-findings-1 as it is); None for the other labels a suite may carry (the committed
+    suite's own records, on other backends)."""
+    if label.endswith("-cl"):
+        return label[:-3]
+    return label if label.startswith("hardened-") else None
 
 
 def _order(arm: str):
@@ -44,7 +48,7 @@ def suite_passes(folder: str) -> dict:
     out = {}
     for e in suite["scenarios"]:
         for label, o in e.get("outcomes", {}).items():
-            if "digest" not in o:  # outcomes exported from the campaign, not recorded by `suite run`
+            if "digest" not in o or arm_of(label) is None:  # exported from the campaign, or not ours
                 continue
             failed, _ = verdict(o["termination"], o.get("proxy"), suite["bound"])
             k, n = out.get(arm_of(label), (0, 0))
@@ -61,7 +65,7 @@ def table(folder: str) -> dict:
         if not m or m.group(1) not in SETS:
             continue
         with open(path, encoding="utf-8") as f:
-            for name, r in json.load(f).items():  # a later round's file overwrites the same arm's
+            for name, r in json.load(f)["results"].items():  # a later round's file overwrites the same arm's
                 arms.setdefault(name, {})[m.group(1)] = {
                     "iou_non_traversable": r["iou"]["non_traversable"],
                     "shadow_false_obstacle_rate": r["shadow_false_obstacle_rate"],
@@ -75,17 +79,19 @@ def table(folder: str) -> dict:
 
 
 def markdown(t: dict) -> str:
+    """The table of docs/design-loop.md (a suite no arm ran on gets no column)."""
+    suites = [s for s in SUITES if any(s in r for r in t["arms"].values())]
     head = ["arm"]
     for s in SETS:
         head += [f"{s}: obstacle IoU", f"{s}: shadow false-obstacle"]
-    head += [f"{s} passed ({SUITE_WORDS[s]})" for s in SUITES]
+    head += [f"{s} passed ({SUITE_WORDS[s]})" for s in suites]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for arm, r in t["arms"].items():
         cells = [arm]
         for s in SETS:
             f = r.get(s)
             cells += [f"{f['iou_non_traversable']:.3f}", f"{f['shadow_false_obstacle_rate']:.3f}"] if f else ["", ""]
-        for s in SUITES:
+        for s in suites:
             f = r.get(s)
             cells.append(f"{f['passed']} / {f['n']}" if f else "")
         lines.append("| " + " | ".join(cells) + " |")

@@ -43,7 +43,9 @@ STACKS = (
     "flawed_tw",
     "full_tw",
     "depth",
-)  #: labels: ground truth, a shipped model's name, or depth (asg_depth_stack, issue #39)
+    "flawed_hf1",
+    "flawed_hr1",
+)  #: labels: ground truth, a shipped model's name (flawed_hf1, flawed_hr1: hardened, issue #40), or depth (issue #39)
 BOUNDS = {"share_ge3": 0.01, "median_yaw_term": 0.2, "median_plr": 1.03, "collision_share": 0.005}  # issue #23
 
 
