@@ -26,3 +26,21 @@ def test_the_hardening_table_is_what_the_results_say():
 
 def test_the_frames_only_table_is_what_its_results_say():
     assert doc_table("frames-only") == ah.markdown(ah.table(os.path.join(REPO, "results", "hardening", "frames-only")))
+
+
+def test_the_hardened_baseline_table_is_what_the_rows_say():
+    import json
+
+    import numpy as np
+
+    lines = doc_table("baseline").splitlines()[2:]
+    for line in lines:
+        stack, n, coll, ge3, plr = [c.strip() for c in line.strip("|").split("|")]
+        with open(os.path.join(REPO, "results", "baseline", "exp1", f"{stack}.jsonl")) as f:
+            rows = {r["layout"]: r for r in map(json.loads, f)}
+        assert sorted(rows) == list(range(int(n)))  # the same seeded layouts 0..n-1
+        assert sum(r["termination"] == "COLLISION" for r in rows.values()) == int(coll)
+        assert sum(r["proxy"] is not None and r["proxy"] >= 3 for r in rows.values()) == int(ge3)
+        ok = [r["plr"] for r in rows.values() if r["proxy"] is not None]
+        assert f"{float(np.percentile(ok, 90)):.3f}" == plr
+    assert [line.split("|")[1].strip() for line in lines] == ["flawed", "flawed_hf1"]
