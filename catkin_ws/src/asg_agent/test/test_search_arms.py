@@ -59,6 +59,11 @@ def test_statistics_over_seeds():
     assert rows[0]["p"] is None and rows[1]["ratio"] == pytest.approx(3.5) and rows[1]["effect"] == 1.0
     with pytest.raises(ValueError, match="default"):
         stats.compare({"a": [1]}, "b")
+    # The design loop's endpoint counts flaw and model findings, nothing else, over the first jobs.
+    rows = [{"job": j, "attribution": c} for j, c in enumerate(["flaw", "model", "stack", None, "flaw", "model"])]
+    assert stats.per_thousand(rows, "findings", 4) == 500.0
+    assert stats.per_thousand(rows, "findings", 6) == pytest.approx(4000 / 6)
+    assert stats.per_thousand(rows, "flaw", 6) == pytest.approx(2000 / 6)
 
 
 def test_failure_modes_of_findings():

@@ -101,6 +101,8 @@ SCORES = {
     # key: (label, per-row predicate on an export row)
     "flaw": ("flaw findings (three-stack attribution)", lambda r: r.get("attribution") == "flaw"),
     "model": ("model findings", lambda r: r.get("attribution") == "model"),
+    # the design loop's endpoint (issue #40, experiments/protocol-design-loop.yaml)
+    "findings": ("flaw + model findings", lambda r: r.get("attribution") in ("flaw", "model")),
     "perception": ("perception findings (round 3: proxy >= 3, ground truth < 2)", None),
     "differential": ("differential findings (proxy - ground truth >= 1)", None),
     "collisions": ("perception collisions (ground truth reached the goal)", None),
