@@ -5,6 +5,8 @@
 #          "flawed=perception:=unet model:=flawed"
 # Each label's outcomes (termination, proxy, trajectory digest) go into SUITE/suite.yaml.
 # ASG_SUITE_WORKERS=N runs N workers a stack (default 1; runs are deterministic either way).
+# ASG_SUITE_JSON=DIR also writes each label's results, paths driven included, to DIR/LABEL.json
+# (for `python3 -m asg_agent.analysis.hardening picture`).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 SUITE="$1"
 shift
@@ -18,6 +20,8 @@ for spec in "$@"; do
   read -ra args <<< "${spec#*=}"
   log "suite $SUITE on $label (${args[*]})"
   start_workers "${ASG_SUITE_WORKERS:-1}" "${args[@]}"
-  /usr/bin/python3 -m asg_agent.cli.suite run "$SUITE" --workers "${ASG_SUITE_WORKERS:-1}" --record "$label"
+  json=()
+  [ -z "${ASG_SUITE_JSON:-}" ] || { mkdir -p "$ASG_SUITE_JSON" && json=(--json "$ASG_SUITE_JSON/$label.json"); }
+  /usr/bin/python3 -m asg_agent.cli.suite run "$SUITE" --workers "${ASG_SUITE_WORKERS:-1}" --record "$label" "${json[@]}"
   stop_workers
 done

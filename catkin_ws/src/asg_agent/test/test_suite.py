@@ -100,6 +100,22 @@ def test_export_run_record_and_regress(tmp_path, campaign_export):
     assert root.get("tests") == str(n) and root.get("failures") == "1"
     bad = [tc for tc in root.iter("testcase") if tc.find("failure") is not None]
     assert bad[0].get("name").startswith("000-") and "regression: collision" in bad[0].find("failure").get("message")
+    # The JSON keeps each path driven (10 Hz): a failure before and after drawn from two results.
+    import json
+
+    from asg_agent.analysis import hardening
+
+    with open(tmp_path / "r.json") as f:
+        failed = json.load(f)
+    assert failed[0]["fails"] and len(failed[0]["trajectory_xy"]) >= 2
+    passed = json.loads(json.dumps(res2, default=str))
+    png = str(tmp_path / "before_after.png")
+    args = ["picture", out, failed[0]["file"], png, f"before={tmp_path / 'r.json'}"]
+    with open(tmp_path / "after.json", "w") as f:
+        json.dump(passed, f)
+    assert hardening.main(args + [f"after={tmp_path / 'after.json'}"]) == 0 and os.path.getsize(png) > 10_000
+    assert hardening.main(["picture", out, "no-such.yaml", png, f"before={tmp_path / 'r.json'}"]) == 2
+    assert hardening.main(args + ["after"]) == 2  # LABEL=RESULTS.json, named as wrong
 
 
 def test_trajectories_are_compared_only_where_the_numerics_repeat(tmp_path, campaign_export):

@@ -3,6 +3,10 @@ figures on held-apart frames (evaluation-SET-ROUND.json of scripts/repro/harden.
 rate on each suite from the outcomes recorded in it.
 
     python3 -m asg_agent.analysis.hardening results/hardening [--json OUT] [--markdown]
+    python3 -m asg_agent.analysis.hardening picture SUITE SCENARIO OUT.png LABEL=RESULTS.json ...
+
+`picture`: one suite scenario as each stack drove it (the results are `suite run --json` files),
+the paths on the scene top-down: a failure before and after hardening.
 """
 
 import argparse
@@ -98,7 +102,67 @@ def markdown(t: dict) -> str:
     return "\n".join(lines)
 
 
+PATH_COLOURS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange")
+
+
+def picture(suite_folder: str, scenario: str, runs: dict, out: str) -> dict:
+    """Top-down picture of suite scenario `scenario` (its file, or the file's name without the
+    folder) as each stack of `runs` ({label: results of `suite run --json`}) drove it; returns
+    {label: (termination, proxy)}. The first label is drawn on top."""
+    from asg_agent.campaign.suite import load_suite
+    from asg_agent.scoring.proxy import optimal_path, placed_mask
+    from asg_scenario.report import plot_run
+
+    suite = load_suite(suite_folder)
+    names = [e["file"] for e in suite["scenarios"]]
+    hit = [k for k, f in enumerate(names) if f == scenario or os.path.basename(f) == os.path.basename(scenario)]
+    if not hit:
+        raise ValueError(f"{scenario!r}: not a scenario of {suite_folder} ({len(names)} there)")
+    entry = suite["scenarios"][hit[0]]
+    drawn, got = [], {}
+    for k, (label, results) in enumerate(runs.items()):
+        r = next((x for x in results if x.get("file") == entry["file"]), None)
+        if r is None:
+            raise ValueError(f"{label}: its results have no run of {entry['file']}")
+        if not r.get("trajectory_xy"):
+            raise ValueError(f"{label}: its results carry no path (made before suite run kept paths)")
+        p = "n/a" if r.get("proxy") is None else f"{r['proxy']:.2f}"
+        drawn.append(
+            (f"{label}: {r['reason'] if r['fails'] else 'passes'}, proxy {p}", r["trajectory_xy"], PATH_COLOURS[k % 5])
+        )
+        got[label] = (r["termination"], r.get("proxy"))
+    req = entry["request"]
+    opt = optimal_path(req, placed_mask(req, []))
+    title = f"{entry['file']}\n{entry.get('campaign', '')} job {entry.get('job', '?')}: {entry.get('mode', '')}"
+    (label0, xy0, _), rest = drawn[0], drawn[1:]
+    plot_run(out, req, xy0, title=title, optimal=opt.points, label=label0, others=rest)
+    return got
+
+
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["picture"]:
+        q = argparse.ArgumentParser(prog="analysis.hardening picture", description=picture.__doc__.split("\n")[0])
+        q.add_argument("suite")
+        q.add_argument("scenario")
+        q.add_argument("out")
+        q.add_argument("runs", nargs="+", help="LABEL=RESULTS.json (suite run --json)")
+        b = q.parse_args(argv[1:])
+        try:
+            runs = {}
+            for spec in b.runs:
+                label, _, path = spec.partition("=")
+                if not path:
+                    raise ValueError(f"{spec!r}: expected LABEL=RESULTS.json")
+                with open(path, encoding="utf-8") as f:
+                    runs[label] = json.load(f)
+            for label, (term, proxy) in picture(b.suite, b.scenario, runs, b.out).items():
+                print(f"{label}: {term}, proxy {proxy}")
+        except (OSError, ValueError, KeyError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        print(f"wrote {b.out}")
+        return 0
     p = argparse.ArgumentParser(prog="analysis.hardening", description=__doc__.split("\n\n")[0])
     p.add_argument("folder")
     p.add_argument("--json", default="")

@@ -186,9 +186,22 @@ def run_suite(suite: dict, pool: Pool, poll: float = 0.2, progress=None) -> List
                 "digest": digest(o.trajectory),
                 "sim_time": o.sim_time,
                 "wall_time": o.wall_time,
+                # the path driven, at 10 Hz, x and y to 1 cm (the exports' sampling), for figures
+                "trajectory_xy": _path_xy(o.trajectory),
             }
         )
     return out
+
+
+PATH_STEP = 6  # [samples] of the 60 Hz trajectory between two points of a result's path (10 Hz)
+
+
+def _path_xy(trajectory) -> List[List[float]]:
+    t = np.asarray(trajectory, float)
+    if t.ndim != 2 or len(t) == 0:
+        return []
+    keep = np.r_[t[::PATH_STEP], t[-1:]]
+    return np.round(keep[:, 1:3], 2).tolist()
 
 
 def compare(suite: dict, results: List[dict], against: str = "", numerics: str = "") -> List[dict]:
