@@ -127,16 +127,18 @@ def picture(suite_folder: str, scenario: str, runs: dict, out: str) -> dict:
         if not r.get("trajectory_xy"):
             raise ValueError(f"{label}: its results carry no path (made before suite run kept paths)")
         p = "n/a" if r.get("proxy") is None else f"{r['proxy']:.2f}"
-        drawn.append(
-            (f"{label}: {r['reason'] if r['fails'] else 'passes'}, proxy {p}", r["trajectory_xy"], PATH_COLOURS[k % 5])
-        )
-        got[label] = (r["termination"], r.get("proxy"))
+        text = f"{label}: {r['reason'] if r['fails'] else 'passes'}, proxy {p}"
+        same = [lab for lab, (xy, _) in got.items() if xy == r["trajectory_xy"]]
+        if same:  # drawn under it: say so, or the legend shows a path the picture hides
+            text += f" (the path of {same[0]})"
+        drawn.append((text, r["trajectory_xy"], PATH_COLOURS[k % 5]))
+        got[label] = (r["trajectory_xy"], (r["termination"], r.get("proxy")))
     req = entry["request"]
     opt = optimal_path(req, placed_mask(req, []))
-    title = f"{entry['file']}\n{entry.get('campaign', '')} job {entry.get('job', '?')}: {entry.get('mode', '')}"
+    title = f"{entry['file']}\n{entry.get('campaign', '')} job {entry.get('job', '?')}\n{entry.get('mode', '')}"
     (label0, xy0, _), rest = drawn[0], drawn[1:]
     plot_run(out, req, xy0, title=title, optimal=opt.points, label=label0, others=rest)
-    return got
+    return {label: outcome for label, (_, outcome) in got.items()}
 
 
 def main(argv=None) -> int:
