@@ -43,4 +43,4 @@ def test_the_hardened_baseline_table_is_what_the_rows_say():
         assert sum(r["proxy"] is not None and r["proxy"] >= 3 for r in rows.values()) == int(ge3)
         ok = [r["plr"] for r in rows.values() if r["proxy"] is not None]
         assert f"{float(np.percentile(ok, 90)):.3f}" == plr
-    assert [line.split("|")[1].strip() for line in lines] == ["flawed", "flawed_hf1"]
+    assert [line.split("|")[1].strip() for line in lines] == ["flawed", "flawed_hf1", "flawed_hr1"]
