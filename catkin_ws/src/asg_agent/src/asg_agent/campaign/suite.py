@@ -29,7 +29,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 import yaml
 
-from asg_agent.campaign.loop import Outcome, Pool, run_each
+from asg_agent.campaign.loop import Outcome, Pool, kept_xy, run_each
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring.proxy import run_terms
 
@@ -186,22 +186,11 @@ def run_suite(suite: dict, pool: Pool, poll: float = 0.2, progress=None) -> List
                 "digest": digest(o.trajectory),
                 "sim_time": o.sim_time,
                 "wall_time": o.wall_time,
-                # the path driven, at 10 Hz, x and y to 1 cm (the exports' sampling), for figures
-                "trajectory_xy": _path_xy(o.trajectory),
+                # the path driven as a campaign keeps a reference run's (loop.kept_xy), for figures
+                "trajectory_xy": kept_xy(o.trajectory),
             }
         )
     return out
-
-
-PATH_STEP = 6  # [samples] of the 60 Hz trajectory between two points of a result's path (10 Hz)
-
-
-def _path_xy(trajectory) -> List[List[float]]:
-    t = np.asarray(trajectory, float)
-    if t.ndim != 2 or len(t) == 0:
-        return []
-    keep = np.r_[t[::PATH_STEP], t[-1:]]
-    return np.round(keep[:, 1:3], 2).tolist()
 
 
 def compare(suite: dict, results: List[dict], against: str = "", numerics: str = "") -> List[dict]:
