@@ -100,6 +100,11 @@ def test_the_seeds_table_is_what_the_exports_say():
     prose = " ".join(text.split())
     assert f"{sum(fails)} failures in its 3,000 scenarios" in prose
     assert f"the three search seeds found {', '.join(map(str, fails))}" in prose
+    rs, rb = s["compare"]
+    assert f"do not overlap ({rs['mean']:.1f} per 1,000, {rs['lo']:.1f}-{rs['hi']:.1f}, against" in prose
+    assert rb["lo"] > rs["hi"] or rb["hi"] < rs["lo"]
+    assert f"as a draw, gives p = {s['pooled_fisher_p']:.2g}." in prose
+    assert f"per-seed counts, gives p = {rb['p']:.2f} (the normal approximation" in prose
     # every failure of the search an idling timeout that the ground-truth stack drives through
     import gzip
 
