@@ -106,11 +106,8 @@ def test_the_seeds_table_is_what_the_exports_say():
     assert f"as a draw, gives p = {s['pooled_fisher_p']:.2g}." in prose
     assert f"per-seed counts, gives p = {rb['p']:.2f} (the normal approximation" in prose
     # every failure of the search an idling timeout that the ground-truth stack drives through
-    import gzip
-
     for n in searches:
-        with gzip.open(os.path.join(REPO, "results", "depth", f"{n}.jsonl.gz"), "rt") as f:
-            rows = [json.loads(line) for line in f][1:]
+        rows = stack_study.read_export(os.path.join(REPO, "results", "depth", f"{n}.jsonl.gz"))[1]
         failed = [r for r in rows if r["termination"] != "SUCCESS"]
         assert len(failed) == s["campaigns"][n]["failures"], n
         assert {r["termination"] for r in failed} <= {"IDLING_TIMEOUT"}, n
