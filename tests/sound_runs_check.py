@@ -33,6 +33,10 @@ class SoundRuns(unittest.TestCase):
         rospy.Subscriber("/worker_1/planner/state", PlannerState, cls.on_state_1, queue_size=500)
         rospy.Subscriber("/worker_0/scenario", ScenarioInfo, cls.on_info, queue_size=10)
         cls.labels_pub = rospy.Publisher("/worker_0/labels", Image, queue_size=4)
+        # Both U-Nets loaded and warmed up before the first run: the workers' command_timeout is
+        # 5 s (wall clock), less than a cold first inference on a freshly built workspace.
+        for ns in ("worker_0", "worker_1"):
+            su.wait_for_segmenter(ns)
         rospy.sleep(1.0)
         # The references: 6 seeded random Exp. 1 scenes, in order, on worker_0.
         cls.scenes = [su.random_exp1(seed, 100 + seed) for seed in range(SCENES)]

@@ -72,3 +72,27 @@ def test_the_summary_names_each_failure_and_fails_on_it(tmp_path):
         text=True,
     )
     assert res.returncode == 0 and res.stdout.strip() == "tests: 1 passed, 0 failed, 0 skipped"
+
+
+def test_an_error_outside_any_test_case_is_a_failure(tmp_path):
+    # What rosunit writes when a rostest's setUpClass raises: no test case, errors="1".
+    (tmp_path / "rosunit-sound_runs.xml").write_text(
+        '<testsuite errors="1" failures="0" name="unittest.suite.TestSuite" tests="0" time="7.8"></testsuite>'
+    )
+    (tmp_path / "rostest-sound_runs.xml").write_text(
+        '<testsuite errors="0" failures="0" tests="1"><testcase classname="rostest.runner.RosTest" name="t"/></testsuite>'
+    )
+    # A suite whose count matches its test cases is not counted twice.
+    (tmp_path / "b.xml").write_text(
+        '<testsuites><testsuite errors="1" failures="1" name="B"><testcase classname="B" name="e"><error>x</error>'
+        '</testcase><testcase classname="B" name="f"><failure>y</failure></testcase></testsuite></testsuites>'
+    )
+    res = subprocess.run(
+        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(tmp_path)],
+        capture_output=True,
+        text=True,
+    )
+    assert res.returncode == 1
+    assert "FAILED rosunit-sound_runs.xml::unittest.suite.TestSuite" in res.stdout
+    assert "setUpClass" in res.stdout
+    assert res.stdout.splitlines()[-1] == "tests: 1 passed, 3 failed, 0 skipped"

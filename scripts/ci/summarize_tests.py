@@ -1,11 +1,34 @@
 #!/usr/bin/python3
 """Count test cases in the JUnit XML files under a folder; print one line per failure with the last
-lines of its message, and the closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or error, or if nothing ran."""
+lines of its message, and the closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or error, or if nothing ran.
+
+A suite's own errors and failures count too: a Python test whose setUpClass raises is written by
+rosunit as <testsuite errors="1" tests="0"> with no test case, and would otherwise vanish."""
 
 import glob
 import os
 import sys
 import xml.etree.ElementTree as ET
+
+
+def suite_level(path, root, suite):
+    """The errors and failures a <testsuite> counts that none of its own test cases carries."""
+    cases = suite.findall("testcase")
+    carried = {
+        "errors": sum(c.find("error") is not None for c in cases),
+        "failures": sum(c.find("failure") is not None for c in cases),
+    }
+    out = []
+    for kind in ("errors", "failures"):
+        try:
+            counted = int(suite.get(kind, "0") or 0)
+        except ValueError:
+            counted = 1  # a count that is not a number is a broken result, not a pass
+        if counted > carried[kind]:
+            name = f"{os.path.relpath(path, root)}::{suite.get('name', 'testsuite')}"
+            why = f"{counted - carried[kind]} suite-level {kind} outside any test case (e.g. setUpClass raised): see the test's log"
+            out.append((name, [why]))
+    return out
 
 
 def main(root):
@@ -16,6 +39,8 @@ def main(root):
         except ET.ParseError as e:
             bad_files.append(f"{path}: unreadable result file ({e})")
             continue
+        for suite in tree.getroot().iter("testsuite"):
+            failed.extend(suite_level(path, root, suite))
         for case in tree.getroot().iter("testcase"):
             name = f"{os.path.relpath(path, root)}::{case.get('classname', '')}.{case.get('name')}"
             bad = case.find("failure")
