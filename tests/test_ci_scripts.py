@@ -50,27 +50,28 @@ def test_shown_is_a_pure_line_rule():
     assert not console_filter.shown("[ERROR] [1.0]: planner: error: x")
 
 
+def summarize(folder):
+    """scripts/ci/summarize_tests.py over the result files in `folder`."""
+    return subprocess.run(
+        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(folder)],
+        capture_output=True,
+        text=True,
+    )
+
+
 def test_the_summary_names_each_failure_and_fails_on_it(tmp_path):
     (tmp_path / "a.xml").write_text(
         '<testsuite><testcase classname="A" name="ok"/><testcase classname="A" name="bad">'
         '<failure message="boom">Traceback\nAssertionError: 1 != 2</failure></testcase>'
         '<testcase classname="A" name="skip"><skipped/></testcase></testsuite>'
     )
-    res = subprocess.run(
-        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(tmp_path)],
-        capture_output=True,
-        text=True,
-    )
+    res = summarize(tmp_path)
     assert res.returncode == 1
     assert "FAILED a.xml::A.bad" in res.stdout
     assert "AssertionError: 1 != 2" in res.stdout  # why, without opening the file
     assert res.stdout.splitlines()[-1] == "tests: 1 passed, 1 failed, 1 skipped"
     (tmp_path / "a.xml").write_text('<testsuite><testcase classname="A" name="ok"/></testsuite>')
-    res = subprocess.run(
-        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(tmp_path)],
-        capture_output=True,
-        text=True,
-    )
+    res = summarize(tmp_path)
     assert res.returncode == 0 and res.stdout.strip() == "tests: 1 passed, 0 failed, 0 skipped"
 
 
@@ -87,11 +88,7 @@ def test_an_error_outside_any_test_case_is_a_failure(tmp_path):
         '<testsuites><testsuite errors="1" failures="1" name="B"><testcase classname="B" name="e"><error>x</error>'
         '</testcase><testcase classname="B" name="f"><failure>y</failure></testcase></testsuite></testsuites>'
     )
-    res = subprocess.run(
-        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), str(tmp_path)],
-        capture_output=True,
-        text=True,
-    )
+    res = summarize(tmp_path)
     assert res.returncode == 1
     assert "FAILED rosunit-sound_runs.xml::unittest.suite.TestSuite" in res.stdout
     assert "setUpClass" in res.stdout
