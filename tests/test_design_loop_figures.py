@@ -44,3 +44,115 @@ def test_the_hardened_baseline_table_is_what_the_rows_say():
         ok = [r["plr"] for r in rows.values() if r["proxy"] is not None]
         assert f"{float(np.percentile(ok, 90)):.3f}" == plr
     assert [line.split("|")[1].strip() for line in lines] == ["flawed", "flawed_hf1", "flawed_hr1"]
+
+
+# -- section 4: the loop's campaigns (asg_agent.analysis.loop_study) ------------------------------
+
+
+def test_the_loop_table_is_what_the_exports_say():
+    from asg_agent.analysis import loop_study as ls
+
+    s = ls.study()
+    assert doc_table("loop") == ls.markdown(s)
+    # every campaign of the plan is either counted (all its scenarios) or listed as not complete
+    assert len(s["campaigns"]) + len(s["not_complete"]) == 9
+    assert all(c["scenarios"] == 500 for c in s["campaigns"].values())
+    assert ("compare" in s) == (not s["not_complete"])
+
+
+def _rows(n, flaw=(), model=(), collide=()):
+    return [
+        {
+            "job": j,
+            "attribution": "flaw" if j in flaw else "model" if j in model else None,
+            "termination": "COLLISION" if j in collide else "SUCCESS",
+        }
+        for j in range(n)
+    ]
+
+
+def test_a_campaign_counts_flaw_and_model_findings_of_its_first_budget_scenarios():
+    from asg_agent.analysis import loop_study as ls
+
+    c = ls.campaign_figures(_rows(12, flaw={1, 2, 11}, model={3}, collide={1, 11}), budget=10)
+    assert (c["scenarios"], c["flaw"], c["model"], c["collisions"]) == (10, 2, 1, 1)
+    assert c["per_1000"] == 300.0
+    lo, hi = c["per_1000_interval"]
+    assert lo < 300.0 < hi
+
+
+def test_the_target_needs_all_three_parts():
+    from asg_agent.analysis import loop_study as ls
+
+    base = {"layouts": 300, "collisions": 5, "proxy_ge_3": 0}
+    worse = {"layouts": 300, "collisions": 9, "proxy_ge_3": 0}
+    good = {"flawed": [20.0, 22.0, 18.0], "hardened-findings": [4.0, 6.0, 2.0], "hardened-random": [14.0, 16.0, 12.0]}
+    bl = {"flawed": base, "hardened-findings": base, "hardened-random": base}
+    t = ls.judge(good, bl, 0.5)["target"]
+    assert t["ratio_to_flawed"] == 0.2 and t["ratio_met"] and t["below_random"] and t["met"]
+    # half of flawed's is the bound, included; more is missed
+    assert ls.judge({**good, "hardened-findings": [10.0, 10.0, 10.0]}, bl, 0.5)["target"]["ratio_met"]
+    assert not ls.judge({**good, "hardened-findings": [12.0, 10.0, 11.0]}, bl, 0.5)["target"]["met"]
+    # intervals overlapping the random arm's
+    t = ls.judge({**good, "hardened-random": [5.0, 3.0, 14.0]}, bl, 0.5)["target"]
+    assert t["ratio_met"] and not t["below_random"] and not t["met"]
+    # a baseline worse than flawed's, or not measured
+    assert ls.judge(good, {**bl, "hardened-findings": worse}, 0.5)["target"]["baseline_no_worse"] is False
+    t = ls.judge(good, {**bl, "hardened-findings": None}, 0.5)["target"]
+    assert t["baseline_no_worse"] is None and not t["met"]
+
+
+def test_a_short_export_is_not_complete_and_nothing_is_compared(tmp_path):
+    import gzip
+    import json
+
+    from asg_agent.analysis import loop_study as ls
+
+    (tmp_path / "plan.txt").write_text(
+        "# a plan\n"
+        + "".join(
+            f"loop-{m}-s{s} 4 train method:=td3-per-asp seed:={s} model:={m}\n"
+            for m in ("flawed", "hf", "hr")
+            for s in (1, 2)
+        )
+    )
+    proto = {
+        "seeds": [1, 2],
+        "budget": 4,
+        "arms": {
+            "flawed": {"model": "flawed"},
+            "hardened-findings": {"model": "hf"},
+            "hardened-random": {"model": "hr"},
+        },
+        "target": {"ratio_to_flawed": 0.5},
+    }
+    (tmp_path / "protocol.yaml").write_text(json.dumps(proto))
+
+    def export(name, rows):
+        with gzip.open(tmp_path / f"{name}.jsonl.gz", "wt") as f:
+            f.write(json.dumps({"campaign": name}) + "\n" + "".join(json.dumps(r) + "\n" for r in rows))
+
+    for m, flaws in (("flawed", {0, 1, 2}), ("hf", set()), ("hr", {0, 1})):
+        for s in (1, 2):
+            export(f"loop-{m}-s{s}", _rows(4, flaw=flaws))
+    export("loop-hr-s2", _rows(3, flaw={0}))  # stopped at 3 of 4
+    s = ls.study(str(tmp_path), str(tmp_path / "protocol.yaml"), str(tmp_path))
+    assert list(s["not_complete"]) == ["loop-hr-s2"] and "compare" not in s
+    assert s["campaigns"]["loop-flawed-s1"]["per_1000"] == 750.0
+    assert "1 of 6 campaigns not complete" in ls.markdown(s)
+    export("loop-hr-s2", _rows(4, flaw={0, 1}))
+    s = ls.study(str(tmp_path), str(tmp_path / "protocol.yaml"), str(tmp_path))
+    assert not s["not_complete"] and s["target"]["ratio_met"] and s["target"]["baseline_no_worse"] is None
+    assert "Overall: **missed**" in ls.markdown(s)  # no baselines in that folder
+
+
+def test_every_committed_experiment_and_protocol_file_is_yaml():
+    import glob
+
+    import yaml
+
+    files = sorted(glob.glob(os.path.join(REPO, "experiments", "*.yaml")))
+    assert any(f.endswith("protocol-design-loop.yaml") for f in files)
+    for path in files:
+        with open(path, encoding="utf-8") as f:
+            assert isinstance(yaml.safe_load(f), dict), path

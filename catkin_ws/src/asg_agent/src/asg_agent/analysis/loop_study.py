@@ -1,0 +1,203 @@
+"""The design loop's measurement (issue #40; docs/design-loop.md section 4), as the protocol
+experiments/protocol-design-loop.yaml fixed it before its data. No ROS.
+
+Arms: the default search against `flawed`, the stack hardened on findings and the one hardened on
+random scenes, one campaign a seed (results/hardening/plan.txt names them). Endpoint: flaw + model
+findings (three-stack attribution) per 1,000 of each campaign's first `budget` scenarios. Per seed
+the exact (Clopper-Pearson) 95 % interval; between arms asg_agent.analysis.stats.compare (each arm's
+mean with a bootstrap 95 % interval over seeds, the ratio of the means, Mann-Whitney U of the per-seed
+rates), the hardened-findings arm the default. The target, judged only once every campaign of the
+plan has all its scenarios: hardened-findings <= `ratio_to_flawed` of flawed's mean, its interval
+below hardened-random's, and its random-layout baseline (results/baseline/exp1/MODEL.jsonl) no worse
+than flawed's in collisions and proxy >= 3.
+
+A campaign whose export is missing or short is listed as not complete; nothing is computed from a
+partial export.
+
+    python3 -m asg_agent.analysis.loop_study            # rewrites the block in docs/design-loop.md
+    python3 -m asg_agent.analysis.loop_study --check    # exit 1 when the page's block is stale
+    python3 -m asg_agent.analysis.loop_study --json results/hardening/loop.json
+"""
+
+import argparse
+import json
+import os
+import shlex
+import sys
+from typing import Dict, List, Optional
+
+import yaml
+
+from asg_agent.analysis import stats
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+DOC = os.path.join(REPO, "docs", "design-loop.md")
+PROTOCOL = os.path.join(REPO, "experiments", "protocol-design-loop.yaml")
+FOLDER = os.path.join(REPO, "results", "hardening")
+BASELINES = os.path.join(REPO, "results", "baseline", "exp1")
+DEFAULT = "hardened-findings"
+BEGIN, END = "<!-- loop table -->", "<!-- end loop table -->"
+
+
+def plan_campaigns(plan: str) -> Dict[tuple, str]:
+    """{(model, seed): campaign name} from a plan file (asg_agent.cli.plan's format)."""
+    out = {}
+    with open(plan, encoding="utf-8") as f:
+        for line in f:
+            words = shlex.split(line, comments=True)
+            if not words:
+                continue
+            args = dict(w.split(":=", 1) for w in words[3:] if ":=" in w)
+            out[(args.get("model"), int(args.get("seed", 0)))] = words[0]
+    return out
+
+
+def campaign_figures(rows: List[dict], budget: int) -> Dict:
+    """One campaign's endpoint over its first `budget` scenarios."""
+    from asg_agent.analysis.stack_study import exact_interval
+
+    keep = [r for r in rows if r["job"] < budget]
+    flaw = sum(r.get("attribution") == "flaw" for r in keep)
+    model = sum(r.get("attribution") == "model" for r in keep)
+    lo, hi = exact_interval(flaw + model, len(keep))
+    return {
+        "scenarios": len(keep),
+        "flaw": flaw,
+        "model": model,
+        "per_1000": 1000.0 * (flaw + model) / len(keep),
+        "per_1000_interval": [1000.0 * lo, 1000.0 * hi],
+        "collisions": sum(r["termination"] == "COLLISION" for r in keep),
+    }
+
+
+def baseline_counts(model: str, folder: str = BASELINES) -> Optional[Dict]:
+    path = os.path.join(folder, f"{model}.jsonl")
+    if not os.path.isfile(path):
+        return None
+    with open(path, encoding="utf-8") as f:
+        rows = [json.loads(line) for line in f if line.strip()]
+    return {
+        "layouts": len(rows),
+        "collisions": sum(r["termination"] == "COLLISION" for r in rows),
+        "proxy_ge_3": sum(r["proxy"] is not None and r["proxy"] >= 3 for r in rows),
+    }
+
+
+def judge(per_seed: Dict[str, List[float]], baselines: Dict[str, Optional[Dict]], ratio_to_flawed: float) -> Dict:
+    """The comparison and the target, from complete data: per_seed {arm: [findings per 1,000 a seed]}
+    (arms flawed, hardened-findings, hardened-random), baselines {arm: baseline_counts or None}."""
+    rows = stats.compare(per_seed, DEFAULT)
+    by = {r["arm"]: r for r in rows}
+    hf, fl, hr = by[DEFAULT], by["flawed"], by["hardened-random"]
+    ratio = hf["mean"] / fl["mean"] if fl["mean"] > 0 else float("inf")
+    b_hf, b_fl = baselines.get(DEFAULT), baselines.get("flawed")
+    baseline_ok = (
+        None
+        if b_hf is None or b_fl is None
+        else b_hf["collisions"] <= b_fl["collisions"] and b_hf["proxy_ge_3"] <= b_fl["proxy_ge_3"]
+    )
+    target = {
+        "ratio_to_flawed": ratio,
+        "ratio_met": ratio <= ratio_to_flawed,
+        "below_random": hf["hi"] < hr["lo"],
+        "baseline_no_worse": baseline_ok,
+    }
+    target["met"] = bool(target["ratio_met"] and target["below_random"] and baseline_ok)
+    return {"compare": rows, "target": target}
+
+
+def study(folder: str = FOLDER, protocol: str = PROTOCOL, baselines: str = BASELINES) -> Dict:
+    from asg_agent.analysis.export import read_export
+
+    with open(protocol, encoding="utf-8") as f:
+        proto = yaml.safe_load(f)
+    names = plan_campaigns(os.path.join(folder, "plan.txt"))
+    budget, seeds = int(proto["budget"]), [int(s) for s in proto["seeds"]]
+    arms = {a: v["model"] for a, v in proto["arms"].items() if a != "full"}
+    campaigns, per_seed, missing = {}, {}, {}
+    for arm, model in arms.items():
+        for seed in seeds:
+            name = names.get((model, seed))
+            if name is None:
+                raise ValueError(f"{folder}/plan.txt has no campaign of model {model} seed {seed}")
+            path = os.path.join(folder, f"{name}.jsonl.gz")
+            rows = read_export(path)[1] if os.path.isfile(path) else []
+            if len({r["job"] for r in rows if r["job"] < budget}) < budget:
+                missing[name] = {"arm": arm, "seed": seed}
+                continue
+            campaigns[name] = dict(arm=arm, seed=seed, **campaign_figures(rows, budget))
+            per_seed.setdefault(arm, []).append(campaigns[name]["per_1000"])
+    out = {
+        "protocol": os.path.relpath(protocol, REPO),
+        "budget": budget,
+        "seeds": seeds,
+        "campaigns": campaigns,
+        "not_complete": missing,
+        "baselines": {a: baseline_counts(m, baselines) for a, m in arms.items()},
+    }
+    if not missing:
+        out.update(judge(per_seed, out["baselines"], float(proto["target"]["ratio_to_flawed"])))
+    return out
+
+
+def markdown(s: Dict) -> str:
+    out = [
+        "| campaign | arm | seed | scenarios | flaw | model | flaw + model per 1,000 (95 % exact interval) | collisions |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, c in s["campaigns"].items():
+        lo, hi = c["per_1000_interval"]
+        out.append(
+            f"| {name} | {c['arm']} | {c['seed']} | {c['scenarios']} | {c['flaw']} | {c['model']} | "
+            f"{c['per_1000']:.1f} ({lo:.1f}-{hi:.1f}) | {c['collisions']} |"
+        )
+    for name, c in s["not_complete"].items():
+        out.append(f"| {name} | {c['arm']} | {c['seed']} | not complete | | | | |")
+    out.append("")
+    if "compare" not in s:
+        n = len(s["not_complete"])
+        out.append(
+            f"{n} of {n + len(s['campaigns'])} campaigns not complete: the comparison between arms and the "
+            "target are computed when every campaign of the plan has all its scenarios."
+        )
+        return "\n".join(out)
+    out.append(stats.markdown(s["compare"], stats.SCORES["findings"][0]))
+    t = s["target"]
+    out += [
+        "",
+        f"Target: hardened-findings / flawed = {t['ratio_to_flawed']:.2f} "
+        f"({'met' if t['ratio_met'] else 'missed'}, <= 0.5); its interval "
+        f"{'below' if t['below_random'] else 'not below'} hardened-random's; its baseline "
+        + {True: "no worse than", False: "worse than", None: "not measured against"}[t["baseline_no_worse"]]
+        + f" flawed's. Overall: **{'met' if t['met'] else 'missed'}**.",
+    ]
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="loop_study", description=__doc__.split("\n\n")[0])
+    p.add_argument("--check", action="store_true", help="exit 1 when docs/design-loop.md's block is stale")
+    p.add_argument("--json", default="", help="also write the figures here")
+    a = p.parse_args(argv)
+    try:
+        s = study()
+    except (OSError, ValueError, KeyError) as e:
+        print(f"loop_study: {e}", file=sys.stderr)
+        return 2
+    if a.json:
+        with open(a.json, "w", encoding="utf-8") as f:
+            json.dump(s, f, indent=1, sort_keys=True)
+    text = open(DOC, encoding="utf-8").read()
+    if BEGIN not in text or END not in text:
+        print(f"loop_study: {DOC} has no {BEGIN} ... {END} block", file=sys.stderr)
+        return 2
+    new = text[: text.index(BEGIN) + len(BEGIN)] + "\n" + markdown(s) + "\n" + text[text.index(END) :]
+    if a.check:
+        return 0 if new == text else 1
+    with open(DOC, "w", encoding="utf-8") as f:
+        f.write(new)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
