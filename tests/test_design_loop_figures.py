@@ -156,3 +156,19 @@ def test_every_committed_experiment_and_protocol_file_is_yaml():
     for path in files:
         with open(path, encoding="utf-8") as f:
             assert isinstance(yaml.safe_load(f), dict), path
+
+
+def test_the_loop_figure_draws_complete_campaigns_and_the_arms_means(tmp_path):
+    from asg_agent.analysis import loop_study as ls
+
+    camp = {
+        f"loop-{a}-s{s}": dict(arm=a, seed=s, **ls.campaign_figures(_rows(40, flaw=set(range(k + s))), 40))
+        for a, k in (("flawed", 8), ("hardened-findings", 2), ("hardened-random", 5))
+        for s in (0, 1, 2)
+    }
+    s = {"budget": 40, "campaigns": camp, "not_complete": {}}
+    s.update(ls.judge({a: [c["per_1000"] for c in camp.values() if c["arm"] == a] for a in ls.ARM_COLOURS}, {}, 0.5))
+    ls.figure(s, str(tmp_path / "loop.png"))
+    from PIL import Image
+
+    assert Image.open(tmp_path / "loop.png").size == (768, 432)

@@ -16,7 +16,7 @@ partial export.
 
     python3 -m asg_agent.analysis.loop_study            # rewrites the block in docs/design-loop.md
     python3 -m asg_agent.analysis.loop_study --check    # exit 1 when the page's block is stale
-    python3 -m asg_agent.analysis.loop_study --json results/hardening/loop.json
+    python3 -m asg_agent.analysis.loop_study --json results/hardening/loop.json --figure docs/images/design_loop.png
 """
 
 import argparse
@@ -174,10 +174,52 @@ def markdown(s: Dict) -> str:
     return "\n".join(out)
 
 
+ARM_COLOURS = {"flawed": "tab:red", "hardened-findings": "tab:blue", "hardened-random": "tab:green"}
+
+
+def figure(s: Dict, out: str) -> None:
+    """Each complete campaign's flaw + model findings per 1,000 with its exact interval, grouped by
+    arm; where every campaign is complete, each arm's mean with its bootstrap interval beside."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    arms = [a for a in ARM_COLOURS if any(c["arm"] == a for c in s["campaigns"].values())]
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    for i, arm in enumerate(arms):
+        cs = sorted((c for c in s["campaigns"].values() if c["arm"] == arm), key=lambda c: c["seed"])
+        for j, c in enumerate(cs):
+            x = i + (j - (len(cs) - 1) / 2) * 0.15
+            lo, hi = c["per_1000_interval"]
+            ax.errorbar(
+                x,
+                c["per_1000"],
+                yerr=[[c["per_1000"] - lo], [hi - c["per_1000"]]],
+                fmt="o",
+                capsize=3,
+                color=ARM_COLOURS[arm],
+            )
+            ax.annotate(f"s{c['seed']}", (x, hi), ha="center", va="bottom", fontsize=7)
+        row = next((r for r in s.get("compare", []) if r["arm"] == arm), None)
+        if row:
+            ax.hlines(row["mean"], i - 0.35, i + 0.35, color=ARM_COLOURS[arm])
+            ax.fill_between([i - 0.35, i + 0.35], row["lo"], row["hi"], color=ARM_COLOURS[arm], alpha=0.15, lw=0)
+    ax.set_xticks(range(len(arms)), arms)
+    ax.set_xlim(-0.6, len(arms) - 0.4)
+    ax.set_ylim(bottom=0)
+    ax.set_ylabel("flaw + model findings per 1,000")
+    ax.set_title(f"Default search, {s['budget']} scenarios a seed (dots: seeds, exact 95 % intervals)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="loop_study", description=__doc__.split("\n\n")[0])
     p.add_argument("--check", action="store_true", help="exit 1 when docs/design-loop.md's block is stale")
     p.add_argument("--json", default="", help="also write the figures here")
+    p.add_argument("--figure", default="", help="also draw the per-seed rates here (PNG)")
     a = p.parse_args(argv)
     try:
         s = study()
@@ -187,6 +229,8 @@ def main(argv=None) -> int:
     if a.json:
         with open(a.json, "w", encoding="utf-8") as f:
             json.dump(s, f, indent=1, sort_keys=True)
+    if a.figure:
+        figure(s, a.figure)
     text = open(DOC, encoding="utf-8").read()
     if BEGIN not in text or END not in text:
         print(f"loop_study: {DOC} has no {BEGIN} ... {END} block", file=sys.stderr)
