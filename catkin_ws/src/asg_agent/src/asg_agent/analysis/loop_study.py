@@ -29,6 +29,7 @@ from typing import Dict, List, Optional
 import yaml
 
 from asg_agent.analysis import stats
+from asg_agent.scoring.attribution import FINDING
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
 DOC = os.path.join(REPO, "docs", "design-loop.md")
@@ -79,7 +80,7 @@ def baseline_counts(model: str, folder: str = BASELINES) -> Optional[Dict]:
     return {
         "layouts": len(rows),
         "collisions": sum(r["termination"] == "COLLISION" for r in rows),
-        "proxy_ge_3": sum(r["proxy"] is not None and r["proxy"] >= 3 for r in rows),
+        "proxy_ge_3": sum(r["proxy"] is not None and r["proxy"] >= FINDING for r in rows),
     }
 
 
