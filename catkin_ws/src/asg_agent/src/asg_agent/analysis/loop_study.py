@@ -232,16 +232,9 @@ def main(argv=None) -> int:
             json.dump(s, f, indent=1, sort_keys=True)
     if a.figure:
         figure(s, a.figure)
-    text = open(DOC, encoding="utf-8").read()
-    if BEGIN not in text or END not in text:
-        print(f"loop_study: {DOC} has no {BEGIN} ... {END} block", file=sys.stderr)
-        return 2
-    new = text[: text.index(BEGIN) + len(BEGIN)] + "\n" + markdown(s) + "\n" + text[text.index(END) :]
-    if a.check:
-        return 0 if new == text else 1
-    with open(DOC, "w", encoding="utf-8") as f:
-        f.write(new)
-    return 0
+    from asg_agent.analysis.seed_tables import rewrite_block
+
+    return rewrite_block(DOC, BEGIN, END, f"{BEGIN}\n{markdown(s)}\n{END}", a.check, "loop_study")
 
 
 if __name__ == "__main__":
