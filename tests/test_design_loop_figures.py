@@ -58,6 +58,11 @@ def test_the_loop_table_is_what_the_exports_say():
     assert len(s["campaigns"]) + len(s["not_complete"]) == 9
     assert all(c["scenarios"] == 500 for c in s["campaigns"].values())
     assert ("compare" in s) == (not s["not_complete"])
+    # round 2: its three campaigns, compared only when both rounds are complete
+    r2 = s["round2"]
+    assert doc_table("round2") == ls.markdown_round2(s)
+    assert len(r2["campaigns"]) + len(r2["not_complete"]) == 3
+    assert ("compare" in r2) == (not r2["not_complete"] and not s["not_complete"])
 
 
 def _rows(n, flaw=(), model=(), collide=()):
@@ -144,6 +149,38 @@ def test_a_short_export_is_not_complete_and_nothing_is_compared(tmp_path):
     s = ls.study(str(tmp_path), str(tmp_path / "protocol.yaml"), str(tmp_path))
     assert not s["not_complete"] and s["target"]["ratio_met"] and s["target"]["baseline_no_worse"] is None
     assert "Overall: **missed**" in ls.markdown(s)  # no baselines in that folder
+    assert "round2" not in s  # no round 2 in that protocol
+    # round 2: a plan of two campaigns, one complete, then both
+    proto["round2"] = {"models": {"findings": "hf2"}, "campaigns": {"seeds": [3, 4], "budget": 4}}
+    (tmp_path / "protocol.yaml").write_text(json.dumps(proto))
+    (tmp_path / "plan-round2.txt").write_text(
+        "".join(f"loop2-hf2-s{s} 4 train method:=td3-per-asp seed:={s} model:=hf2\n" for s in (3, 4))
+    )
+    export("loop2-hf2-s3", _rows(4))
+    s = ls.study(str(tmp_path), str(tmp_path / "protocol.yaml"), str(tmp_path))
+    assert list(s["round2"]["not_complete"]) == ["loop2-hf2-s4"] and "compare" not in s["round2"]
+    assert "1 of 2 round-2 campaigns not complete" in ls.markdown_round2(s)
+    export("loop2-hf2-s4", _rows(4))
+    s = ls.study(str(tmp_path), str(tmp_path / "protocol.yaml"), str(tmp_path))
+    assert s["round2"]["reading"] == "saturate"  # 0 against round 1's 0: not below
+    assert "Reading (fixed before the data): **saturate**" in ls.markdown_round2(s)
+
+
+def test_round_two_reads_compound_only_with_its_interval_below_round_one():
+    from asg_agent.analysis import loop_study as ls
+
+    r1 = {"flawed": [150.0, 110.0, 130.0], "hardened-findings": [26.0, 30.0, 22.0]}
+    got = ls.read_round2(r1, {}, {ls.ROUND2: [8.0, 10.0, 6.0]}, {})
+    assert got["reading"] == "compound"
+    by = {r["arm"]: r for r in got["compare"]}
+    assert got["compare"][0]["arm"] == ls.ROUND2 and by["hardened-findings"]["ratio"] == 8.0 / 26.0
+    # lower mean, intervals overlapping: saturate
+    assert ls.read_round2(r1, {}, {ls.ROUND2: [20.0, 28.0, 14.0]}, {})["reading"] == "saturate"
+    # higher: saturate
+    assert ls.read_round2(r1, {}, {ls.ROUND2: [40.0, 44.0, 36.0]}, {})["reading"] == "saturate"
+    # anything missing in either round: nothing read
+    assert ls.read_round2(r1, {"loop-hr1-s22": {}}, {ls.ROUND2: [8.0, 10.0, 6.0]}, {}) is None
+    assert ls.read_round2(r1, {}, {ls.ROUND2: [8.0, 10.0]}, {"loop2-hf2-s25": {}}) is None
 
 
 def test_every_committed_experiment_and_protocol_file_is_yaml():
@@ -167,7 +204,20 @@ def test_the_loop_figure_draws_complete_campaigns_and_the_arms_means(tmp_path):
         for s in (0, 1, 2)
     }
     s = {"budget": 40, "campaigns": camp, "not_complete": {}}
-    s.update(ls.judge({a: [c["per_1000"] for c in camp.values() if c["arm"] == a] for a in ls.ARM_COLOURS}, {}, 0.5))
+    per_seed = {
+        a: [c["per_1000"] for c in camp.values() if c["arm"] == a]
+        for a in ("flawed", "hardened-findings", "hardened-random")
+    }
+    s.update(ls.judge(per_seed, {}, 0.5))
+    # round 2's campaigns and mean drawn beside round 1's
+    camp2 = {
+        f"loop2-hf2-s{s}": dict(arm=ls.ROUND2, seed=s, **ls.campaign_figures(_rows(40, flaw={s}), 40))
+        for s in (3, 4, 5)
+    }
+    s["round2"] = {
+        "campaigns": camp2,
+        **ls.read_round2(per_seed, {}, {ls.ROUND2: [c["per_1000"] for c in camp2.values()]}, {}),
+    }
     ls.figure(s, str(tmp_path / "loop.png"))
     from PIL import Image
 

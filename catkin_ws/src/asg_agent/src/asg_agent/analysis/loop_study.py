@@ -11,11 +11,16 @@ plan has all its scenarios: hardened-findings <= `ratio_to_flawed` of flawed's m
 below hardened-random's, and its random-layout baseline (results/baseline/exp1/MODEL.jsonl) no worse
 than flawed's in collisions and proxy >= 3.
 
+Round 2 (protocol `round2`, results/hardening/plan-round2.txt): the findings arm hardened again,
+searched on its own seeds, compared with round 1's findings arm and with flawed once both rounds are
+complete; the reading fixed before the data: "compound" where round 2's mean is below round 1's with
+bootstrap intervals apart, "saturate" otherwise.
+
 A campaign whose export is missing or short is listed as not complete; nothing is computed from a
 partial export.
 
-    python3 -m asg_agent.analysis.loop_study            # rewrites the block in docs/design-loop.md
-    python3 -m asg_agent.analysis.loop_study --check    # exit 1 when the page's block is stale
+    python3 -m asg_agent.analysis.loop_study            # rewrites both blocks in docs/design-loop.md
+    python3 -m asg_agent.analysis.loop_study --check    # exit 1 when a block is stale
     python3 -m asg_agent.analysis.loop_study --json results/hardening/loop.json --figure docs/images/design_loop.png
 """
 
@@ -37,7 +42,9 @@ PROTOCOL = os.path.join(REPO, "experiments", "protocol-design-loop.yaml")
 FOLDER = os.path.join(REPO, "results", "hardening")
 BASELINES = os.path.join(REPO, "results", "baseline", "exp1")
 DEFAULT = "hardened-findings"
+ROUND2 = "hardened-findings-2"  # the findings arm hardened again (protocol `round2`)
 BEGIN, END = "<!-- loop table -->", "<!-- end loop table -->"
+BEGIN2, END2 = "<!-- round2 table -->", "<!-- end round2 table -->"
 
 
 def plan_campaigns(plan: str) -> Dict[tuple, str]:
@@ -107,20 +114,18 @@ def judge(per_seed: Dict[str, List[float]], baselines: Dict[str, Optional[Dict]]
     return {"compare": rows, "target": target}
 
 
-def study(folder: str = FOLDER, protocol: str = PROTOCOL, baselines: str = BASELINES) -> Dict:
+def collect(folder: str, plan: str, arms: Dict[str, str], seeds: List[int], budget: int) -> tuple:
+    """(campaigns, per_seed, not_complete) of the plan's campaigns of `arms` {arm: model} x seeds:
+    a campaign is counted only when its export holds all its first `budget` scenarios."""
     from asg_agent.analysis.export import read_export
 
-    with open(protocol, encoding="utf-8") as f:
-        proto = yaml.safe_load(f)
-    names = plan_campaigns(os.path.join(folder, "plan.txt"))
-    budget, seeds = int(proto["budget"]), [int(s) for s in proto["seeds"]]
-    arms = {a: v["model"] for a, v in proto["arms"].items() if a != "full"}
+    names = plan_campaigns(os.path.join(folder, plan))
     campaigns, per_seed, missing = {}, {}, {}
     for arm, model in arms.items():
         for seed in seeds:
             name = names.get((model, seed))
             if name is None:
-                raise ValueError(f"{folder}/plan.txt has no campaign of model {model} seed {seed}")
+                raise ValueError(f"{folder}/{plan} has no campaign of model {model} seed {seed}")
             path = os.path.join(folder, f"{name}.jsonl.gz")
             rows = read_export(path)[1] if os.path.isfile(path) else []
             if len({r["job"] for r in rows if r["job"] < budget}) < budget:
@@ -128,6 +133,30 @@ def study(folder: str = FOLDER, protocol: str = PROTOCOL, baselines: str = BASEL
                 continue
             campaigns[name] = dict(arm=arm, seed=seed, **campaign_figures(rows, budget))
             per_seed.setdefault(arm, []).append(campaigns[name]["per_1000"])
+    return campaigns, per_seed, missing
+
+
+def read_round2(
+    r1: Dict[str, List[float]], r1_missing: Dict, r2: Dict[str, List[float]], r2_missing: Dict
+) -> Optional[Dict]:
+    """Round 2's comparison and reading (protocol `round2.reading`), from complete data only: the
+    findings arm of round 2 against round 1's and against flawed; "compound" where round 2's mean is
+    below round 1's with bootstrap intervals apart, "saturate" otherwise."""
+    if r1_missing or r2_missing:
+        return None
+    rows = stats.compare({ROUND2: r2[ROUND2], DEFAULT: r1[DEFAULT], "flawed": r1["flawed"]}, ROUND2)
+    by = {r["arm"]: r for r in rows}
+    new, old = by[ROUND2], by[DEFAULT]
+    compound = new["mean"] < old["mean"] and new["hi"] < old["lo"]
+    return {"compare": rows, "reading": "compound" if compound else "saturate"}
+
+
+def study(folder: str = FOLDER, protocol: str = PROTOCOL, baselines: str = BASELINES) -> Dict:
+    with open(protocol, encoding="utf-8") as f:
+        proto = yaml.safe_load(f)
+    budget, seeds = int(proto["budget"]), [int(s) for s in proto["seeds"]]
+    arms = {a: v["model"] for a, v in proto["arms"].items() if a != "full"}
+    campaigns, per_seed, missing = collect(folder, "plan.txt", arms, seeds, budget)
     out = {
         "protocol": os.path.relpath(protocol, REPO),
         "budget": budget,
@@ -138,10 +167,19 @@ def study(folder: str = FOLDER, protocol: str = PROTOCOL, baselines: str = BASEL
     }
     if not missing:
         out.update(judge(per_seed, out["baselines"], float(proto["target"]["ratio_to_flawed"])))
+    r2 = proto.get("round2")
+    if r2 and os.path.isfile(os.path.join(folder, "plan-round2.txt")):
+        c2 = r2["campaigns"]
+        b2, s2 = int(c2["budget"]), [int(s) for s in c2["seeds"]]
+        camp2, per2, miss2 = collect(folder, "plan-round2.txt", {ROUND2: r2["models"]["findings"]}, s2, b2)
+        out["round2"] = {"budget": b2, "seeds": s2, "campaigns": camp2, "not_complete": miss2}
+        got = read_round2(per_seed, missing, per2, miss2)
+        if got:
+            out["round2"].update(got)
     return out
 
 
-def markdown(s: Dict) -> str:
+def campaign_rows(s: Dict) -> List[str]:
     out = [
         "| campaign | arm | seed | scenarios | flaw | model | flaw + model per 1,000 (95 % exact interval) | collisions |",
         "|---|---|---|---|---|---|---|---|",
@@ -154,6 +192,11 @@ def markdown(s: Dict) -> str:
         )
     for name, c in s["not_complete"].items():
         out.append(f"| {name} | {c['arm']} | {c['seed']} | not complete | | | | |")
+    return out
+
+
+def markdown(s: Dict) -> str:
+    out = campaign_rows(s)
     out.append("")
     if "compare" not in s:
         n = len(s["not_complete"])
@@ -175,7 +218,35 @@ def markdown(s: Dict) -> str:
     return "\n".join(out)
 
 
-ARM_COLOURS = {"flawed": "tab:red", "hardened-findings": "tab:blue", "hardened-random": "tab:green"}
+def markdown_round2(s: Dict) -> str:
+    """Round 2's block: its campaigns, then (all of both rounds complete) the comparison and reading."""
+    r2 = s.get("round2")
+    if r2 is None:
+        return "Round 2 is not in the protocol or has no plan."
+    out = campaign_rows(r2) + [""]
+    if "compare" not in r2:
+        n1, n2 = len(s["not_complete"]), len(r2["not_complete"])
+        out.append(
+            f"{n2} of {n2 + len(r2['campaigns'])} round-2 campaigns not complete"
+            + (f" (and {n1} of round 1's)" if n1 else "")
+            + ": round 2 is compared with round 1 when every campaign of both plans has all its scenarios."
+        )
+        return "\n".join(out)
+    out.append(stats.markdown(r2["compare"], stats.SCORES["findings"][0]))
+    out += [
+        "",
+        f"Reading (fixed before the data): **{r2['reading']}** (compound: round 2's mean below round 1's "
+        "with intervals apart; saturate: otherwise).",
+    ]
+    return "\n".join(out)
+
+
+ARM_COLOURS = {
+    "flawed": "tab:red",
+    "hardened-findings": "tab:blue",
+    "hardened-random": "tab:green",
+    ROUND2: "tab:purple",
+}
 
 
 def figure(s: Dict, out: str) -> None:
@@ -186,10 +257,14 @@ def figure(s: Dict, out: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    arms = [a for a in ARM_COLOURS if any(c["arm"] == a for c in s["campaigns"].values())]
+    r2 = s.get("round2", {})
+    campaigns = {**s["campaigns"], **r2.get("campaigns", {})}
+    means = {r["arm"]: r for r in s.get("compare", [])}
+    means.update({r["arm"]: r for r in r2.get("compare", []) if r["arm"] == ROUND2})
+    arms = [a for a in ARM_COLOURS if any(c["arm"] == a for c in campaigns.values())]
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     for i, arm in enumerate(arms):
-        cs = sorted((c for c in s["campaigns"].values() if c["arm"] == arm), key=lambda c: c["seed"])
+        cs = sorted((c for c in campaigns.values() if c["arm"] == arm), key=lambda c: c["seed"])
         for j, c in enumerate(cs):
             x = i + (j - (len(cs) - 1) / 2) * 0.15
             lo, hi = c["per_1000_interval"]
@@ -202,7 +277,7 @@ def figure(s: Dict, out: str) -> None:
                 color=ARM_COLOURS[arm],
             )
             ax.annotate(f"s{c['seed']}", (x, hi), ha="center", va="bottom", fontsize=7)
-        row = next((r for r in s.get("compare", []) if r["arm"] == arm), None)
+        row = means.get(arm)
         if row:
             ax.hlines(row["mean"], i - 0.35, i + 0.35, color=ARM_COLOURS[arm])
             ax.fill_between([i - 0.35, i + 0.35], row["lo"], row["hi"], color=ARM_COLOURS[arm], alpha=0.15, lw=0)
@@ -218,7 +293,7 @@ def figure(s: Dict, out: str) -> None:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="loop_study", description=__doc__.split("\n\n")[0])
-    p.add_argument("--check", action="store_true", help="exit 1 when docs/design-loop.md's block is stale")
+    p.add_argument("--check", action="store_true", help="exit 1 when a block of docs/design-loop.md is stale")
     p.add_argument("--json", default="", help="also write the figures here")
     p.add_argument("--figure", default="", help="also draw the per-seed rates here (PNG)")
     a = p.parse_args(argv)
@@ -234,7 +309,8 @@ def main(argv=None) -> int:
         figure(s, a.figure)
     from asg_agent.analysis.seed_tables import rewrite_block
 
-    return rewrite_block(DOC, BEGIN, END, f"{BEGIN}\n{markdown(s)}\n{END}", a.check, "loop_study")
+    rc = rewrite_block(DOC, BEGIN, END, f"{BEGIN}\n{markdown(s)}\n{END}", a.check, "loop_study")
+    return max(rc, rewrite_block(DOC, BEGIN2, END2, f"{BEGIN2}\n{markdown_round2(s)}\n{END2}", a.check, "loop_study"))
 
 
 if __name__ == "__main__":
