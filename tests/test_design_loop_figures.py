@@ -63,6 +63,11 @@ def test_the_loop_table_is_what_the_exports_say():
     assert doc_table("round2") == ls.markdown_round2(s)
     assert len(r2["campaigns"]) + len(r2["not_complete"]) == 3
     assert ("compare" in r2) == (not r2["not_complete"] and not s["not_complete"])
+    # the committed figures (results/hardening/loop.json, drawn as docs/images/design_loop.png) are these
+    import json
+
+    with open(os.path.join(REPO, "results", "hardening", "loop.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(s))
 
 
 def _rows(n, flaw=(), model=(), collide=()):

@@ -285,7 +285,12 @@ def figure(s: Dict, out: str) -> None:
     ax.set_xlim(-0.6, len(arms) - 0.4)
     ax.set_ylim(bottom=0)
     ax.set_ylabel("flaw + model findings per 1,000")
-    ax.set_title(f"Default search, {s['budget']} scenarios a seed (dots: seeds, exact 95 % intervals)", fontsize=9)
+    left = len(s["not_complete"]) + len(r2.get("not_complete", {}))
+    ax.set_title(
+        f"Default search, {s['budget']} scenarios a seed (dots: seeds, exact 95 % intervals)"
+        + (f"\n{left} campaign(s) of the plans not complete, not drawn" if left else ""),
+        fontsize=9,
+    )
     fig.tight_layout()
     fig.savefig(out, dpi=120)
     plt.close(fig)
