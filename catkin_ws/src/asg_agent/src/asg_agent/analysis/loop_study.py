@@ -146,8 +146,8 @@ def read_round2(
         return None
     rows = stats.compare({ROUND2: r2[ROUND2], DEFAULT: r1[DEFAULT], "flawed": r1["flawed"]}, ROUND2)
     by = {r["arm"]: r for r in rows}
-    new, old = by[ROUND2], by[DEFAULT]
-    compound = new["mean"] < old["mean"] and new["hi"] < old["lo"]
+    # an interval entirely below round 1's puts the mean below it too
+    compound = by[ROUND2]["hi"] < by[DEFAULT]["lo"]
     return {"compare": rows, "reading": "compound" if compound else "saturate"}
 
 
