@@ -227,3 +227,30 @@ def test_the_loop_figure_draws_complete_campaigns_and_the_arms_means(tmp_path):
     from PIL import Image
 
     assert Image.open(tmp_path / "loop.png").size == (768, 432)
+
+
+def test_the_prose_of_round_one_is_what_its_figures_say():
+    """docs/design-loop.md section 4's reading of round 1, checked against the committed figures."""
+    import json
+
+    from scipy.stats import mannwhitneyu
+
+    with open(os.path.join(REPO, "results", "hardening", "loop.json")) as f:
+        s = json.load(f)
+    assert not s["not_complete"]  # the reading is of the complete round
+    arms = {r["arm"]: r for r in s["compare"]}
+    hf, hr, fl = arms["hardened-findings"], arms["hardened-random"], arms["flawed"]
+    t = s["target"]
+    # missed on one part of three: the ratio and the baseline met, the intervals not apart
+    assert t["ratio_met"] and t["baseline_no_worse"] and not t["below_random"] and not t["met"]
+    assert hf["hi"] >= hr["lo"]  # the bootstrap intervals overlap
+    # lower on every seed (the same search seed against each stack) ...
+    assert all(a < b for a, b in zip(hf["counts"], hr["counts"]))
+    # ... by less than either arm's spread over its seeds
+    gap = hr["mean"] - hf["mean"]
+    assert gap < max(hf["counts"]) - min(hf["counts"]) and gap < max(hr["counts"]) - min(hr["counts"])
+    # three seeds an arm: even complete separation gives a two-sided Mann-Whitney p of 0.1
+    assert mannwhitneyu([1, 2, 3], [4, 5, 6], alternative="two-sided", method="exact").pvalue == 0.1
+    assert len(hf["counts"]) == len(hr["counts"]) == 3
+    # the random arm, too, has at most half of flawed's findings
+    assert hr["mean"] <= 0.5 * fl["mean"]
