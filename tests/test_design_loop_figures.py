@@ -20,7 +20,7 @@ def test_the_hardening_table_is_what_the_results_say():
     t = ah.table(os.path.join(REPO, "results", "hardening"))
     assert doc_table("hardening") == ah.markdown(t)
     # every arm on both suites, each suite's scenarios counted once per arm
-    for arm in ("flawed", "hardened-findings-1", "hardened-random-1", "full"):
+    for arm in ("flawed", "full") + tuple(f"hardened-{a}-{r}" for a in ("findings", "random") for r in (1, 2)):
         assert t["arms"][arm]["suite-exp1c"]["n"] == 12 and t["arms"][arm]["suite-r4pilot"]["n"] == 14
 
 
@@ -254,3 +254,43 @@ def test_the_prose_of_round_one_is_what_its_figures_say():
     assert len(hf["counts"]) == len(hr["counts"]) == 3
     # the random arm, too, has at most half of flawed's findings
     assert hr["mean"] <= 0.5 * fl["mean"]
+
+
+def test_the_prose_of_round_two_hardening_is_what_its_figures_say():
+    """docs/design-loop.md's reading of round 2's per-pixel and suite figures."""
+    import json
+
+    t = ah.table(os.path.join(REPO, "results", "hardening"))["arms"]
+
+    def px(arm, s, k):
+        return t[arm][s]["iou_non_traversable" if k == "iou" else "shadow_false_obstacle_rate"]
+
+    for s in ("test", "heldout-findings"):
+        # obstacles: the findings arm better again, the random arm less so and below it
+        assert px("hardened-findings-2", s, "iou") > px("hardened-findings-1", s, "iou")
+        assert (
+            px("hardened-random-1", s, "iou") < px("hardened-random-2", s, "iou") < px("hardened-findings-2", s, "iou")
+        )
+        # shadows: the findings arm's rate falls, still above flawed's; the random arm's rises
+        assert (
+            px("flawed", s, "shadow") < px("hardened-findings-2", s, "shadow") < px("hardened-findings-1", s, "shadow")
+        )
+        assert px("hardened-random-2", s, "shadow") > px("hardened-random-1", s, "shadow")
+    assert abs(px("hardened-findings-2", "test", "iou") - px("full", "test", "iou")) < 0.02
+    assert px("hardened-findings-2", "heldout-findings", "iou") > px("full", "heldout-findings", "iou")
+    # suites: 10 of 12 for every hardened model; on the unseen 14, round 2 passes 1-2 more, random one more
+    passed = {a: (t[a]["suite-exp1c"]["passed"], t[a]["suite-r4pilot"]["passed"]) for a in t}
+    for a in ("hardened-findings-1", "hardened-random-1", "hardened-findings-2", "hardened-random-2"):
+        assert passed[a][0] == 10 and t[a]["suite-exp1c"]["n"] == 12 and t[a]["suite-r4pilot"]["n"] == 14
+    for arm in ("findings", "random"):
+        assert passed[f"hardened-{arm}-2"][1] - passed[f"hardened-{arm}-1"][1] in (1, 2)
+    assert passed["hardened-random-2"][1] == passed["hardened-findings-2"][1] + 1
+    # round 1's arms, re-evaluated in round 2 on re-made frame sets, agree with their first figures
+    for s in ("test", "heldout-findings"):
+        with open(os.path.join(REPO, "results", "hardening", f"evaluation-{s}-1.json")) as f:
+            first = json.load(f)["results"]
+        with open(os.path.join(REPO, "results", "hardening", f"evaluation-{s}-2.json")) as f:
+            again = json.load(f)["results"]
+        for arm, r in first.items():
+            assert abs(r["iou"]["non_traversable"] - again[arm]["iou"]["non_traversable"]) < 1e-5
+            assert abs(r["shadow_false_obstacle_rate"] - again[arm]["shadow_false_obstacle_rate"]) < 1e-5
