@@ -294,3 +294,24 @@ def test_the_prose_of_round_two_hardening_is_what_its_figures_say():
         for arm, r in first.items():
             assert abs(r["iou"]["non_traversable"] - again[arm]["iou"]["non_traversable"]) < 1e-5
             assert abs(r["shadow_false_obstacle_rate"] - again[arm]["shadow_false_obstacle_rate"]) < 1e-5
+
+
+def test_the_prose_of_round_two_campaigns_is_what_its_figures_say():
+    """docs/design-loop.md's reading of round 2's campaigns, checked against the committed figures."""
+    import json
+
+    with open(os.path.join(REPO, "results", "hardening", "loop.json")) as f:
+        s = json.load(f)
+    r2 = s["round2"]
+    assert not r2["not_complete"] and r2["reading"] == "saturate"
+    arms = {r["arm"]: r for r in r2["compare"]}
+    two, one, fl = arms["hardened-findings-2"], arms["hardened-findings"], arms["flawed"]
+    assert two["lo"] <= one["hi"] and one["lo"] <= two["hi"]  # the intervals overlap
+    assert two["mean"] <= 0.5 * fl["mean"] and one["mean"] <= 0.5 * fl["mean"]
+    # `model` findings are most of what remains in both rounds
+    model = sum(c["model"] for c in r2["campaigns"].values())
+    flaw = sum(c["flaw"] for c in r2["campaigns"].values())
+    assert model > flaw
+    model1 = sum(c["model"] for k, c in s["campaigns"].items() if "hf1" in k)
+    flaw1 = sum(c["flaw"] for k, c in s["campaigns"].items() if "hf1" in k)
+    assert model1 > flaw1
