@@ -281,7 +281,7 @@ def figure(s: Dict, out: str) -> None:
         if row:
             ax.hlines(row["mean"], i - 0.35, i + 0.35, color=ARM_COLOURS[arm])
             ax.fill_between([i - 0.35, i + 0.35], row["lo"], row["hi"], color=ARM_COLOURS[arm], alpha=0.15, lw=0)
-    ax.set_xticks(range(len(arms)), arms)
+    ax.set_xticks(range(len(arms)), [a.replace("-", "\n", 1) for a in arms])  # two lines: four arms fit
     ax.set_xlim(-0.6, len(arms) - 0.4)
     ax.set_ylim(bottom=0)
     ax.set_ylabel("flaw + model findings per 1,000")
