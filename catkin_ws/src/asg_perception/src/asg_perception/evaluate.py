@@ -132,7 +132,11 @@ def main(argv=None):
                 print(f"  {c}: {ratio(lambda r: r['by_condition'][c]['shadow_false_obstacle_rate']):.1f}x")
     if a.json:
         with open(a.json, "w") as f:
-            json.dump({"data": a.data, "frames": len(frames), "results": results}, f, indent=1)
+            # the data folder as given, or relative to the working directory when inside it, so a
+            # committed result names no machine's path
+            rel = os.path.relpath(a.data)
+            data = rel if os.path.isabs(a.data) and not rel.startswith("..") else a.data
+            json.dump({"data": data, "frames": len(frames), "results": results}, f, indent=1)
     if a.panels:
         # Frames with the most shadowed ground, where the flaw shows.
         shadow = ((frames.labels == 0) & (frames.lit < 128)).reshape(len(frames), -1).sum(1)
