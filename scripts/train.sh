@@ -22,6 +22,12 @@ STORE="${ASG_STORE:-$REPO/results/train.sqlite}"
 mkdir -p "$(dirname "$STORE")"
 LAUNCH="$REPO/launch/${ASG_LAUNCH:-train}.launch"
 ARGS=(scenarios:="$SCENARIOS" store:="$STORE" "$@")
+if [ "${ASG_LAUNCH:-train}" = train ]; then
+  # The experiment file decides the workers' stack (model, U-Net numerics, planner): the arguments
+  # it implies that the command line leaves out; a contradiction is refused here (issue #53).
+  IMPLIED="$(/usr/bin/python3 -m asg_agent.cli.launch_args "$@")" || exit 2
+  [ -z "$IMPLIED" ] || { mapfile -t MORE <<< "$IMPLIED"; ARGS+=("${MORE[@]}"); }
+fi
 read -ra CAMPAIGN < <(roslaunch --args /campaign "$LAUNCH" "${ARGS[@]}")
 [ "${#CAMPAIGN[@]}" -gt 1 ] || { echo "train.sh: $LAUNCH gives no campaign command line" >&2; exit 2; }
 log "campaign: $SCENARIOS scenarios of $(basename "${CAMPAIGN[1]}") (worker logs: $LOG)"

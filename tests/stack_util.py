@@ -95,14 +95,20 @@ REFERENCE_DIR = os.path.join(os.path.dirname(os.path.realpath(__file__)), "refer
 
 def reference_path(worker_ns, write=False):
     """The stored reference runs for the U-Net backend `worker_ns` runs: tests/reference/
-    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once), or, where the
-    segmenter's kernels here are not the ones that file was recorded with (another CPU: issue #36),
-    exp1_flawed_BACKEND.ISA.json recorded on such a CPU, when there is one (or when writing)."""
+    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once). fp32 backends have
+    that one file on every CPU (issue #53: their runs are bit-identical across the CPU classes of
+    docs/benchmarks.md); for bf16, where the segmenter's kernels here are not the ones that file was
+    recorded with (another CPU: issue #36), exp1_flawed_BACKEND.ISA.json recorded on such a CPU,
+    when there is one (or when writing)."""
     import json
+
+    from asg_perception.numerics import BF16_BACKENDS
 
     backend = rospy.get_param(f"/{worker_ns}/segmenter/backend")
     base = os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.json")
     here = wait_for_numerics(f"/{worker_ns}")
+    if backend not in BF16_BACKENDS:
+        return base
     isa = dict(kv.split("=", 1) for kv in here.split()[1:] if "=" in kv).get("isa", "unknown")
     if os.path.isfile(base):
         with open(base) as f:
@@ -113,15 +119,20 @@ def reference_path(worker_ns, write=False):
     return other if write or os.path.isfile(other) else base
 
 
-def wait_for_numerics(worker, timeout=120.0):
-    """The segmenter's numerics identity (asg_perception.numerics), set once its model is loaded."""
+def wait_for_param(name, timeout=120.0):
+    """The value of parameter `name` once it is set and not empty."""
     deadline = time.time() + timeout
     while time.time() < deadline:
-        got = rospy.get_param(f"{worker}/segmenter/numerics", "")
+        got = rospy.get_param(name, "")
         if got:
             return got
         time.sleep(0.2)
-    raise AssertionError(f"{worker}'s segmenter set no ~numerics within {timeout:.0f} s")
+    raise AssertionError(f"{name} was not set within {timeout:.0f} s")
+
+
+def wait_for_numerics(worker, timeout=120.0):
+    """The segmenter's numerics identity (asg_perception.numerics), set once its model is loaded."""
+    return wait_for_param(f"{worker}/segmenter/numerics", timeout)
 
 
 def check_reference(test, c, path, write=False, worker="/worker_0"):
@@ -175,6 +186,54 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
         with open(path, "w") as f:
             json.dump(ref, f, indent=1)
             f.write("\n")
+    return here
+
+
+CPU_CLASSES = os.path.join(REPO, "results", "numerics", "cpu_classes.json")
+
+
+def record_cpu_class(path, here, note=""):
+    """Adds (or renews) this CPU's line in results/numerics/cpu_classes.json (issue #53): the
+    CPU's model name, its best ISA, the segmenter's numerics here, and the stored reference's
+    digests that replayed on it (check_reference passed just before)."""
+    import datetime
+    import json
+
+    from asg_perception.numerics import best_isa, cpu_flags
+
+    model = ""
+    with open("/proc/cpuinfo", encoding="utf-8") as f:
+        model = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), "")
+    flags = cpu_flags()
+    with open(path) as f:
+        ref = json.load(f)
+    entry = {
+        "cpu": model,
+        "best_isa": best_isa(flags),
+        "native_bf16": any(fl in flags for fl in ("avx512_bf16", "amx_bf16")),
+        "numerics": here,
+        "reference": os.path.relpath(path, REPO),
+        "digests": [r["digest"] for r in ref["runs"]],
+        "date": datetime.date.today().isoformat(),
+        "note": note,
+    }
+    table = []
+    if os.path.isfile(CPU_CLASSES):
+        with open(CPU_CLASSES) as f:
+            table = json.load(f)["classes"]
+    table = [e for e in table if (e["cpu"], e["best_isa"]) != (entry["cpu"], entry["best_isa"])] + [entry]
+    os.makedirs(os.path.dirname(CPU_CLASSES), exist_ok=True)
+    with open(CPU_CLASSES, "w") as f:
+        json.dump({"about": CPU_CLASSES_ABOUT, "classes": table}, f, indent=1)
+        f.write("\n")
+
+
+CPU_CLASSES_ABOUT = (
+    "CPU classes on which the default numerics' stored reference runs (tests/reference/exp1_flawed_channels_last.json)"
+    " replayed bit for bit (issue #53). Each line is written by `ASG_RECORD_CPU_CLASS=1 rostest asg_tests "
+    "reference_runs.test` after its check passed; tests/test_numerics_classes.py checks every line's digests "
+    "against the stored reference; docs/benchmarks.md lists them."
+)
 
 
 def largest_difference(a, b):

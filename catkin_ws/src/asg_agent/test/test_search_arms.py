@@ -185,3 +185,51 @@ def test_dense_rewards_see_how_close_a_run_came():
     # proxy - full's proxy, plus the clearance lost, at most DENSE_WEIGHT either way
     lost = [r["reward"] - (r["proxy"] - json.loads(r["reference_runs"])["full"]["proxy"]) for r in rows]
     assert all(abs(v) <= rw.DENSE_WEIGHT + 1e-9 for v in lost) and any(abs(v) > 1e-6 for v in lost)
+
+
+def test_the_route_action_space_places_obstacles_along_the_route_and_random_on_it_is_route_random():
+    # issue #54: the search's route-relative action space (experiments/exp1-route.yaml)
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp1-route.yaml"))
+    assert exp.action_space == "route" and exp.route_lateral_m == 10.0
+    op = exp.scenario["operational"]
+    a, b = np.array([op["start_x"], op["start_y"]]), np.array([op["goal_x"], op["goal_y"]])
+    n = exp.position_dim // 2
+    # the corners of the action box: start end and goal end of the band, both sides
+    for u, v in ((-1.0, -1.0), (1.0, 1.0), (0.0, 0.0)):
+        xy = exp.to_positions(np.tile([u, v], n))
+        t = ((xy - a) @ (b - a)) / ((b - a) @ (b - a))
+        d = np.cross(b - a, xy - a) / np.linalg.norm(b - a)  # signed: left of the route > 0
+        assert np.allclose(d, v * 10.0, atol=1e-3)
+        lo = op["safety_radius"] / np.linalg.norm(b - a)
+        assert np.allclose(t, lo + (u + 1) / 2 * (1 - 2 * lo), atol=1e-4)
+    # the request is a valid scene, positions to 1 mm
+    req = exp.request(np.full(exp.action_dim, 0.3), 7)
+    assert req["name"] == "exp1-route-7"
+    # uniform random actions in this space are route-random's band-10 layouts, in distribution
+    rnd = make_method("random", exp, 3)
+    rr = make_method("route-random", load_experiment(EXP), 3, options={"band": 10.0})
+    xa = np.concatenate([exp.to_positions(rnd.propose(j, 0, 0, None)) for j in range(400)])
+    xb = np.concatenate([_xy(exp, rr.propose(j, 0, 0, None)) for j in range(400)])
+    for xy in (xa, xb):
+        d = np.abs(np.cross(b - a, xy - a)) / np.linalg.norm(b - a)
+        assert d.max() <= 10.0 + 1e-3 and 4.0 < d.mean() < 6.0
+    # route-random places obstacles itself: it refuses an experiment of another action space
+    with pytest.raises(ValueError, match="action_space must be absolute"):
+        make_method("route-random", exp, 0)
+    with pytest.raises(ValueError, match="absolute action space"):
+        exp.to_action(xa[:n])
+
+
+def test_experiment_action_space_keys_are_checked(tmp_path):
+    from asg_agent.campaign.experiment import ExperimentError
+
+    scen = os.path.join(REPO, "scenarios", "exp1.yaml")
+    for body, msg in (
+        ("action_space: polar\n", "action_space: 'polar', must be one of absolute, route"),
+        ("action_space: route\nroute_lateral_m: -2\n", "route_lateral_m: -2, must be a number in (0, 1000] m"),
+        ("route_lateral_m: 5\n", "route_lateral_m: only with action_space: route"),
+    ):
+        f = tmp_path / "e.yaml"
+        f.write_text(f"name: e\nscenario: {scen}\n" + body)
+        with pytest.raises(ExperimentError, match=msg.replace("(", r"\(").replace(")", r"\)").replace("]", r"\]")):
+            load_experiment(str(f))

@@ -35,8 +35,11 @@ ENV = ("ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA")
 #: one home of the default, read by the segmenter node (an empty ~backend), the launch files (an
 #: empty unet_backend), asg_agent's experiments (a file without unet_backend) and the tests. Here,
 #: in a module without torch, so that asg_agent reads it without loading the U-Net's code.
+#: Since issue #53 the default is fp32 channels_last: its closed-loop runs are bit-identical on
+#: every CPU class the project has met (docs/benchmarks.md, "CPU classes"), so one stored reference
+#: set serves them all; bf16 is a fast mode a user asks for, on CPUs that run it natively.
 BACKENDS = ("eager", "channels_last", "frozen", "bf16")
-DEFAULT_BACKEND = "bf16"
+DEFAULT_BACKEND = "channels_last"
 #: backends whose convolutions run in bf16 (the others run fp32, whose kernels VNNI, BF16 and AMX
 #: do not change: their numerics are those of FP32_TOP on any CPU at or above it)
 BF16_BACKENDS = ("bf16",)
@@ -94,6 +97,9 @@ def effective_isa(flags: Iterable[str], cap: Optional[str] = None) -> str:
 #: [-] a CPU without native bf16 (AVX512-BF16 or AMX) runs the bf16 backend in oneDNN's reference
 #: code, measured 1.54 s a frame on an AVX2-only EPYC against 0.062 s for channels_last (2026-11-25)
 NATIVE_BF16 = ("avx512_bf16", "amx_bf16")
+#: [s] one U-Net frame, AVX2-only EPYC, one thread (docs/benchmarks.md, 2026-11-25): what asking
+#: for bf16 there would cost, quoted when it is refused
+EMULATED_BF16_FRAME_S, FP32_FRAME_S = 1.541, 0.062
 
 
 def resolve_backend(name: Optional[str]) -> str:
@@ -111,10 +117,23 @@ def native_bf16(flags: Optional[Iterable[str]] = None) -> bool:
     return any(f in flags for f in NATIVE_BF16)
 
 
+def refuse_emulated(backend: str, flags: Optional[Iterable[str]] = None) -> Optional[str]:
+    """Why `backend` may not run on this CPU, or None: a bf16 backend needs native bf16 (the
+    fast mode of issue #53); oneDNN would otherwise emulate it 25x slower than the default."""
+    if backend not in BF16_BACKENDS or native_bf16(flags):
+        return None
+    return (
+        f"U-Net backend {backend}: this CPU has no native bf16 (none of the flags {', '.join(NATIVE_BF16)}), so "
+        f"oneDNN would emulate it: {EMULATED_BF16_FRAME_S:.2f} s a frame against {FP32_FRAME_S:.3f} s for the "
+        f"default {DEFAULT_BACKEND} (measured on an AVX2-only EPYC), about "
+        f"{EMULATED_BF16_FRAME_S / FP32_FRAME_S:.0f}x slower; run the default (leave unet_backend empty)"
+    )
+
+
 def test_backend(flags: Optional[Iterable[str]] = None) -> str:
     """The U-Net backend the end-to-end tests run on this CPU (scripts/test.sh exports it as
     ASG_TEST_UNET_BACKEND): the shipped default, DEFAULT_BACKEND, unless it is a bf16 one and this
-    CPU would emulate it; then channels_last, the fp32 backend every campaign before bf16 ran."""
+    CPU would emulate it; then channels_last, the portable fp32 backend."""
     if DEFAULT_BACKEND not in BF16_BACKENDS or native_bf16(flags):
         return DEFAULT_BACKEND
     return "channels_last"
@@ -140,10 +159,17 @@ def identity(backend: str, threads: int, flags: Optional[Iterable[str]] = None) 
     return f"{backend} isa={isa or 'unknown'} threads={int(threads)} torch={torch.__version__}"
 
 
+#: the effective ISAs on which the fp32 default's closed-loop runs were replayed bit for bit
+#: against the one stored reference set (tests/reference, docs/benchmarks.md "CPU classes"):
+#: between these, an fp32 run replays whatever ISA recorded it
+FP32_PORTABLE_ISAS = ("AVX2", "AVX512_CORE")
+
+
 def can_reproduce(recorded: str, here: str) -> Optional[str]:
     """None when a run whose segmenter numerics were `recorded` replays bit for bit where they are
     `here`; otherwise the reason, in words. An empty `recorded` (runs from before issue #36) is
-    taken as reproducible."""
+    taken as reproducible. fp32 backends ignore the ISA between FP32_PORTABLE_ISAS (measured
+    portable); bf16 ones need the recorded ISA."""
     if not recorded or recorded == here:
         return None
     want = dict(kv.split("=", 1) for kv in recorded.split()[1:] if "=" in kv)
@@ -151,9 +177,18 @@ def can_reproduce(recorded: str, here: str) -> Optional[str]:
     why = []
     if recorded.split()[0] != here.split()[0]:
         why.append(f"backend {recorded.split()[0]} was recorded, this segmenter runs {here.split()[0]}")
-    for key, what in (("isa", "oneDNN kernels"), ("threads", "torch threads"), ("torch", "torch")):
+    keys = (("isa", "oneDNN kernels"), ("threads", "torch threads"), ("torch", "torch"))
+    if (
+        recorded.split()[0] not in BF16_BACKENDS
+        and want.get("isa") in FP32_PORTABLE_ISAS
+        and got.get("isa") in FP32_PORTABLE_ISAS
+    ):
+        keys = keys[1:]
+    for key, what in keys:
         if want.get(key) != got.get(key):
             why.append(f"{what}: recorded {want.get(key)}, here {got.get(key)}")
+    if not why and len(keys) == 2:  # fp32 across portable ISAs, all else equal
+        return None
     return "; ".join(why) or f"recorded {recorded!r}, here {here!r}"
 
 

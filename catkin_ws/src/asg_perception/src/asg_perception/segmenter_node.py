@@ -50,6 +50,10 @@ class SegmenterNode:
         height = int(rospy.get_param("~height", 256))
         self.ack_name = rospy.get_param("~ack_name", "segmenter")
         rospy.set_param("~backend", backend)  # the one it runs, for whoever reads the parameter
+        refused = numerics.refuse_emulated(backend)
+        if refused:  # bf16 is a fast mode for CPUs that run it natively (issue #53)
+            rospy.set_param("~refused", refused)  # for whoever waits for ~numerics
+            raise ValueError(refused)
         if not 1 <= threads <= 64:
             raise ValueError(f"~threads = {threads}: must be 1..64")
         path = resolve_model(model)

@@ -52,3 +52,26 @@ def random_scene(scenario: dict, seed: int, scenario_id: int = None) -> dict:
     if scenario_id is not None:
         s["scenario_id"] = scenario_id
     return s
+
+
+class RouteFrame:
+    """Coordinates along the straight start-goal route of a scenario: `t` [-] the fraction of the
+    way from start to goal, `d` [m] the signed distance to the left of it (looking from start to
+    goal). The usable `t` range `t_range` leaves out the safety radius around start and goal, where
+    the simulator removes obstacles. Used by route-random and the route-relative action space."""
+
+    def __init__(self, scenario: dict):
+        op = scenario["operational"]
+        self.size = float(scenario["structural"]["landscape"]["size"])
+        self.start = np.array([op["start_x"], op["start_y"]], dtype=np.float64)
+        self.along = np.array([op["goal_x"], op["goal_y"]], dtype=np.float64) - self.start
+        self.length = float(np.linalg.norm(self.along))
+        margin = min(0.45, float(op.get("safety_radius", 0.0)) / max(self.length, 1e-9))
+        self.t_range = (margin, 1.0 - margin)
+        self.normal = np.array([-self.along[1], self.along[0]]) / max(self.length, 1e-9)
+
+    def point(self, t, d) -> np.ndarray:
+        """x, y [m] of route coordinates (t [-], d [m]) (arrays broadcast), clipped to the
+        landscape's nominal square."""
+        t, d = np.asarray(t, dtype=np.float64)[..., None], np.asarray(d, dtype=np.float64)[..., None]
+        return np.clip(self.start + t * self.along + d * self.normal, 0.0, self.size)

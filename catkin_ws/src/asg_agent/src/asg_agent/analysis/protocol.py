@@ -55,11 +55,21 @@ def load(path: str) -> dict:
     return p
 
 
-def _campaign(p: dict, name: str, method: str, seed: int, reward: str = "proxy", band: Optional[float] = None):
+def _campaign(
+    p: dict,
+    name: str,
+    method: str,
+    seed: int,
+    reward: str = "proxy",
+    band: Optional[float] = None,
+    experiment: str = "",
+    budget: int = 0,
+):
+    experiment = experiment or p["experiment"]
     args = [
         f"method:={method}",
         f"seed:={seed}",
-        f"experiment:={p['experiment']}",
+        f"experiment:={experiment}",
         f"workers:={p['workers']}",
         f"attribution:={p['attribution']}",
         f"reward:={reward}",
@@ -70,11 +80,12 @@ def _campaign(p: dict, name: str, method: str, seed: int, reward: str = "proxy",
         args.append("candidates:=all")
     return {
         "name": name,
-        "budget": p["budget"],
+        "budget": budget or p["budget"],
         "method": method,
         "seed": seed,
         "reward": reward,
         "band": band,
+        "experiment": experiment,
         "args": args,
     }
 
@@ -83,6 +94,25 @@ def campaigns(p: dict, stage: str, choice: Optional[dict] = None) -> List[dict]:
     """Every campaign of a stage ('pilot' or 'confirmatory'), each with its name and settings."""
     n = p["name"]
     out = []
+    if stage == "pilot" and "search" in p["pilot"]:  # version 2: named search arms
+        budget = p["pilot"].get("budget", p["budget"])
+        for arm, a in p["pilot"]["search"].items():
+            for s in p["pilot"]["seeds"]:
+                c = _campaign(
+                    p,
+                    f"{n}-pilot-{arm}-s{s}",
+                    a["method"],
+                    s,
+                    a.get("reward", "proxy"),
+                    experiment=a.get("experiment", ""),
+                    budget=budget,
+                )
+                out.append(dict(c, arm=arm))
+        for band in p["pilot"]["route_bands_m"]:
+            for s in p["pilot"]["seeds"]:
+                c = _campaign(p, f"{n}-pilot-band-{band:g}-s{s}", "route-random", s, band=float(band), budget=budget)
+                out.append(dict(c, arm=f"band {band:g} m"))
+        return out
     if stage == "pilot":
         for reward in p["pilot"]["rewards"]:
             for s in p["pilot"]["seeds"]:
@@ -106,11 +136,15 @@ def campaigns(p: dict, stage: str, choice: Optional[dict] = None) -> List[dict]:
     if choice is None:
         raise ProtocolError("the confirmatory plan needs the pilot's choice (protocol choose ...)")
     for arm, a in p["arms"].items():
+        # "pilot": what the pilot chose (version 2 also chooses the search's method and experiment)
+        method = choice["method"] if a["method"] == "pilot" else a["method"]
         reward = choice["reward"] if a.get("reward") == "pilot" else a.get("reward", "proxy")
         band = a.get("band_m")
         band = choice["band_m"] if band == "pilot" else band
+        experiment = choice["experiment"] if a.get("experiment") == "pilot" else a.get("experiment", "")
         for s in a["seeds"]:
-            out.append(dict(_campaign(p, f"{n}-{arm}-s{s}", a["method"], s, reward, band), arm=arm))
+            c = _campaign(p, f"{n}-{arm}-s{s}", method, s, reward, band, experiment=experiment)
+            out.append(dict(c, arm=arm))
     return out
 
 
@@ -129,8 +163,15 @@ def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
     out = []
     s = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp.get("settings", {})
     jobs = {r["job"] for r in rows}
-    if len(jobs & set(range(p["budget"]))) < p["budget"]:
-        out.append(f"{c['name']}: {len(jobs & set(range(p['budget'])))} of the {p['budget']} scenarios")
+    budget = c.get("budget", p["budget"])
+    if len(jobs & set(range(budget))) < budget:
+        out.append(f"{c['name']}: {len(jobs & set(range(budget)))} of the {budget} scenarios")
+    want = os.path.normpath(c.get("experiment") or p["experiment"])
+    ran = s.get("experiment_repo_file") or s.get("experiment_file", "")
+    if ran and not os.path.normpath(ran).endswith(want):
+        out.append(f"{c['name']}: experiment {ran}, the protocol says {want}")
+    for e in interruptions(s, rows):
+        out.append(f"{c['name']}: {e}")
     if camp.get("method") != c["method"]:
         out.append(f"{c['name']}: method {camp.get('method')!r}, the protocol says {c['method']!r}")
     if camp.get("seed") != c["seed"]:
@@ -147,6 +188,49 @@ def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
     if any(r.get("attribution") == attr.PENDING for r in rows):
         out.append(f"{c['name']}: candidates still pending attribution")
     return out
+
+
+#: [s] a pause between two finished scenarios longer than this is an interruption (a stop, a
+#: park) even where no event recorded it (campaigns before the events existed)
+GAP_S = 600.0
+
+
+def interruptions(settings: dict, rows: List[dict]) -> List[str]:
+    """Every resume, restart and long pause of a campaign, in words: from the events its store
+    recorded (Store.record_event) and from the gaps between its rows' finish times."""
+    out = []
+    for e in settings.get("events", []):
+        if e.get("kind") in ("resume", "restart"):
+            out.append(
+                f"{e['kind']} after {e.get('stored', '?')} stored scenarios"
+                + (f" on {e['cpu']}" if e.get("cpu") else "")
+                + (f" at commit {e['commit'][:10]}" if e.get("commit") else "")
+            )
+    fin = sorted((r["finished"], r["job"]) for r in rows if r.get("finished"))
+    for (t0, j0), (t1, _) in zip(fin, fin[1:]):
+        if t1 - t0 > GAP_S:
+            out.append(f"paused {t1 - t0:,.0f} s after job {j0}")
+    return out
+
+
+def cpu_hours(settings: dict, rows: List[dict], budget: int) -> float:
+    """[h] what the first `budget` scenarios of a campaign cost: the time from its start to the
+    last of them finishing, less the pauses longer than GAP_S, times the machine's cores (each
+    campaign of the project fills its machine: workers under test, references, the search)."""
+    fin = sorted(r["finished"] for r in rows if r.get("finished") and r["job"] < budget)
+    if not fin:
+        return 0.0
+    events = settings.get("events", [])
+    cores = next((e["cores"] for e in events if e.get("cores")), 2)
+    start = next((e["time"] for e in events if e.get("kind") == "start"), fin[0] - rows_wall(rows))
+    spans = [fin[0] - start] + [b - a for a, b in zip(fin, fin[1:])]
+    return cores * sum(d for d in spans if d <= GAP_S) / 3600.0
+
+
+def rows_wall(rows: List[dict]) -> float:
+    """[s] the first finished row's own wall time (the start of a campaign without a start event)."""
+    first = min((r for r in rows if r.get("finished")), key=lambda r: r["finished"], default=None)
+    return float(first.get("wall_time", 0.0)) if first else 0.0
 
 
 def read_arms(p: dict, folder: str, cs: List[dict]):
@@ -175,6 +259,7 @@ def choose(p: dict, folder: str) -> dict:
     cs = campaigns(p, "pilot")
     arms, heads, devs = read_arms(p, folder, cs)
     cls = p["endpoint"]["class"]
+    budget = p["pilot"].get("budget", p["budget"])
 
     from asg_agent.analysis import failure_modes as fm
 
@@ -186,13 +271,29 @@ def choose(p: dict, folder: str) -> dict:
         camp = heads[next(c["name"] for c in cs if c["arm"] == arm and c["seed"] in seeds)]
         modes = []
         for rows in seeds.values():
-            keep = [r for r in rows if r["job"] < p["budget"]]
+            keep = [r for r in rows if r["job"] < budget]
             modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
-        return (float(np.mean([per_seed(r, p["budget"], cls) for r in seeds.values()])), fm.distinct(modes))
+        return (float(np.mean([per_seed(r, budget, cls) for r in seeds.values()])), fm.distinct(modes))
 
-    rewards = [(score(f"reward {r}"), -k, r) for k, r in enumerate(p["pilot"]["rewards"])]
     bands = [(score(f"band {b:g} m"), -k, b) for k, b in enumerate(p["pilot"]["route_bands_m"])]
-    best_r, best_b = max(rewards), max(bands)
+    best_b = max(bands)
+    if "search" in p["pilot"]:  # version 2: the search arm (method, reward, experiment) and the band
+        search = [(score(arm), -k, arm) for k, arm in enumerate(p["pilot"]["search"])]
+        best = max(search)[2]
+        a = p["pilot"]["search"][best]
+        return {
+            "search": best,
+            "method": a["method"],
+            "reward": a.get("reward", "proxy"),
+            "experiment": a.get("experiment") or p["experiment"],
+            "band_m": float(best_b[2]),
+            "searches": {arm: sc[0] for sc, _, arm in search},
+            "bands_m": {f"{b:g}": sc[0] for sc, _, b in bands},
+            "deviations": devs,
+            "protocol": p["_path"],
+        }
+    rewards = [(score(f"reward {r}"), -k, r) for k, r in enumerate(p["pilot"]["rewards"])]
+    best_r = max(rewards)
     return {
         "reward": best_r[2],
         "band_m": float(best_b[2]),
@@ -218,26 +319,52 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
             keep = [r for r in rows if r["job"] < budget]
             modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
             meshes = meshes or (keep[0]["meshes"] if keep else [])
+        names = {c["seed"]: c["name"] for c in cs if c["arm"] == arm}
+        hours = {}
+        for s_, r in sorted(seeds.items()):
+            st = heads[names[s_]].get("settings") or "{}"
+            hours[s_] = cpu_hours(json.loads(st) if isinstance(st, str) else st, r, budget)
         table[arm] = {
+            "per_cpu_hour": {
+                s_: (
+                    sum(x["job"] < budget and x.get("attribution") == cls for x in r) / hours[s_] if hours[s_] else None
+                )
+                for s_, r in sorted(seeds.items())
+            },
+            "cpu_hours": hours,
             "per_seed": {s: per_seed(r, budget, cls) for s, r in sorted(seeds.items())},
             "model": {s: per_seed(r, budget, "model") for s, r in sorted(seeds.items())},
             "stack": {s: per_seed(r, budget, "stack") for s, r in sorted(seeds.items())},
             "distinct_modes": fm.distinct(modes),
             "coverage": fm.coverage(modes, meshes) if meshes else 0.0,
         }
-    rows = []
+    rows, rows_hour = [], []
     if "default" in table:
         rows = stats.compare({a: list(t["per_seed"].values()) for a, t in table.items()}, "default")
+        if all(v is not None for t in table.values() for v in t["per_cpu_hour"].values()):
+            rows_hour = stats.compare({a: list(t["per_cpu_hour"].values()) for a, t in table.items()}, "default")
     t = p["target"]
     ref = next((r for r in rows if r["arm"] == t["ratio_over"]), None)
+    ref_hour = next((r for r in rows_hour if r["arm"] == t["ratio_over"]), None)
     met = None
     if ref is not None and "default" in table:
         met = bool(
             ref["ratio"] >= t["ratio"]
             and ref["p"] < t["p"]
             and table["default"]["distinct_modes"] >= t["distinct_modes"]
+            and (
+                not t.get("per_cpu_hour")
+                or (ref_hour is not None and ref_hour["ratio"] >= t["ratio"] and ref_hour["p"] < t["p"])
+            )
         )
-    return {"arms": table, "comparison": rows, "target_met": met, "deviations": devs, "choice": choice}
+    return {
+        "arms": table,
+        "comparison": rows,
+        "comparison_per_cpu_hour": rows_hour,
+        "target_met": met,
+        "deviations": devs,
+        "choice": choice,
+    }
 
 
 def main(argv=None) -> int:
@@ -272,7 +399,8 @@ def main(argv=None) -> int:
                 f.write("\n")
             for d in ch["deviations"]:
                 print(f"deviation: {d}")
-            print(f"pilot choice: reward {ch['reward']}, route band {ch['band_m']:g} m ({out})")
+            what = f"search {ch['search']}, " if "search" in ch else ""
+            print(f"pilot choice: {what}reward {ch['reward']}, route band {ch['band_m']:g} m ({out})")
             return 0
         with open(os.path.join(args.folder, "pilot_choice.json")) as f:
             choice = json.load(f)

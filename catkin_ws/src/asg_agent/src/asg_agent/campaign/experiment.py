@@ -23,6 +23,15 @@ from [-1, 1] to its range. Keys (docs/agent.md):
       amplitude_m: [0.0, 1.5]          #   [m] the rolling ground's, at most wavelength_m / 10
       hill_height_m: [-3.0, 3.0]       #   [m] one per hill of the scenario; |h| <= its radius_m / 2
       hill_positions: true             #   every hill's x, y over the landscape, as the obstacles'
+    action_space: absolute             # how the action places an obstacle: absolute (the paper's:
+                                       #   x, y over the landscape) or route (along the straight
+                                       #   start-goal route and a signed lateral offset; issue #54)
+    route_lateral_m: 10.0              # route only: [m] the largest lateral offset from the route
+
+With `action_space: route` each obstacle's two values are (u, v) in [-1, 1]: u sets the fraction
+of the way from start to goal over the part outside the safety radii, v the lateral offset
+v * route_lateral_m (asg_scenario.layout.RouteFrame). The scene space is the route band; what the
+search may vary is otherwise the same (the obstacles' classes and counts stay the scenario's).
 
 The action then goes on with the terrain values, in this order: the amplitude, one height per
 hill, one x, y per hill.
@@ -39,7 +48,7 @@ import yaml
 from asg_perception.numerics import BACKENDS, DEFAULT_BACKEND
 from asg_scenario import ScenarioError, load_scenario
 from asg_scenario.schema import TEXTURAL_FIELDS, strict_yaml_load
-from asg_scenario.layout import instance_count, with_positions
+from asg_scenario.layout import RouteFrame, instance_count, with_positions
 
 
 class ExperimentError(ValueError):
@@ -63,7 +72,11 @@ KEYS = {
     "description",
     "textural_free",
     "terrain_free",
+    "action_space",
+    "route_lateral_m",
 }
+#: how an action places obstacles (docs/agent.md): over the landscape, or relative to the route
+ACTION_SPACES = ("absolute", "route")
 TERRAIN_FREE_KEYS = ("amplitude_m", "hill_height_m", "hill_positions")
 #: textural attributes a search may set (a number with a range; not the ground texture's seed)
 FREE_TEXTURAL = {f.key: f for f in TEXTURAL_FIELDS if f.kind is float}
@@ -93,6 +106,8 @@ class Experiment:
     #: (lo, hi) [m] of every hill's height the search sets, or None
     hill_height_free: Optional[tuple] = None
     hill_positions_free: bool = False
+    action_space: str = "absolute"  #: ACTION_SPACES
+    route_lateral_m: float = 10.0  #: [m] route only: the largest lateral offset
 
     @property
     def hills(self) -> int:
@@ -119,9 +134,15 @@ class Experiment:
         return self.position_dim + len(self.textural_free) + self.terrain_dim
 
     def to_positions(self, action) -> np.ndarray:
-        """The action's first 2n values, [-1, 1] -> (n, 2) positions [m], rounded to 1 mm."""
+        """The action's first 2n values, [-1, 1] -> (n, 2) positions [m], rounded to 1 mm: over
+        the landscape, or (action_space route) along and across the route."""
         a = np.asarray(action, dtype=np.float64).reshape(-1)[: self.position_dim]
         a = np.clip(a.reshape(-1, 2), -1.0, 1.0)
+        if self.action_space == "route":
+            route = RouteFrame(self.scenario)
+            lo, hi = route.t_range
+            t = lo + (a[:, 0] + 1.0) * 0.5 * (hi - lo)
+            return np.round(route.point(t, a[:, 1] * self.route_lateral_m), 3)
         return np.round((a + 1.0) * 0.5 * self.size, 3)
 
     def to_textural(self, action) -> dict:
@@ -155,6 +176,9 @@ class Experiment:
         return terrain
 
     def to_action(self, xy) -> np.ndarray:
+        """Positions [m] -> the action's first 2n values (absolute action space only)."""
+        if self.action_space != "absolute":
+            raise ValueError(f"{self.name}: to_action needs the absolute action space, not {self.action_space!r}")
         return (np.asarray(xy, dtype=np.float64).reshape(-1) / self.size * 2.0 - 1.0).astype(np.float32)
 
     def request(self, action, scenario_id: int) -> dict:
@@ -256,6 +280,14 @@ def load_experiment(path: str) -> Experiment:
     if not isinstance(hill_positions, bool):
         problems.append(f"terrain_free.hill_positions: {hill_positions!r}, must be true or false")
         hill_positions = False
+    space = data.get("action_space", "absolute")
+    if space not in ACTION_SPACES:
+        problems.append(f"action_space: {space!r}, must be one of {', '.join(ACTION_SPACES)}")
+    lateral = data.get("route_lateral_m", 10.0)
+    if isinstance(lateral, bool) or not isinstance(lateral, (int, float)) or not 0.0 < lateral <= 1000.0:
+        problems.append(f"route_lateral_m: {lateral!r}, must be a number in (0, 1000] m")
+    elif "route_lateral_m" in data and space != "route":
+        problems.append("route_lateral_m: only with action_space: route")
     if problems:
         raise ExperimentError(f"{path}: " + "; ".join(problems))
     spath = data["scenario"]
@@ -305,4 +337,6 @@ def load_experiment(path: str) -> Experiment:
         amplitude_free=ranges.get("amplitude_m"),
         hill_height_free=ranges.get("hill_height_m"),
         hill_positions_free=hill_positions,
+        action_space=space,
+        route_lateral_m=float(lateral),
     )

@@ -27,7 +27,7 @@ import numpy as np
 from asg_agent.campaign.experiment import Experiment
 from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
 from asg_agent.search.methods import SearchMethod
-from asg_agent.campaign.store import Store, pack_trajectory, unpack_trajectory
+from asg_agent.campaign.store import Store, pack_trajectory, provenance, unpack_trajectory
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring import rewards
 from asg_agent.search.td3 import load_checked, save_atomic
@@ -272,6 +272,7 @@ class Campaign:
             self.seed,
             dict(self.settings, total=self.total, slots=self.slots, method_config=self.method.config()),
         )
+        self.store.record_event(self.name, dict(provenance(), kind="start", stored=0))
         for s in range(self.slots):
             self._new_episode(s)
         for s in range(self.slots):
@@ -284,6 +285,11 @@ class Campaign:
             ck = load_checked(self.checkpoint_path)
         except FileNotFoundError:
             ck = None
+        # every interruption is on record: a resume from the checkpoint, or a restart without one
+        self.store.record_event(
+            self.name,
+            dict(provenance(), kind="restart" if ck is None else "resume", stored=self.store.count(self.name)),
+        )
         if ck is None:  # killed before the first checkpoint: start over from the stored rows
             for s in range(self.slots):
                 self._new_episode(s)

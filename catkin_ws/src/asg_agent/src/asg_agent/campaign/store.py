@@ -175,6 +175,19 @@ class Store:
                 f"campaign {name!r} already exists in {self.path}: --resume it or choose another " f"--name"
             ) from None
 
+    def record_event(self, name: str, event: Dict):
+        """Appends `event` (a start, resume or restart, with the machine and code it ran on:
+        provenance()) to the campaign's settings["events"], so that an export lists every
+        interruption of its campaign (issues #54, #57)."""
+        row = self.db.execute("SELECT settings FROM campaigns WHERE name = ?", (name,)).fetchone()
+        if row is None:
+            raise StoreError(f"no campaign {name!r} in {self.path}")
+        settings = json.loads(row[0])
+        settings.setdefault("events", []).append(event)
+        self.db.execute(
+            "UPDATE campaigns SET settings = ? WHERE name = ?", (json.dumps(settings, sort_keys=True), name)
+        )
+
     def finish_campaign(self, name):
         self.db.execute("UPDATE campaigns SET finished = ? WHERE name = ?", (time.time(), name))
 
@@ -411,3 +424,27 @@ def unpark(store: "Store", parked: str, checkpoint_for=None) -> Optional[int]:
         shutil.copyfile(os.path.join(tmp, "checkpoint.ckpt"), target + ".part")
         os.replace(target + ".part", target)
         return store.count(campaign)
+
+
+#: the repository this module runs from (empty commit where it is not a git checkout)
+_REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 5))
+
+
+def provenance() -> Dict:
+    """Where and on what a campaign runs now: the time, the CPU's model name and cores, and the
+    repository's commit (the code, and the protocol committed before it)."""
+    import subprocess
+
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            cpu = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), "")
+    except OSError:
+        pass
+    try:
+        commit = subprocess.run(
+            ["git", "-C", _REPO, "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        commit = ""
+    return {"time": round(time.time(), 1), "cpu": cpu, "cores": os.cpu_count() or 0, "commit": commit}

@@ -240,6 +240,25 @@ def reference_settings(a, exp, roles, candidates) -> dict:
     }
 
 
+def stack_line(camp) -> str:
+    """The summary's line naming the stack under test and its numerics (issue #53); for bf16, the
+    fast mode, that its findings replay only where oneDNN runs the recorded ISA."""
+    settings = json.loads(camp["settings"]) if camp and camp["settings"] else {}
+    if settings.get("stack", "paper") != "paper" or settings.get("perception") != "unet":
+        return f"stack under test: {settings.get('stack', 'paper')}, perception {settings.get('perception', '?')}"
+    numerics = settings.get("numerics") or settings.get("unet_backend", "?")
+    line = f"stack under test: U-Net {settings.get('model')} ({numerics}), planner {settings.get('planner_config')}"
+    from asg_perception.numerics import BF16_BACKENDS
+
+    if numerics.split()[0] in BF16_BACKENDS:
+        isa = dict(kv.split("=", 1) for kv in numerics.split()[1:] if "=" in kv).get("isa", "?")
+        line += (
+            f"\nbf16 fast mode: these findings replay bit for bit only where oneDNN runs {isa}; elsewhere "
+            f"`replay` refuses them and reruns each on the default numerics on request"
+        )
+    return line
+
+
 def print_summary(store, name, out=sys.stdout):
     s = store.summary(name)
     best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
@@ -261,6 +280,7 @@ def print_summary(store, name, out=sys.stdout):
             f"{s['stack_collisions']} the stack's (the reference collided too)",
             file=out,
         )
+    print(stack_line(store.campaign(name)), file=out)
     cl = s["classes"]
     if sum(cl.values()):
         rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
@@ -423,6 +443,13 @@ def progress_bar(a):
     return bar, progress
 
 
+def repo_relative(path: str) -> str:
+    """`path` relative to the repository this code runs from, or "" when it lies outside it."""
+    repo = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+    rel = os.path.relpath(os.path.realpath(path), repo) if path else ".."
+    return "" if rel.startswith("..") else rel
+
+
 def campaign_settings(a, exp, workers, roles, candidates) -> dict:
     """What the store keeps of the campaign: workers, references, reward and the stack's identity."""
     return {
@@ -432,6 +459,7 @@ def campaign_settings(a, exp, workers, roles, candidates) -> dict:
         "reward": a.reward,
         **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
         "experiment_file": exp.source,
+        **({"experiment_repo_file": repo_relative(exp.source)} if repo_relative(exp.source) else {}),
         "stack": exp.stack,
         **({"command_interface": "twist"} if exp.stack == "depth" else {}),
         "perception": exp.perception if exp.stack == "paper" else "depth",

@@ -190,6 +190,11 @@ def main(argv=None):
     p.add_argument("--bag", default="", help="record the run's topics into this bag")
     p.add_argument("--figure", default="", help="write a top-down PNG of the replayed run")
     p.add_argument("--force", action="store_true", help="replay even if the worker's stack differs")
+    p.add_argument(
+        "--default-numerics",
+        action="store_true",
+        help="rerun a stored bf16 run on the default fp32 numerics (a new run, not a bit-for-bit replay)",
+    )
     a = p.parse_args([x for x in (sys.argv[1:] if argv is None else argv) if ":=" not in x])
     row, settings = None, {}
     if a.scenario:
@@ -210,11 +215,23 @@ def main(argv=None):
             print(f"replay: no campaign {a.campaign!r} in {a.store}", file=sys.stderr)
             return 2
         settings = json.loads(c["settings"])
+        why = bf16_refusal(settings)
+        if why and not a.default_numerics and not a.worker:
+            print(
+                f"replay: {why}\nrerun it on the default numerics (a new run, compared but not expected to match):\n"
+                f"  rosrun asg_agent replay {a.store} {a.campaign} {a.job} --default-numerics",
+                file=sys.stderr,
+            )
+            return 2
         row = next((r for r in store.rows(a.campaign, a.job - 1) if r["job"] == a.job), None)
         if row is None:
             print(f"replay: campaign {a.campaign!r} has no job {a.job}", file=sys.stderr)
             return 2
         request = json.loads(row["request"])
+    if a.default_numerics:
+        from asg_perception.numerics import DEFAULT_BACKEND
+
+        settings = dict(settings, unet_backend=DEFAULT_BACKEND, numerics="")
     # An attributed row replayed on the ground-truth stack is checked against its reference run.
     a.against_reference = bool(
         row is not None
@@ -246,6 +263,23 @@ def main(argv=None):
                 launched.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 os.killpg(os.getpgid(launched.pid), signal.SIGKILL)
+
+
+def bf16_refusal(settings: dict) -> str:
+    """Why a stored run of the bf16 fast mode cannot replay bit for bit on this CPU ("" if it
+    can): its findings repeat only where oneDNN runs the ISA they were recorded with (issue #53)."""
+    from asg_perception import numerics as nm
+
+    recorded = settings.get("numerics", "")
+    if not recorded or recorded.split()[0] not in nm.BF16_BACKENDS:
+        return ""
+    isa = dict(kv.split("=", 1) for kv in recorded.split()[1:] if "=" in kv).get("isa", "")
+    flags = nm.cpu_flags()
+    here = nm.effective_isa(flags) if nm.native_bf16(flags) else ""
+    if here == isa:
+        return ""
+    where = f"oneDNN runs {here} here" if here else "this CPU has no native bf16"
+    return f"the campaign ran the bf16 fast mode on oneDNN {isa}; its runs replay bit for bit only there ({where})"
 
 
 def bring_up_worker(stack: dict, port: int):
@@ -363,6 +397,9 @@ def run_replay(a, request, row, settings) -> int:
         "run", diff, samples, replayed_proxy(request, o), row["proxy"], a.bag, getattr(a, "worker", "")
     )
     ok = diff < 0.01 and same_proxy and o.termination == row["termination"]
+    if getattr(a, "default_numerics", False):  # a rerun on other numerics: reported, not judged
+        print(f"RERUN on the default numerics: {o.termination} (stored on bf16: {row['termination']})")
+        return 0 if o.termination != "ERROR" else 1
     print("REPRODUCED" if ok else "NOT REPRODUCED")
     return 0 if ok else 1
 

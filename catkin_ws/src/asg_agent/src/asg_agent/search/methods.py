@@ -26,6 +26,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from asg_agent.campaign.experiment import Experiment
+from asg_scenario.layout import RouteFrame
 from asg_agent.scoring.proxy import resample_path
 from asg_agent.search.td3 import TD3Agent, TD3Config
 
@@ -105,13 +106,13 @@ class RouteRandom(SearchMethod):
         super().__init__(experiment, seed)
         if not (band > 0.0 and 0.0 <= share <= 1.0):
             raise ValueError(f"route-random: band {band} [m] must be > 0 and share {share} in [0, 1]")
+        if experiment.action_space != "absolute":
+            raise ValueError(
+                f"route-random: places obstacles itself; the experiment's action_space must be absolute, "
+                f"not {experiment.action_space!r}"
+            )
         self.band, self.share = float(band), float(share)
-        op = experiment.scenario["operational"]
-        a, b = np.array([op["start_x"], op["start_y"]], float), np.array([op["goal_x"], op["goal_y"]], float)
-        length = float(np.linalg.norm(b - a))
-        margin = min(0.45, float(op.get("safety_radius", 0.0)) / max(length, 1e-9))
-        self.a, self.ab, self.t = a, b - a, (margin, 1.0 - margin)
-        self.normal = np.array([-self.ab[1], self.ab[0]]) / max(length, 1e-9)
+        self.route = RouteFrame(experiment.scenario)
 
     def propose(self, job, episode, step, state):
         rng = _rng(self.seed, 3, job)
@@ -120,8 +121,8 @@ class RouteRandom(SearchMethod):
         size = self.exp.size
         for k in range(n):
             if rng.uniform() < self.share:
-                t, d = rng.uniform(*self.t), rng.uniform(-self.band, self.band)
-                xy = np.clip(self.a + t * self.ab + d * self.normal, 0.0, size)
+                t, d = rng.uniform(*self.route.t_range), rng.uniform(-self.band, self.band)
+                xy = self.route.point(t, d)
                 a[2 * k : 2 * k + 2] = xy / size * 2.0 - 1.0
         return a.astype(np.float32)
 

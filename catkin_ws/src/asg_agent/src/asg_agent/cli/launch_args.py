@@ -1,0 +1,87 @@
+"""The experiment file decides the stack under test (issue #53): scripts/train.sh asks this module
+which train.launch arguments the experiment implies, so that `experiment:=FILE` alone sets the
+workers' stack, perception, model, U-Net numerics and planner configuration.
+
+    python3 -m asg_agent.cli.launch_args [key:=value ...]   # the arguments train.sh was given
+
+Prints, one a line, each `key:=value` of STACK_KEYS that the experiment sets and the arguments
+leave out. An argument that contradicts the experiment (model:=full for an experiment of
+`flawed`, unet_backend:=bf16 for one of channels_last) is refused, exit 2, naming both; so is a
+bf16 experiment on a CPU that would emulate bf16 (asg_perception.numerics.refuse_emulated).
+"""
+
+import os
+import sys
+from typing import Dict, List
+
+from asg_agent.campaign.experiment import Experiment, ExperimentError, load_experiment
+from asg_perception.numerics import refuse_emulated, resolve_backend
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+#: train.launch's default experiment (asg_bringup/experiments is the repository's experiments/)
+DEFAULT_EXPERIMENT = os.path.join(REPO, "experiments", "exp1.yaml")
+#: the train.launch arguments an experiment decides, in the order they are printed
+STACK_KEYS = ("stack", "perception", "model", "unet_backend", "planner_config")
+
+
+def planner_path(name: str) -> str:
+    """A planner configuration by name (a file of asg_planner/config) or path, as a path."""
+    if os.sep in name:
+        return os.path.abspath(name)
+    return os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config", name)
+
+
+def implied(exp: Experiment) -> Dict[str, str]:
+    """The train.launch arguments of STACK_KEYS the experiment sets (only those its stack uses)."""
+    out = {"stack": exp.stack}
+    if exp.stack == "paper":
+        out["perception"] = exp.perception
+        if exp.perception == "unet":
+            out["model"], out["unet_backend"] = exp.model, exp.unet_backend
+        out["planner_config"] = planner_path(exp.planner_config)
+    return out
+
+
+def _same(key: str, given: str, want: str) -> bool:
+    if key == "unet_backend":
+        return resolve_backend(given) == resolve_backend(want)
+    if key == "planner_config":
+        return os.path.realpath(planner_path(given)) == os.path.realpath(want)
+    return given == want
+
+
+def launch_args(args: List[str]) -> List[str]:
+    """What to add to `args` (train.launch's key:=value words); ExperimentError when they
+    contradict the experiment or the experiment cannot run on this CPU."""
+    given = dict(a.split(":=", 1) for a in args if ":=" in a)
+    path = given.get("experiment") or DEFAULT_EXPERIMENT
+    exp = load_experiment(path)
+    want = implied(exp)
+    problems = []
+    for key, value in want.items():
+        if key in given and not _same(key, given[key], value):
+            problems.append(f"{key}:={given[key]} contradicts the experiment's {key} {value}")
+    if problems:
+        raise ExperimentError(
+            f"{path}: " + "; ".join(problems) + " (leave these arguments out: the experiment sets the workers' stack)"
+        )
+    if "unet_backend" in want:
+        why = refuse_emulated(want["unet_backend"])
+        if why:
+            raise ExperimentError(f"{path}: {why}")
+    return [f"{k}:={v}" for k, v in want.items() if k not in given]
+
+
+def main(argv=None) -> int:
+    try:
+        out = launch_args(sys.argv[1:] if argv is None else argv)
+    except (ExperimentError, ValueError) as e:
+        print(f"train: {e}", file=sys.stderr)
+        return 2
+    for a in out:
+        print(a)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

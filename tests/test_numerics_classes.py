@@ -1,0 +1,49 @@
+"""Issue #53: the default numerics are one stack identity on every CPU class checked. Every line
+of results/numerics/cpu_classes.json (written by reference_runs.test with ASG_RECORD_CPU_CLASS=1 on
+the CPU it names) must hold the digests of the one stored reference set; at least two classes of
+different best ISA; and the fp32 replay rule accepts a run recorded on any of them."""
+
+import json
+import os
+import sys
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_perception", "src"))
+
+from asg_perception import numerics as n  # noqa: E402
+
+
+def load(name):
+    with open(os.path.join(REPO, name)) as f:
+        return json.load(f)
+
+
+def test_every_cpu_class_replayed_the_one_stored_reference():
+    ref = load(f"tests/reference/exp1_flawed_{n.DEFAULT_BACKEND}.json")
+    digests = [r["digest"] for r in ref["runs"]]
+    classes = load("results/numerics/cpu_classes.json")["classes"]
+    for c in classes:
+        assert c["reference"] == f"tests/reference/exp1_flawed_{n.DEFAULT_BACKEND}.json", c["cpu"]
+        assert c["digests"] == digests, f"{c['cpu']}: digests differ from the stored reference"
+        assert c["numerics"].split()[0] == n.DEFAULT_BACKEND, c["cpu"]
+    assert len({c["best_isa"] for c in classes}) >= 2, "fewer than two CPU classes checked"
+    # one reference file for the default: no per-ISA copies
+    assert not [
+        f
+        for f in os.listdir(os.path.join(REPO, "tests", "reference"))
+        if f.startswith(f"exp1_flawed_{n.DEFAULT_BACKEND}.") and f != f"exp1_flawed_{n.DEFAULT_BACKEND}.json"
+    ]
+
+
+def test_fp32_runs_replay_across_the_checked_classes_and_bf16_ones_do_not():
+    classes = load("results/numerics/cpu_classes.json")["classes"]
+    ids = {c["numerics"] for c in classes}
+    for a in ids:
+        for b in ids:
+            assert n.can_reproduce(a, b) is None, (a, b)
+    bf = "bf16 isa=AVX512_CORE_BF16 threads=1 torch=1.13.0a0"
+    assert "oneDNN kernels" in n.can_reproduce(bf, bf.replace("AVX512_CORE_BF16", "AVX512_CORE_AMX"))
+    # fp32 on an ISA never checked is still refused, with the reason
+    assert "oneDNN kernels" in n.can_reproduce(
+        "channels_last isa=AVX2 threads=1 torch=1.13.0a0", "channels_last isa=SSE41 threads=1 torch=1.13.0a0"
+    )
