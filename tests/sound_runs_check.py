@@ -154,12 +154,14 @@ class SoundRuns(unittest.TestCase):
             self.assertSameRun(r, self.reference[nxt], f"try {i}: scene {nxt} after a cancel")
 
     def test_5_cancel_in_the_first_milliseconds_is_a_cancel(self):
-        # Before the server took the goal: RECALLED; after, while the scene is built or the stack
-        # acknowledges: PREEMPTED. Never ABORTED.
+        # As soon as the server acknowledged the goal: RECALLED (still pending) or PREEMPTED (taken);
+        # later, while the scene is built or the stack acknowledges: PREEMPTED. Never ABORTED, never
+        # LOST: a cancel before the acknowledgement lets actionlib's client mark the goal LOST on a
+        # status array sent before the goal arrived (su.cancel_acknowledged, issue #53).
         for delay, states in ((0.0, (su.PREEMPTED, su.RECALLED)), (0.02, (su.PREEMPTED,)), (0.2, (su.PREEMPTED,))):
             self.w0.send_goal(su.to_goal_msg(self.scenes[1]))
             time.sleep(delay)
-            self.w0.cancel_goal()
+            su.cancel_acknowledged(self.w0)
             self.assertTrue(self.w0.wait_for_result(rospy.Duration(60)))
             self.assertIn(self.w0.get_state(), states, f"cancel after {delay} s")
 

@@ -119,6 +119,22 @@ def reference_path(worker_ns, write=False):
     return other if write or os.path.isfile(other) else base
 
 
+def cancel_acknowledged(client, timeout=5.0):
+    """Cancels the SimpleActionClient's goal once the server has acknowledged it (issue #53's race).
+    actionlib's client leaves WAITING_FOR_GOAL_ACK when it cancels; a status array the server
+    published before it received the goal then lacks the goal, and the client marks it LOST
+    (actionlib's CommStateMachine.update_status) although the server goes on to recall or preempt
+    it. Waiting for the acknowledgement (the goal in a status array) closes that window."""
+    from actionlib.action_client import CommState
+
+    deadline = time.time() + timeout
+    while client.gh is not None and time.time() < deadline:
+        if client.gh.get_comm_state() != CommState.WAITING_FOR_GOAL_ACK:
+            break
+        time.sleep(0.0005)
+    client.cancel_goal()
+
+
 def wait_for_param(name, timeout=120.0):
     """The value of parameter `name` once it is set and not empty."""
     deadline = time.time() + timeout

@@ -35,7 +35,7 @@ def small_protocol(tmp_path):
 def run(tmp_path, store, c, collide, workers=3):
     """Campaign `c` of a plan on stand-in stacks: the stack under test collides on `collide`, the
     references never (so each collision is a flaw finding)."""
-    exp = load_experiment(os.path.join(REPO, "experiments", "exp1.yaml"))
+    exp = load_experiment(os.path.join(REPO, c.get("experiment") or "experiments/exp1.yaml"))
     options = {"band": c["band"], "share": 1.0} if c["band"] else None
     m = make_method(c["method"], exp, c["seed"], budget=c["budget"], options=options)
     settings = {
@@ -123,3 +123,101 @@ def test_a_bad_protocol_is_named(tmp_path):
     with pytest.raises(pr.ProtocolError, match="reuses pilot seeds"):
         pr.load(str(bad))
     assert json.loads(json.dumps(p))  # plain data
+
+
+def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
+    # issue #54: the shipped flaw-study protocol, then a small one of the same shape run end to end
+    shipped = pr.load(os.path.join(REPO, "experiments", "protocol-flaw-study.yaml"))
+    pilot = pr.campaigns(shipped, "pilot")
+    assert len(pilot) == (5 + 3) * 2 and sum(c["budget"] for c in pilot) == 4000
+    assert {c["experiment"] for c in pilot if "route-" in c["arm"]} == {"experiments/exp1-route.yaml"}
+    choice = {
+        "search": "route-collision",
+        "method": "td3-per-asp",
+        "reward": "collision",
+        "experiment": "experiments/exp1-route.yaml",
+        "band_m": 5.0,
+    }
+    confirm = pr.campaigns(shipped, "confirmatory", choice)
+    assert len(confirm) == 5 * 3 + 3 * 2 and all(c["budget"] == 300 for c in confirm)
+    by = {c["name"]: c for c in confirm}
+    assert by["flaw-default-s10"]["experiment"] == "experiments/exp1-route.yaml"
+    assert "reward:=collision" in by["flaw-default-s10"]["args"]
+    assert by["flaw-cmaes-s10"]["experiment"] == "experiments/exp1-route.yaml"
+    assert by["flaw-random-s10"]["experiment"] == "experiments/exp1.yaml"
+    assert "route_band:=5" in by["flaw-route-random-s14"]["args"]
+
+    p = yaml.safe_load(open(os.path.join(REPO, "experiments", "protocol-flaw-study.yaml")))
+    p.update(name="v", budget=12)
+    p["pilot"].update(seeds=[0], budget=10, route_bands_m=[5.0])
+    p["pilot"]["search"] = {
+        "absolute-proxy": {"method": "td3-per-asp", "reward": "proxy", "experiment": "experiments/exp1.yaml"},
+        "route-proxy": {"method": "td3-per-asp", "reward": "proxy", "experiment": "experiments/exp1-route.yaml"},
+    }
+    p["arms"] = {
+        "default": {"method": "pilot", "reward": "pilot", "experiment": "pilot", "seeds": [1, 2]},
+        "route-random": {"method": "route-random", "band_m": "pilot", "share": 1.0, "seeds": [1, 2]},
+    }
+    path = tmp_path / "protocol.yaml"
+    path.write_text(yaml.safe_dump(p))
+    p = pr.load(str(path))
+    store = Store(str(tmp_path / "s.sqlite"))
+    (tmp_path / "out").mkdir()
+    for c in pr.campaigns(p, "pilot"):
+        assert c["budget"] == 10
+        run(tmp_path, store, c, {1, 4, 6} if "route-proxy" in c["name"] else {3})
+    ch = pr.choose(p, str(tmp_path / "out"))
+    assert (ch["search"], ch["experiment"], ch["band_m"]) == ("route-proxy", "experiments/exp1-route.yaml", 5.0)
+    assert ch["searches"] == {"absolute-proxy": 100.0, "route-proxy": 300.0} and ch["deviations"] == []
+    for c in pr.campaigns(p, "confirmatory", ch):
+        run(tmp_path, store, c, {2, 5, 8, 9} if c["arm"] == "default" else {7})
+    res = pr.analyse(p, str(tmp_path / "out"), ch)
+    assert res["deviations"] == []
+    d = res["arms"]["default"]
+    assert set(d["cpu_hours"]) == {1, 2} and all(h > 0 for h in d["cpu_hours"].values())
+    assert d["per_cpu_hour"][1] == pytest.approx(4 / d["cpu_hours"][1])
+    assert {r["arm"] for r in res["comparison_per_cpu_hour"]} == {"default", "route-random"}
+
+
+def test_interruptions_and_cpu_hours_from_events_and_gaps(tmp_path):
+    # issues #54, #57: every resume, restart and long pause is a deviation; a pause is no cost
+    rows = [{"job": j, "finished": 1000.0 + 10 * j, "wall_time": 5.0} for j in range(5)]
+    rows += [{"job": 5 + j, "finished": 5000.0 + 10 * j, "wall_time": 5.0} for j in range(3)]
+    settings = {
+        "events": [
+            {"kind": "start", "time": 990.0, "cpu": "Xeon", "cores": 2, "commit": "abc1234def5678", "stored": 0},
+            {"kind": "resume", "time": 4990.0, "cpu": "EPYC", "cores": 2, "commit": "abc1234def5678", "stored": 5},
+        ]
+    }
+    said = pr.interruptions(settings, rows)
+    assert said == ["resume after 5 stored scenarios on EPYC at commit abc1234def", "paused 3,960 s after job 4"]
+    # 10 s to the first row, 4 x 10 s, the 3,960 s pause left out, 2 x 10 s; on 2 cores
+    assert pr.cpu_hours(settings, rows, 8) == pytest.approx(2 * (10 + 40 + 20) / 3600)
+    assert pr.cpu_hours(settings, rows, 5) == pytest.approx(2 * 50 / 3600)  # the budget's rows only
+    # a campaign resumed in its store records the resume itself
+    store = Store(str(tmp_path / "s.sqlite"))
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp1.yaml"))
+
+    def campaign(total):
+        return Campaign(
+            "c",
+            exp,
+            make_method("random", exp, 0),
+            store,
+            FakePool(2, gain=0.0),
+            total,
+            0,
+            str(tmp_path / "c.ckpt"),
+            slots=2,
+            checkpoint_every=2,
+        )
+
+    first = campaign(6)
+    first.start()
+    first.run(poll_timeout=0.0)
+    again = campaign(8)
+    again.resume()
+    again.run(poll_timeout=0.0)
+    events = json.loads(store.campaign("c")["settings"])["events"]
+    assert [e["kind"] for e in events] == ["start", "resume"] and events[1]["stored"] == 6
+    assert all(e["cores"] >= 1 and "commit" in e and "cpu" in e for e in events)
