@@ -47,3 +47,17 @@ def test_fp32_runs_replay_across_the_checked_classes_and_bf16_ones_do_not():
     assert "oneDNN kernels" in n.can_reproduce(
         "channels_last isa=AVX2 threads=1 torch=1.13.0a0", "channels_last isa=SSE41 threads=1 torch=1.13.0a0"
     )
+
+
+def test_the_benchmarks_page_lists_every_class_checked():
+    text = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
+    sec = text[text.index("### CPU classes: the default numerics") :]
+    sec = sec[: sec.index("\n### ")]
+    rows = [ln for ln in sec.splitlines() if ln.startswith("| ") and not ln.startswith("| CPU ")]
+    classes = load("results/numerics/cpu_classes.json")["classes"]
+    assert len(rows) == len(classes)
+    for ln, c in zip(rows, classes):
+        cells = [x.strip() for x in ln.strip("|").split("|")]
+        assert cells[0] == c["cpu"] and cells[1] == c["best_isa"]
+        assert cells[2] == ("yes" if c["native_bf16"] else "no") and cells[3] == f"`{c['numerics']}`"
+        assert cells[4].split() == [d[:8] for d in c["digests"]] and cells[5] == c["date"]

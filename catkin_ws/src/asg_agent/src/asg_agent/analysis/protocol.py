@@ -367,6 +367,75 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
     }
 
 
+BEGIN, END = "<!-- flaw study status: begin (generated) -->", "<!-- flaw study status: end -->"
+
+
+def status(p: dict, folder: str) -> dict:
+    """Every campaign of the protocol so far, each with its endpoint (first `budget` scenarios),
+    cost and interruptions; nothing compared (that waits for complete stages)."""
+    from asg_agent.analysis import failure_modes as fm
+    from asg_agent.analysis.export import read_export
+    from asg_agent.analysis.stack_study import exact_interval
+
+    cs = campaigns(p, "pilot")
+    choice_path = os.path.join(folder, "pilot_choice.json")
+    if os.path.isfile(choice_path):
+        with open(choice_path) as f:
+            cs += campaigns(p, "confirmatory", json.load(f))
+    out = {}
+    for c in cs:
+        path = os.path.join(folder, c["name"] + ".jsonl.gz")
+        if not os.path.isfile(path):
+            out[c["name"]] = {"arm": c["arm"], "seed": c["seed"], "budget": c["budget"], "scenarios": 0}
+            continue
+        camp, rows = read_export(path)
+        settings = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp["settings"]
+        keep = [r for r in rows if r["job"] < c["budget"]]
+        count = {k: sum(r.get("attribution") == k for r in keep) for k in ("flaw", "model", "stack")}
+        lo, hi = exact_interval(count["flaw"], len(keep)) if keep else (0.0, 0.0)
+        hours = cpu_hours(settings, rows, c["budget"])
+        cpus = sorted({e.get("cpu", "") for e in settings.get("events", []) if e.get("cpu")})
+        out[c["name"]] = dict(
+            arm=c["arm"],
+            seed=c["seed"],
+            budget=c["budget"],
+            scenarios=len(keep),
+            **count,
+            flaw_per_1000=1000.0 * count["flaw"] / max(1, len(keep)),
+            flaw_interval=[1000.0 * lo, 1000.0 * hi],
+            modes=fm.distinct(fm.modes_of(camp, keep, lambda r: r.get("attribution") == "flaw")),
+            cpu_hours=hours,
+            flaw_per_cpu_hour=count["flaw"] / hours if hours else None,
+            cpu=", ".join(cpus),
+            deviations=[d.split(": ", 1)[1] for d in deviations(p, c, camp, rows) if "of the" not in d],
+        )
+    return out
+
+
+def status_markdown(st: dict) -> str:
+    lines = [
+        BEGIN,
+        "| campaign | arm | seed | scenarios | flaw per 1,000 (95 % exact) | flaw | model | stack | distinct flaw modes "
+        "| CPU-hours | flaw per CPU-hour | CPU | deviations |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, c in st.items():
+        if not c["scenarios"]:
+            lines.append(f"| {name} | {c['arm']} | {c['seed']} | 0 of {c['budget']} | | | | | | | | | |")
+            continue
+        done = c["scenarios"] >= c["budget"]
+        lo, hi = c["flaw_interval"]
+        per_h = "" if c["flaw_per_cpu_hour"] is None else f"{c['flaw_per_cpu_hour']:.1f}"
+        lines.append(
+            f"| {name} | {c['arm']} | {c['seed']} | {c['scenarios']}{'' if done else ' of ' + str(c['budget'])} | "
+            f"{c['flaw_per_1000']:.1f} ({lo:.1f}-{hi:.1f}) | {c['flaw']} | {c['model']} | {c['stack']} | "
+            f"{c['modes']} | {c['cpu_hours']:.2f} | {per_h} | {c['cpu']} | {'; '.join(c['deviations']) or 'none'} |"
+        )
+    done = sum(c["scenarios"] >= c["budget"] for c in st.values())
+    lines += ["", f"{done} of {len(st)} campaigns complete.", END]
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="protocol", description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -377,6 +446,11 @@ def main(argv=None) -> int:
     c = sub.add_parser("choose")
     c.add_argument("protocol")
     c.add_argument("folder")
+    t = sub.add_parser("status", help="every campaign so far into the doc's generated block")
+    t.add_argument("protocol")
+    t.add_argument("folder")
+    t.add_argument("--doc", default="")
+    t.add_argument("--check", action="store_true", help="only say whether the doc's block is stale (exit 1)")
     n = sub.add_parser("analyse")
     n.add_argument("protocol")
     n.add_argument("folder")
@@ -391,6 +465,14 @@ def main(argv=None) -> int:
                     choice = json.load(f)
             sys.stdout.write(plan_lines(campaigns(p, args.stage, choice)))
             return 0
+        if args.cmd == "status":
+            block = status_markdown(status(p, args.folder))
+            if not args.doc:
+                print(block)
+                return 0
+            from asg_agent.analysis.seed_tables import rewrite_block
+
+            return rewrite_block(args.doc, BEGIN, END, block, args.check, "protocol status")
         if args.cmd == "choose":
             ch = choose(p, args.folder)
             out = os.path.join(args.folder, "pilot_choice.json")

@@ -1,0 +1,70 @@
+"""Issue #54: docs/experiments.md's flaw-study table is what the exports say. `protocol status
+--check` finds the block in step; and, apart from the project's counting code, this test reads
+each export (gzip JSON lines) itself and checks every listed campaign's scenarios and flaw,
+model and stack counts."""
+
+import gzip
+import json
+import os
+import re
+import subprocess
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+FOLDER = os.path.join(REPO, "results", "flaw_study")
+DOC = os.path.join(REPO, "docs", "experiments.md")
+
+
+def budgets():
+    """{campaign: budget} from the committed plans (NAME SCENARIOS train ...)."""
+    out = {}
+    for plan in ("pilot.txt", "plan.txt"):
+        path = os.path.join(FOLDER, plan)
+        if os.path.isfile(path):
+            for line in open(path):
+                w = line.split("#", 1)[0].split()
+                if len(w) >= 3:
+                    out[w[0]] = int(w[1])
+    return out
+
+
+def test_the_doc_block_is_in_step_with_the_exports():
+    r = subprocess.run(
+        [
+            "/usr/bin/python3",
+            "-m",
+            "asg_agent.analysis.protocol",
+            "status",
+            os.path.join(REPO, "experiments", "protocol-flaw-study.yaml"),
+            FOLDER,
+            "--doc",
+            DOC,
+            "--check",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0, (
+        "docs/experiments.md's flaw-study block is stale: rerun `protocol status ... --doc`" + r.stderr
+    )
+
+
+def test_every_row_counts_what_its_export_holds():
+    text = open(DOC, encoding="utf-8").read()
+    block = text[text.index("<!-- flaw study status: begin") : text.index("<!-- flaw study status: end")]
+    plan = budgets()
+    rows = [ln for ln in block.splitlines() if ln.startswith("| flaw-")]
+    assert [ln.split("|")[1].strip() for ln in rows] == list(plan)  # every planned campaign, in order
+    for ln in rows:
+        cells = [c.strip() for c in ln.strip("|").split("|")]
+        name, scenarios = cells[0], cells[3]
+        path = os.path.join(FOLDER, name + ".jsonl.gz")
+        if not os.path.isfile(path):
+            assert scenarios == f"0 of {plan[name]}"
+            continue
+        with gzip.open(path, "rt") as f:
+            lines = [json.loads(x) for x in f]
+        jobs = [x for x in lines[1:] if "job" in x and x["job"] < plan[name]]
+        assert int(re.match(r"\d+", scenarios).group()) == len(jobs), name
+        got = [sum(1 for x in jobs if x.get("attribution") == k) for k in ("flaw", "model", "stack")]
+        assert [int(cells[5]), int(cells[6]), int(cells[7])] == got, name
+        assert abs(float(cells[4].split()[0]) - 1000.0 * got[0] / len(jobs)) < 0.051, name
