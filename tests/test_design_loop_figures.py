@@ -315,3 +315,94 @@ def test_the_prose_of_round_two_campaigns_is_what_its_figures_say():
     model1 = sum(c["model"] for k, c in s["campaigns"].items() if "hf1" in k)
     flaw1 = sum(c["flaw"] for k, c in s["campaigns"].items() if "hf1" in k)
     assert model1 > flaw1
+
+
+def test_the_corrected_sentences_of_issue_57_are_what_the_figures_say():
+    """docs/design-loop.md after issue #57: round 1's pooled comparison, the classes `flawed`'s flaw
+    findings hit, round 2's random-arm IoU sentence, and job 126's caption."""
+    import gzip
+    import json
+    import math
+
+    import numpy as np
+    from scipy.stats import fisher_exact
+
+    doc = open(os.path.join(REPO, "docs", "design-loop.md"), encoding="utf-8").read()
+    with open(os.path.join(REPO, "results", "hardening", "loop.json")) as f:
+        s = json.load(f)
+    arms = {r["arm"]: r for r in s["compare"]}
+    per = {a: [round(c * 500 / 1000) for c in arms[a]["counts"]] for a in ("hardened-findings", "hardened-random")}
+    x, y, n = sum(per["hardened-findings"]), sum(per["hardened-random"]), 1500
+    rr = x / y
+    se = math.sqrt(1 / x - 1 / n + 1 / y - 1 / n)
+    p = fisher_exact([[x, n - x], [y, n - y]]).pvalue
+    said = (
+        f"findings arm has {x} flaw + model findings in 1,500 scenarios and the random arm {y}: rate ratio\n"
+        f"  {rr:.2f} (95 % {math.exp(math.log(rr) - 1.96 * se):.2f}-{math.exp(math.log(rr) + 1.96 * se):.2f}), "
+        f"Fisher's exact p = {p:.2f}"
+    )
+    assert said in doc
+    # the classes flawed's flaw findings collided with, seeds 20-22
+    hit = {"barberry": 0, "juniper": 0}
+    for seed in (20, 21, 22):
+        with gzip.open(os.path.join(REPO, "results", "hardening", f"loop-flawed-s{seed}.jsonl.gz"), "rt") as f:
+            rows = [json.loads(ln) for ln in f][1:]
+        for r in rows:
+            if r.get("attribution") == "flaw" and r.get("collision_with") is not None:
+                hit[r["meshes"][r["collision_with"]]] += 1
+    total = sum(hit.values())
+    assert (
+        f"of its {total} flaw\n  findings over seeds 20-22, {hit['barberry']} are collisions with a barberry and {hit['juniper']} with a juniper"
+        in doc
+    )
+    # round 2: the random arm's IoU rises less than the findings arm's on the test set, more on the held-apart findings
+    t = ah.table(os.path.join(REPO, "results", "hardening"))["arms"]
+
+    def rise(arm, st):
+        return t[f"{arm}-2"][st]["iou_non_traversable"] - t[f"{arm}-1"][st]["iou_non_traversable"]
+
+    assert rise("hardened-random", "test") < rise("hardened-findings", "test")
+    assert rise("hardened-random", "heldout-findings") > rise("hardened-findings", "heldout-findings")
+    assert "by less than the findings arm's on the test set,\n  by more on the held-apart findings" in doc
+    # job 126's caption: the obstacle nearest where each stack's run ended
+    from asg_scenario import load_scenario
+
+    scen = load_scenario(
+        os.path.join(
+            REPO, "results", "hardening", "suite-r4pilot", "scenarios", "005-round4-pilot-reward-proxy-s0-job126.yaml"
+        )
+    )
+    obs = [(lay["mesh_name"], i["x"], i["y"]) for lay in scen["structural"]["layouts"] for i in lay["instances"]]
+    ended = {}
+    for arm in ("flawed-cl", "hardened-findings-1", "hardened-random-1"):
+        with open(os.path.join(REPO, "results", "hardening", "paths", f"{arm}.json")) as f:
+            run = next(r for r in json.load(f) if "job126" in r["file"])
+        end = np.asarray(run["trajectory_xy"][-1])
+        near = min(obs, key=lambda o: math.dist(o[1:], end))
+        ended[arm] = (run["termination"], near[0])
+    assert ended["flawed-cl"] == ("COLLISION", "juniper")
+    assert ended["hardened-findings-1"] == ("COLLISION", "barberry")
+    assert ended["hardened-random-1"][0] == "SUCCESS"
+    assert "job 126: flawed hits a juniper, hardened-findings a barberry, hardened-random drives round both" in doc
+
+
+def test_the_stale_note_counts_the_shared_scenes():
+    """Section 3's stale note (issue #57): how many held-apart scenes the findings arm trained on."""
+    from asg_agent.campaign import overlap
+    from asg_agent.campaign.hardening import sources_from_export
+
+    training = overlap.scenes_of(os.path.join(REPO, "results", "attribution", "exp1c-td3-per-asp-s0.jsonl.gz"))
+    suite = overlap.scenes_of(os.path.join(REPO, "results", "hardening", "suite-r4pilot"))
+    in_suite = {p["scene"] for p in overlap.shared(suite, training)}
+    held = sources_from_export(
+        os.path.join(REPO, "results", "round4", "round4-pilot-reward-proxy-s0.jsonl.gz"), classes=("flaw", "model")
+    )
+    shared = overlap.shared([overlap.request_scene(str(s.origin["job"]), s.request) for s in held], training)
+    jobs = sorted(int(p["scene"]) for p in shared)
+    doc = " ".join(
+        open(os.path.join(REPO, "docs", "design-loop.md"), encoding="utf-8").read().replace(">", " ").split()
+    )
+    assert jobs == [24, 27, 40, 65, 94, 110]
+    assert max(p["largest_m"] for p in shared) <= 0.005
+    assert f"{len(jobs)} of the {len(held)} `heldout-findings` scenes" in doc
+    assert f"{len(in_suite)} of the {len(suite)} `suite-r4pilot` findings" in doc

@@ -34,7 +34,8 @@ SCENES=$(/usr/bin/python3 -c "import json,sys; print(len(json.load(open(sys.argv
 [ -f "$WORK/random$ROUND/frames/manifest.csv" ] ||
   harden --export "$RANDOM_EXPORT" --scenes "$SCENES" --out "$WORK/random$ROUND" --frames $FRAMES --seed 0
 [ -f "$WORK/heldout-findings/frames/manifest.csv" ] ||
-  harden --export "$HELDOUT_EXPORT" --classes flaw,model --out "$WORK/heldout-findings" --frames 848 --seed 1
+  harden --export "$HELDOUT_EXPORT" --classes flaw,model --out "$WORK/heldout-findings" --frames 848 --seed 1 \
+    --apart-from "$FINDINGS_EXPORT,$RANDOM_EXPORT" --drop-shared  # held apart from both arms' sources (issue #57)
 [ -f "$WORK/test/manifest.csv" ] || "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/test" --count 600 --seed 3
 # the first FRAMES frames of flawed.pt's own training set (scripts/repro/make_models.sh: seed 2, barberries)
 [ -f "$WORK/rehearsal/manifest.csv" ] ||
@@ -69,7 +70,8 @@ done
 
 log "suite pass rates (one worker a stack, U-Net in fp32 channels_last)"
 [ -f "$OUT/suite-r4pilot/suite.yaml" ] ||
-  /usr/bin/python3 -m asg_agent.cli.suite export "$HELDOUT_EXPORT" --out "$OUT/suite-r4pilot" --classes flaw,model
+  /usr/bin/python3 -m asg_agent.cli.suite export "$HELDOUT_EXPORT" --out "$OUT/suite-r4pilot" --classes flaw,model \
+    --apart-from "$FINDINGS_EXPORT,$RANDOM_EXPORT" --drop-shared
 [ -f "$OUT/suite-exp1c/suite.yaml" ] || cp -r "$REPO/tests/suites/exp1c-flaw" "$OUT/suite-exp1c"
 STACKS=("flawed-cl=perception:=unet model:=flawed unet_backend:=channels_last"
   "full-cl=perception:=unet model:=full unet_backend:=channels_last")

@@ -23,7 +23,7 @@ import hashlib
 import json
 import os
 import time
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Sequence
 from xml.etree import ElementTree as ET
 
 import numpy as np
@@ -64,16 +64,31 @@ def verdict(termination: str, proxy: Optional[float], bound: float) -> tuple:
     return False, f"reached the goal, proxy {proxy:.2f}"
 
 
-def export_suite(exports: List[str], out: str, classes=("flaw",), limit: int = 0, label: str = "") -> dict:
+def export_suite(
+    exports: List[str],
+    out: str,
+    classes=("flaw",),
+    limit: int = 0,
+    label: str = "",
+    apart_from: Sequence[str] = (),
+    drop_shared: bool = False,
+) -> dict:
     """Writes the suite folder `out` from campaign exports: one finding per failure mode of the
     attribution `classes` (earliest job first), at most `limit` (0: all). `label` names the stack
-    the campaign ran, for its recorded outcomes (default: its model and backend)."""
+    the campaign ran, for its recorded outcomes (default: its model and backend). `apart_from`:
+    training sources (exports, suites, frame sets; campaign.overlap) whose scenes the suite must
+    not hold: a shared finding is refused (OverlapError naming them all), or with `drop_shared`
+    left out (the next finding of its mode may take its place), and listed in `dropped_shared`."""
     from asg_scenario import dump_scenario, validate_scenario
 
     from asg_agent.analysis import failure_modes as fm
     from asg_agent.analysis.campaign_metrics import scenario_of
     from asg_agent.analysis.export import read_export
 
+    from asg_agent.campaign import overlap
+
+    training = [sc for src in apart_from for sc in overlap.scenes_of(src)]
+    shared_pairs, dropped = [], []
     os.makedirs(os.path.join(out, "scenarios"), exist_ok=True)
     entries, seen = [], set()
     for path in exports:
@@ -88,6 +103,11 @@ def export_suite(exports: List[str], out: str, classes=("flaw",), limit: int = 0
             mode = fm.mode(r, req)
             if mode in seen:
                 continue
+            if training:
+                pairs = overlap.shared([overlap.request_scene(f"{camp['name']} job {r['job']}", req)], training)
+                if pairs:
+                    (dropped if drop_shared else shared_pairs).extend(pairs)
+                    continue
             seen.add(mode)
             req["name"] = f"{camp['name']}-job{r['job']}"
             req = validate_scenario(req, req["name"])
@@ -118,9 +138,16 @@ def export_suite(exports: List[str], out: str, classes=("flaw",), limit: int = 0
                 break
         if limit and len(entries) >= limit:
             break
+    if shared_pairs:
+        listed = "; ".join(f"{p['scene']} = {p['training']}" for p in shared_pairs)
+        raise overlap.OverlapError(
+            f"suite {out}: findings held in a training source: {listed} (--drop-shared leaves them out)"
+        )
     suite = {
         "format_version": FORMAT_VERSION,
         "made_from": [os.path.basename(p) for p in exports],
+        **({"apart_from": [os.path.basename(p.rstrip("/")) for p in apart_from]} if apart_from else {}),
+        **({"dropped_shared": [f"{p['scene']} = {p['training']}" for p in dropped]} if dropped else {}),
         "classes": list(classes),
         "bound": attr.FINDING,
         "scenarios": entries,

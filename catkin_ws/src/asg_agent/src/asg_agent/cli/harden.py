@@ -28,6 +28,23 @@ from asg_agent.campaign.hardening import (
 )
 
 
+def apart(sources, training: list, what: str, drop: bool):
+    """The sources none of the `training` sources holds (campaign.overlap), and the dropped ones in
+    words; without `drop`, OverlapError naming every shared scene."""
+    from asg_agent.campaign import overlap
+
+    scenes = [
+        overlap.request_scene(f"{s.origin.get('campaign')} job {s.origin.get('job')}", s.request) for s in sources
+    ]
+    if not drop:
+        overlap.check_apart(scenes, training, what)
+        return sources, []
+    pairs = [p for src in training for p in overlap.shared(scenes, overlap.scenes_of(src))]
+    gone = {p["scene"] for p in pairs}
+    keep = [s for s, sc in zip(sources, scenes) if sc[0] not in gone]
+    return keep, [f"{p['scene']} = {p['training']}" for p in pairs]
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="harden", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -42,6 +59,13 @@ def main(argv=None) -> int:
     f.add_argument("--frames", type=int, required=True, help="frames in all")
     f.add_argument("--seed", type=int, default=0)
     f.add_argument("--no-render", action="store_true", help="write scenarios and poses only")
+    f.add_argument(
+        "--apart-from",
+        default="",
+        help="training sources (exports, suites, frame sets), comma-separated, whose scenes this set must not "
+        "hold (issue #57: a held-apart set); a shared scene is refused, naming it",
+    )
+    f.add_argument("--drop-shared", action="store_true", help="with --apart-from: leave shared scenes out")
     d = Perturbation()
     for k, v in vars(d).items():
         f.add_argument("--" + k.replace("_", "-"), type=type(v), default=v, help=f"(default {v})")
@@ -59,6 +83,11 @@ def main(argv=None) -> int:
                 raise HardeningError("--export needs --scenes K > 0 or --classes: which of its scenes to take")
             sources = sources_from_export(a.export, a.scenes, a.seed, classes)
             made_from = {"export": a.export, "scenes": len(sources), "classes": classes}
+        if a.apart_from:
+            sources, dropped = apart(sources, [x for x in a.apart_from.split(",") if x], a.out, a.drop_shared)
+            made_from.update(apart_from=a.apart_from, dropped_shared=dropped)
+            for d in dropped:
+                print(f"left out, in a training source: {d}")
         info = write_frame_set(sources, a.out, a.frames, a.seed, pert, made_from)
         print(f"{a.out}: {info['frames']} poses over {len(sources)} scenes x {pert.variants} variants")
         if not a.no_render:

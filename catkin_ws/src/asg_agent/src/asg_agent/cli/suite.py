@@ -29,6 +29,12 @@ def main(argv=None) -> int:
     e.add_argument("--classes", default="flaw", help="attribution classes, comma-separated (default flaw)")
     e.add_argument("--limit", type=int, default=0)
     e.add_argument("--label", default="", help="the stack under test's label in the outcomes (default MODEL-BACKEND)")
+    e.add_argument(
+        "--apart-from",
+        default="",
+        help="training sources (exports, suites, frame sets), comma-separated, whose scenes the suite must not hold",
+    )
+    e.add_argument("--drop-shared", action="store_true", help="leave shared findings out instead of refusing")
     r = sub.add_parser("run")
     r.add_argument("suite")
     r.add_argument("--workers", default="1", help="worker count N (/worker_0..) or namespaces, comma-separated")
@@ -41,12 +47,20 @@ def main(argv=None) -> int:
     try:
         if a.cmd == "export":
             s = export_suite(
-                a.exports, a.out, tuple(c.strip() for c in a.classes.split(",") if c.strip()), a.limit, a.label
+                a.exports,
+                a.out,
+                tuple(c.strip() for c in a.classes.split(",") if c.strip()),
+                a.limit,
+                a.label,
+                [x for x in a.apart_from.split(",") if x],
+                a.drop_shared,
             )
             print(f"suite {a.out}: {len(s['scenarios'])} scenarios ({', '.join(s['classes'])}, one per failure mode)")
+            for d in s.get("dropped_shared", []):
+                print(f"  left out, in a training source: {d}")
             return 0
         suite = load_suite(a.suite)
-    except (SuiteError, OSError, ValueError) as err:
+    except (SuiteError, OSError, ValueError) as err:  # OverlapError is a ValueError
         print(f"suite: {err}", file=sys.stderr)
         return 2
     if a.fake_workers:

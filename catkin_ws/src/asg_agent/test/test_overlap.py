@@ -1,0 +1,56 @@
+"""Issue #57: a held-apart set that shares scenes with a training source is refused, naming them.
+The case the issue found: round 4's pilot seed-0 search proposed the same first scenes as the
+findings arm's training source, exp1c-td3-per-asp-s0 (both seed-0 searches of Exp. 1)."""
+
+import os
+
+import pytest
+
+from asg_agent.campaign import overlap
+from asg_agent.campaign.hardening import sources_from_export
+from asg_agent.campaign.suite import export_suite, load_suite
+from asg_agent.cli.harden import apart
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
+TRAINING = os.path.join(REPO, "results", "attribution", "exp1c-td3-per-asp-s0.jsonl.gz")
+HELDOUT = os.path.join(REPO, "results", "round4", "round4-pilot-reward-proxy-s0.jsonl.gz")
+
+
+def test_the_heldout_findings_set_of_the_design_loop_is_refused_naming_its_shared_scenes(tmp_path):
+    sources = sources_from_export(HELDOUT, classes=("flaw", "model"))
+    with pytest.raises(overlap.OverlapError) as e:
+        apart(sources, [TRAINING], "heldout-findings", drop=False)
+    said = str(e.value)
+    # the issue's five identical scenes and the one within 5 mm, each named with its twin
+    for job in (24, 27, 40, 65, 94, 110):
+        assert f"round4-pilot-reward-proxy-s0 job {job} = exp1c-td3-per-asp-s0 job {job}" in said
+    assert said.startswith(f"heldout-findings: 6 of {len(sources)} scenes are in a training source")
+    keep, dropped = apart(sources, [TRAINING], "heldout-findings", drop=True)
+    assert len(keep) == len(sources) - 6 and len(dropped) == 6
+    overlap.check_apart(
+        [overlap.request_scene(s.name, s.request) for s in keep], [TRAINING], "rebuilt"
+    )  # the rebuilt set is apart
+
+
+def test_a_suite_exported_apart_from_a_training_source(tmp_path):
+    with pytest.raises(overlap.OverlapError, match=r"job 24 = exp1c-td3-per-asp-s0 job 24"):
+        export_suite([HELDOUT], str(tmp_path / "s"), ("flaw", "model"), apart_from=[TRAINING])
+    s = export_suite([HELDOUT], str(tmp_path / "s"), ("flaw", "model"), apart_from=[TRAINING], drop_shared=True)
+    assert s["dropped_shared"] and all("exp1c-td3-per-asp-s0" in d for d in s["dropped_shared"])
+    assert load_suite(str(tmp_path / "s"))["scenarios"]
+    # the suite as a source: its scenes against the training export, none shared
+    assert overlap.shared(overlap.scenes_of(str(tmp_path / "s")), overlap.scenes_of(TRAINING)) == []
+    assert overlap.main([str(tmp_path / "s"), TRAINING]) == 0
+    assert overlap.main([HELDOUT, TRAINING]) == 1
+
+
+def test_the_tolerance_decides_what_is_one_scene():
+    import numpy as np
+
+    a = ("a", ("juniper", "barberry"), np.array([[10.0, 10.0], [20.0, 20.0]]))
+    b = ("b", ("juniper", "barberry"), np.array([[10.004, 10.0], [20.0, 19.997]]))
+    c = ("c", ("barberry", "juniper"), np.array([[10.0, 10.0], [20.0, 20.0]]))  # other classes in order
+    assert [p["training"] for p in overlap.shared([a], [b, c])] == ["b"]
+    assert overlap.shared([a], [b], tol_m=0.001) == []
+    with pytest.raises(overlap.OverlapError, match="not an export"):
+        overlap.scenes_of(str(REPO))
