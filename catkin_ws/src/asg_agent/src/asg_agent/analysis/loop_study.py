@@ -34,6 +34,7 @@ from typing import Dict, List, Optional
 import yaml
 
 from asg_agent.analysis import stats
+from asg_agent.analysis.protocol import interruptions
 from asg_agent.scoring.attribution import FINDING
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
@@ -127,11 +128,14 @@ def collect(folder: str, plan: str, arms: Dict[str, str], seeds: List[int], budg
             if name is None:
                 raise ValueError(f"{folder}/{plan} has no campaign of model {model} seed {seed}")
             path = os.path.join(folder, f"{name}.jsonl.gz")
-            rows = read_export(path)[1] if os.path.isfile(path) else []
+            camp, rows = read_export(path) if os.path.isfile(path) else ({}, [])
+            # every resume, restart and long pause (issue #57; the flaw study's rule, one place)
+            settings = (camp.get("settings") if isinstance(camp, dict) else None) or "{}"
+            stops = interruptions(json.loads(settings) if isinstance(settings, str) else settings, rows)
             if len({r["job"] for r in rows if r["job"] < budget}) < budget:
-                missing[name] = {"arm": arm, "seed": seed}
+                missing[name] = {"arm": arm, "seed": seed, "interruptions": stops}
                 continue
-            campaigns[name] = dict(arm=arm, seed=seed, **campaign_figures(rows, budget))
+            campaigns[name] = dict(arm=arm, seed=seed, interruptions=stops, **campaign_figures(rows, budget))
             per_seed.setdefault(arm, []).append(campaigns[name]["per_1000"])
     return campaigns, per_seed, missing
 
@@ -192,6 +196,13 @@ def campaign_rows(s: Dict) -> List[str]:
         )
     for name, c in s["not_complete"].items():
         out.append(f"| {name} | {c['arm']} | {c['seed']} | not complete | | | | |")
+    devs = [(n, d) for n, c in {**s["campaigns"], **s["not_complete"]}.items() for d in c.get("interruptions", [])]
+    out += [
+        "",
+        "Deviations (every resume, restart or pause over 10 minutes of these campaigns, from their exports): "
+        + ("; ".join(f"{n}: {d}" for n, d in devs) if devs else "none")
+        + ".",
+    ]
     return out
 
 
