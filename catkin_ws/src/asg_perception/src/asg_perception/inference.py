@@ -4,15 +4,16 @@ Backends, all giving the plain eager model's labels (checked by `asg_perception.
 the tests):
 - ``eager``: the model as trained, NCHW.
 - ``channels_last``: NHWC memory layout, which oneDNN convolutions run without reorders, 2.3x
-  faster than eager on one core (docs/benchmarks.md); the default until 2026-11-24 (issue #24),
-  which every campaign and baseline before then ran.
+  faster than eager on one core (docs/benchmarks.md); the default until 2026-11-24 (issue #24)
+  and again since issue #53: bit-identical closed-loop runs on every CPU class checked.
 - ``frozen``: TorchScript, frozen and optimised for inference (conv/activation fusion), NHWC;
   measured no faster than eager with Debian's torch 1.13, kept for comparison.
 - ``bf16``: ``channels_last`` under torch's CPU autocast to bfloat16 (convolutions in bf16 with
   fp32 accumulation, argmax on the bf16 logits). Not bit-equal to eager: its labels agree on a
   measured share of pixels (docs/benchmarks.md), and it is deterministic run to run. Fast where
-  the CPU has AVX512-BF16 (or AMX); elsewhere oneDNN emulates it. The default since issue #24:
-  1.9-2.0x channels_last per frame, 2,512 against 1,743 Exp. 1 scenarios an hour.
+  the CPU has AVX512-BF16 (or AMX); elsewhere oneDNN emulates it, and the segmenter refuses it.
+  The default from issue #24 to #53, a fast mode since: 1.9-2.0x channels_last per frame, 2,512
+  against 1,743 Exp. 1 scenarios an hour on an AVX512-BF16 EPYC.
 """
 
 import numpy as np
