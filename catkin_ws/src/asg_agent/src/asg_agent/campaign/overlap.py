@@ -47,15 +47,18 @@ def scenes_of(source: str) -> List[Scene]:
                     xy = np.asarray(r["positions"], dtype=np.float64).reshape(-1, 2)
                     out.append((f"{head.get('name', source)} job {r['job']}", tuple(r.get("meshes") or ()), xy))
         return out
-    if os.path.isfile(os.path.join(source, "suite.yaml")):
-        from asg_agent.campaign.suite import load_suite
+    if os.path.isfile(os.path.join(source, "suite.yaml")):  # read here: campaign.suite imports this module
+        import yaml
+        from asg_scenario import load_scenario
 
-        suite = load_suite(source)
+        with open(os.path.join(source, "suite.yaml"), encoding="utf-8") as f:
+            entries = (yaml.safe_load(f) or {}).get("scenarios") or []
         return [
             request_scene(
-                f"{os.path.basename(source.rstrip('/'))}/{e['file']} ({e['campaign']} job {e['job']})", e["request"]
+                f"{os.path.basename(source.rstrip('/'))}/{e['file']} ({e['campaign']} job {e['job']})",
+                load_scenario(os.path.join(source, e["file"])),
             )
-            for e in suite["scenarios"]
+            for e in entries
         ]
     if os.path.isfile(os.path.join(source, "hardening.json")):
         from asg_scenario import load_scenario
