@@ -215,18 +215,17 @@ def record_cpu_class(path, here, note=""):
     import datetime
     import json
 
-    from asg_perception.numerics import best_isa, cpu_flags
+    from asg_agent.campaign.store import provenance
+    from asg_perception.numerics import best_isa, cpu_flags, native_bf16
 
-    model = ""
-    with open("/proc/cpuinfo", encoding="utf-8") as f:
-        model = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), "")
+    model = provenance()["cpu"]
     flags = cpu_flags()
     with open(path) as f:
         ref = json.load(f)
     entry = {
         "cpu": model,
         "best_isa": best_isa(flags),
-        "native_bf16": any(fl in flags for fl in ("avx512_bf16", "amx_bf16")),
+        "native_bf16": native_bf16(flags),
         "numerics": here,
         "reference": os.path.relpath(path, REPO),
         "digests": [r["digest"] for r in ref["runs"]],
