@@ -13,8 +13,8 @@
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SCENARIOS="${1:-150}"
 shift || true
-install_packages
-build_workspace ON
+# ASG_BUILT=1 (set by a plan, whose campaigns.sh did both): skip the install and build check
+if [ -n "${ASG_BUILT:-}" ]; then source_ros; else install_packages; build_workspace ON; fi
 # A master of our own on a port of our own, on loopback: a user's roscore is left alone.
 LOG="$REPO/runs/train/logs"
 use_local_master "${ASG_TRAIN_PORT:-11398}" "$LOG"

@@ -1,7 +1,10 @@
 """cli.plan: a plan of campaigns run back to back, resumably (scripts/repro/campaigns.sh), with a
 stand-in for train.sh that runs a real campaign loop on the stand-in simulator."""
 
+import json
 import os
+import subprocess
+import sys
 
 import pytest
 
@@ -189,3 +192,30 @@ def test_a_stopped_plan_stops_its_campaign_and_everything_under_it(tmp_path):
     assert p.wait(timeout=60) == 130
     lines = log.read_text().splitlines()
     assert "stopped" in lines and "child stopped" in lines, lines
+
+
+def test_each_run_records_the_cpu_time_of_its_process_tree(tmp_path):
+    # issue #54, amendment 1: findings per CPU-hour count the CPU time a campaign's runs took (the
+    # children the plan waited for), measured per run, not wall time x cores
+    from asg_agent.analysis.protocol import measured_cpu_hours
+
+    cs = plan.parse_plan(PLAN)[:1]
+    here = plan.Places.of(str(tmp_path / "here"), "results/x")
+    inner, _ = stand_in(cut_after=10)
+    burn = "import time\nt = time.process_time()\nwhile time.process_time() - t < 0.4: pass\n"
+
+    def run(c, store_path, args, repo):
+        subprocess.run([sys.executable, "-c", burn], check=True)  # a campaign's own child, in CPU
+        return inner(c, store_path, args, repo)
+
+    assert plan.run_plan(cs, here, repo=REPO, runner=run, say=lambda s: None) == 1  # cut: one run
+    assert plan.run_plan(cs, here, repo=REPO, runner=run, say=lambda s: None) == 0  # resumed, done
+    c, _ = read_export(os.path.join(here.exports, "a-random-s0.jsonl.gz"))
+    settings = json.loads(c["settings"]) if isinstance(c["settings"], str) else c["settings"]
+    cpu = [e for e in settings["events"] if e["kind"] == "cpu"]
+    assert [e["rc"] for e in cpu] == [1, 0]
+    assert all(0.35 <= e["cpu_s"] < 30 and e["wall_s"] >= e["cpu_s"] * 0.5 for e in cpu)
+    assert measured_cpu_hours(settings) == pytest.approx(sum(e["cpu_s"] for e in cpu) / 3600)
+    # a run that went unmeasured (here: the resume's cpu event missing) falls back to the clock
+    settings["events"] = [e for e in settings["events"] if e is not cpu[1]]
+    assert measured_cpu_hours(settings) is None

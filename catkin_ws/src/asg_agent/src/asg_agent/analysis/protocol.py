@@ -214,9 +214,29 @@ def interruptions(settings: dict, rows: List[dict]) -> List[str]:
 
 
 def cpu_hours(settings: dict, rows: List[dict], budget: int) -> float:
-    """[h] what the first `budget` scenarios of a campaign cost: the time from its start to the
-    last of them finishing, less the pauses longer than GAP_S, times the machine's cores (each
-    campaign of the project fills its machine: workers under test, references, the search)."""
+    """[h] what a campaign cost: its measured CPU time (measured_cpu_hours) where every run of it
+    was measured, else wall_cpu_hours."""
+    m = measured_cpu_hours(settings)
+    return m if m is not None else wall_cpu_hours(settings, rows, budget)
+
+
+def measured_cpu_hours(settings: dict) -> Optional[float]:
+    """[h] the user + system CPU time of every run of the campaign (the plan's `cpu` events:
+    cli.plan.cpu_event, the process tree of train.sh), or None when a run of it went unmeasured
+    (a run outside a plan, or a campaign from before the protocol's amendment 1)."""
+    events = settings.get("events", [])
+    runs = sum(e.get("kind") in ("start", "resume", "restart") for e in events)
+    cpu = [e for e in events if e.get("kind") == "cpu"]
+    if not cpu or len(cpu) < runs:
+        return None
+    return sum(float(e["cpu_s"]) for e in cpu) / 3600.0
+
+
+def wall_cpu_hours(settings: dict, rows: List[dict], budget: int) -> float:
+    """[h] what the first `budget` scenarios of a campaign cost by the clock: the time from its
+    start to the last of them finishing, less the pauses longer than GAP_S, times the machine's
+    cores (each campaign of the project fills its machine: workers under test, references, the
+    search). It grows with whatever else shares the machine: the fallback of cpu_hours."""
     fin = sorted(r["finished"] for r in rows if r.get("finished") and r["job"] < budget)
     if not fin:
         return 0.0
@@ -405,6 +425,7 @@ def status(p: dict, folder: str) -> dict:
             flaw_interval=[1000.0 * lo, 1000.0 * hi],
             modes=fm.distinct(fm.modes_of(camp, keep, lambda r: r.get("attribution") == "flaw")),
             cpu_hours=hours,
+            cpu_measured=measured_cpu_hours(settings) is not None,
             flaw_per_cpu_hour=count["flaw"] / hours if hours else None,
             cpu=", ".join(cpus),
             deviations=[d.split(": ", 1)[1] for d in deviations(p, c, camp, rows) if "of the" not in d],
@@ -429,10 +450,18 @@ def status_markdown(st: dict) -> str:
         lines.append(
             f"| {name} | {c['arm']} | {c['seed']} | {c['scenarios']}{'' if done else ' of ' + str(c['budget'])} | "
             f"{c['flaw_per_1000']:.1f} ({lo:.1f}-{hi:.1f}) | {c['flaw']} | {c['model']} | {c['stack']} | "
-            f"{c['modes']} | {c['cpu_hours']:.2f} | {per_h} | {c['cpu']} | {'; '.join(c['deviations']) or 'none'} |"
+            f"{c['modes']} | {c['cpu_hours']:.2f}{'' if c.get('cpu_measured') else ' †'} | {per_h} | {c['cpu']} | {'; '.join(c['deviations']) or 'none'} |"
         )
     done = sum(c["scenarios"] >= c["budget"] for c in st.values())
-    lines += ["", f"{done} of {len(st)} campaigns complete.", END]
+    lines += ["", f"{done} of {len(st)} campaigns complete."]
+    if any(c["scenarios"] and not c.get("cpu_measured") for c in st.values()):
+        lines += [
+            "",
+            "† CPU-hours by the clock (wall time x cores, protocol.wall_cpu_hours): a campaign run before "
+            "the protocol's amendment 1, or with a run the plan did not measure; the others count the "
+            "CPU time measured (protocol.measured_cpu_hours).",
+        ]
+    lines.append(END)
     return "\n".join(lines)
 
 

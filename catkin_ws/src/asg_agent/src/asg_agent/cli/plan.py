@@ -20,7 +20,9 @@ results/campaigns and the store is results/campaigns/exp11.sqlite (issue #11's p
 import argparse
 import os
 import re
+import resource
 import signal
+import time
 import subprocess
 import sys
 from dataclasses import dataclass, field
@@ -111,7 +113,9 @@ def complete(export_path: str, scenarios: int) -> bool:
 
 def train(c: Campaign, store: str, args: List[str], repo: str) -> int:
     """The campaign through scripts/train.sh (its master, workers and campaign node), resumed."""
-    env = dict(os.environ, ASG_LAUNCH=c.launch, ASG_STORE=store)
+    # ASG_BUILT: campaigns.sh installed and built once; train.sh skips its own check, so that
+    # the campaign's measured CPU time (cpu_event) is the campaign's alone
+    env = dict(os.environ, ASG_LAUNCH=c.launch, ASG_STORE=store, ASG_BUILT="1")
     cmd = ["bash", os.path.join(repo, "scripts", "train.sh"), str(c.scenarios), f"name:={c.name}", "resume:=true"]
     # its own process group: a stopped plan stops the campaign, its workers and its master with it
     p = subprocess.Popen(cmd + args, env=env, stdin=subprocess.DEVNULL, start_new_session=True)
@@ -121,6 +125,20 @@ def train(c: Campaign, store: str, args: List[str], repo: str) -> int:
         os.killpg(p.pid, signal.SIGTERM)
         p.wait()
         return 130
+
+
+def children_cpu_s() -> float:
+    """[s] user + system CPU time of this process's finished children and all they waited for
+    (train.sh, its roslaunch, the master, workers, references and the campaign node)."""
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def cpu_event(cpu_s: float, wall_s: float, rc: int) -> dict:
+    """The event a plan records in a campaign's store after each of its runs: the CPU seconds
+    and wall seconds that run took (issue #54's amendment 1: findings per CPU-hour count these,
+    not wall time x cores, which grows with whatever else shares the machine)."""
+    return {"kind": "cpu", "cpu_s": round(cpu_s, 3), "wall_s": round(wall_s, 3), "rc": rc, "time": time.time()}
 
 
 def run_plan(
@@ -161,9 +179,11 @@ def run_plan(
             os.makedirs(os.path.dirname(store), exist_ok=True)
             n = unpark(Store(store), parked)
             say(f"campaign {c.name}: " + ("already in the store" if n is None else f"unparked, {n} scenarios"))
+        before, t0 = children_cpu_s(), time.time()
         rc = runner(c, store, args, repo)
         store_obj = Store(store)
         if store_obj.campaign(c.name) is not None:
+            store_obj.record_event(c.name, cpu_event(children_cpu_s() - before, time.time() - t0, rc))
             n = export(store_obj, c.name, export_path)
             say(f"campaign {c.name}: {n} scenarios exported to {export_path}")
         if rc != 0:  # the plan stops here; run it again to go on
