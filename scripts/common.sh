@@ -23,6 +23,9 @@ APT_PACKAGES=(
   python3-torch python3-opencv python3-numpy python3-yaml python3-matplotlib python3-scipy python3-tqdm
   python3-pytest python3-pil xvfb python3-pip python3-protobuf
   python3-numba python3-pandas python3-sklearn python3-threadpoolctl python3-sortedcontainers
+  libros-rosgraph-msgs-dev python3-rosgraph-msgs
+  # gap_nav, the third stack under test (issue #55): Debian's nodelet and depth_image_proc
+  libnodeletlib-tools libdepth-image-proc0d libdepth-image-proc-dev
 )
 # From PyPI, pinned, without dependencies (every dependency above is Debian's: pip's numpy 2 would
 # break Debian's torch): TensorBoard's event-file writer for campaign scalars, CMA-ES for the

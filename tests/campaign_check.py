@@ -132,7 +132,7 @@ class CampaignEndToEnd(unittest.TestCase):
             counts = {t: i.message_count for t, i in b.get_type_and_topic_info().topics.items()}
         row = next(r for r in store.rows("first") if r["job"] == top["job"])
         frames = int(row["sim_time"] * 15) + 1  # 15 Hz from t = 0
-        for topic in ("camera/image", "labels", "camera/depth"):
+        for topic in ("camera/image_raw", "labels", "camera/depth/image_raw"):
             self.assertGreaterEqual(counts.get("/worker_0/" + topic, 0), frames - 1, topic)
         # odom at the ticks a stack reads (camera every 4th, control every 3rd of the 60 Hz ticks),
         # and the final state (the worker's default odom_every_tick: false).

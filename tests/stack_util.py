@@ -47,10 +47,10 @@ def wait_for_segmenter(ns, timeout=180.0):
     master, deadline = rosgraph.Master("/stack_util"), time.time() + timeout
     while time.time() < deadline:
         _, subs, _ = master.getSystemState()
-        if any(t == f"/{ns}/camera/image" and f"/{ns}/segmenter" in nodes for t, nodes in subs):
+        if any(t == f"/{ns}/camera/image_raw" and f"/{ns}/segmenter" in nodes for t, nodes in subs):
             return
         time.sleep(0.5)
-    raise AssertionError(f"/{ns}/segmenter did not subscribe to /{ns}/camera/image within {timeout:.0f} s")
+    raise AssertionError(f"/{ns}/segmenter did not subscribe to /{ns}/camera/image_raw within {timeout:.0f} s")
 
 
 def run(c, scenario, timeout=300.0):

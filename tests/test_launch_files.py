@@ -168,8 +168,8 @@ def test_every_node_default_has_one_home_and_the_docs_quote_it(config, doc, sect
 
 
 def test_worker_launch_takes_the_worker_defaults_from_the_yaml():
-    # Issue #26: worker.launch passes lockstep, render_threads, command_timeout and odom_every_tick
-    # only when given, so the YAML is their one home; given, they override it.
+    # Issue #26: worker.launch passes render_threads, command_timeout and odom_every_tick only when
+    # given, so the YAML is their one home; given, they override it.
     import yaml
 
     path = os.path.join(REPO, "launch", "worker.launch")
@@ -179,4 +179,7 @@ def test_worker_launch_takes_the_worker_defaults_from_the_yaml():
         assert params[f"/worker_0/scene_worker/{key}"] == values[key], key
     params = yaml.safe_load(roslaunch("--dump-params", path, "command_timeout:=5.0", "lockstep:=false"))
     assert params["/worker_0/scene_worker/command_timeout"] == 5.0
-    assert params["/worker_0/scene_worker/lockstep"] is False
+    # issue #55: the stack's registration decides the mode; lockstep:= overrides it, for the worker
+    # and the stack's client alike
+    assert params["/worker_0/stack/mode"] == "free"
+    assert yaml.safe_load(roslaunch("--dump-params", path))["/worker_0/stack/mode"] == "lockstep"

@@ -34,6 +34,12 @@ def test_the_experiment_alone_sets_the_workers_stack():
     assert "unet_backend:=" not in " ".join(la.launch_args([exp("exp1.yaml"), "unet_backend:="]))
     # ground truth and the depth stack: only what they use
     assert [a.split(":=")[0] for a in la.launch_args([exp("exp1-depth.yaml")])] == ["stack"]
+    # a stack registered by a file (issue #55): by its name where it is one of stacks/, and the
+    # master's simulated time where its registration asks for it
+    assert la.launch_args([exp("exp1-gap-nav.yaml")]) == ["stack:=gap_nav", "sim_time:=true"]
+    assert la.launch_args([exp("exp1-gap-nav.yaml"), f"stack:={REPO}/stacks/gap_nav.launch"]) == ["sim_time:=true"]
+    with pytest.raises(ExperimentError, match="stack:=depth contradicts the experiment's stack gap_nav"):
+        la.launch_args([exp("exp1-gap-nav.yaml"), "stack:=depth"])
 
 
 def test_a_contradiction_is_refused_naming_both():

@@ -91,7 +91,7 @@ def test_a_replay_bag_names_its_worker_namespace():
     from asg_agent.ros.replay_view import bag_namespace
 
     assert bag_namespace(["/replay_worker/planner/votes", "/replay_worker/odom", "/rosout"]) == "replay_worker"
-    assert bag_namespace({"/worker_3/camera/image": None, "/worker_3/scenario": None}) == "worker_3"
+    assert bag_namespace({"/worker_3/camera/image_raw": None, "/worker_3/scenario": None}) == "worker_3"
     with pytest.raises(ValueError, match="not a replay bag"):
         bag_namespace(["/rosout", "/chatter"])
 

@@ -43,7 +43,9 @@ def cloud_xyz(msg: PointCloud2) -> np.ndarray:
 
 
 class DepthStack:
-    def __init__(self, grid: GridParams, arcs: ArcParams, camera_frame: str = "camera", base_frame: str = "base_link"):
+    def __init__(
+        self, grid: GridParams, arcs: ArcParams, camera_frame: str = "camera_optical", base_frame: str = "base_link"
+    ):
         self.grid_params, self.planner = grid, ArcPlanner(arcs)
         self.camera_frame, self.base_frame = camera_frame, base_frame
         self.cmd = None  # set by main(): the cmd_vel publisher
@@ -165,7 +167,7 @@ def main():
         rospy.logfatal(f"depth_stack: bad parameter: {e}")
         raise SystemExit(2)
     stack = DepthStack(
-        grid, arcs, rospy.get_param("~camera_frame", "camera"), rospy.get_param("~base_frame", "base_link")
+        grid, arcs, rospy.get_param("~camera_frame", "camera_optical"), rospy.get_param("~base_frame", "base_link")
     )
     tf_buffer = tf2_ros.Buffer()
     tf2_ros.TransformListener(tf_buffer)
@@ -200,6 +202,6 @@ def main():
     if rospy.get_param("~publish_markers", True):
         stack.show = Markers()
     sub("goal", PoseStamped, stack.on_goal)
-    sub("camera/points", PointCloud2, on_points)
+    sub("camera/depth/points", PointCloud2, on_points)
     sub("odom", Odometry, stack.on_odom)
     rospy.spin()

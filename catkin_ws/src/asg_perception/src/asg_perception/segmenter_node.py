@@ -1,6 +1,6 @@
 """segmenter: the rospy adapter of the U-Net (docs/perception.md).
 
-Subscribes `camera/image` (rgb8) and publishes `labels` (mono8, same header): one output per
+Subscribes `camera/image_raw` (rgb8) and publishes `labels` (mono8, same header): one output per
 input, in order. Acknowledges scenario announcements so that the worker starts only once the
 model is loaded. Images stamped outside the current run's window (ScenarioInfo.RUN_WINDOW) are
 dropped before inference and counted; a camera size it was not made for, or a frame it cannot
@@ -78,7 +78,7 @@ class SegmenterNode:
         self.publish_stage_times()
         rospy.Timer(rospy.Duration(1.0), lambda _: self.publish_stage_times())
         rospy.Subscriber("scenario", ScenarioInfo, self.on_scenario, queue_size=4)
-        rospy.Subscriber("camera/image", Image, self.on_image, queue_size=64, tcp_nodelay=True, buff_size=2**24)
+        rospy.Subscriber("camera/image_raw", Image, self.on_image, queue_size=64, tcp_nodelay=True, buff_size=2**24)
 
     def on_scenario(self, info):
         with self.lock:

@@ -21,7 +21,7 @@ class SegmenterTest(unittest.TestCase):
         rospy.Subscriber("/worker_0/labels", Image, got.append, queue_size=10)
         rospy.Subscriber("/worker_0/stack_error", StackError, errors.append, queue_size=10)
         rospy.Subscriber("/worker_0/stack_ack", StackAck, acks.append, queue_size=10)
-        pub = rospy.Publisher("/worker_0/camera/image", Image, queue_size=10)
+        pub = rospy.Publisher("/worker_0/camera/image_raw", Image, queue_size=10)
         ann = rospy.Publisher("/worker_0/scenario", ScenarioInfo, queue_size=1, latch=True)
         deadline = rospy.Time.now() + rospy.Duration(60)
         base = rospy.Time(3 * ScenarioInfo.RUN_WINDOW)

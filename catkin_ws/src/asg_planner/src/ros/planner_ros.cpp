@@ -32,11 +32,11 @@ PlannerROS::PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   lookahead_pub_ = nh_.advertise<geometry_msgs::PointStamped>("planner/lookahead", 16);
   const auto nodelay = ros::TransportHints().tcpNoDelay();
   scenario_sub_ = nh_.subscribe("scenario", 4, &PlannerROS::onScenario, this);
-  depth_sub_ = nh_.subscribe("camera/depth", 16, &PlannerROS::onDepth, this, nodelay);
+  depth_sub_ = nh_.subscribe("camera/depth/image_raw", 16, &PlannerROS::onDepth, this, nodelay);
   labels_sub_ = nh_.subscribe("labels", 16, &PlannerROS::onLabels, this, nodelay);
   info_sub_ = nh_.subscribe("camera/camera_info", 4, &PlannerROS::onInfo, this, nodelay);
   odom_sub_ = nh_.subscribe("odom", 64, &PlannerROS::onOdom, this, nodelay);
-  tf_sub_ = nh_.subscribe("tf", 16, &PlannerROS::onTf, this, nodelay);
+  tf_sub_ = nh_.subscribe("tf_static", 4, &PlannerROS::onTf, this, nodelay);  // the camera's mount
   tick_sub_ = nh_.subscribe("tick", 16, &PlannerROS::onTick, this, nodelay);
   stage_pub_ = std::make_unique<asg_lockstep::StageTimesPublisher>(nh_, "planner", &clock_);
   ROS_INFO("planner ready in %s (vote grid %.1f m, vehicle grid %.1f m, labels from %s)",
@@ -145,7 +145,7 @@ void PlannerROS::onInfo(const sensor_msgs::CameraInfoConstPtr& msg) {
 
 void PlannerROS::onTf(const tf2_msgs::TFMessageConstPtr& msg) {
   for (const auto& t : msg->transforms) {
-    if (t.header.frame_id != "base_link" || t.child_frame_id != "camera") continue;
+    if (t.header.frame_id != "base_link" || t.child_frame_id != "camera_optical") continue;
     geometry_msgs::Pose p;
     p.position.x = t.transform.translation.x;
     p.position.y = t.transform.translation.y;

@@ -33,6 +33,7 @@ struct VehicleParams {
   double max_steer = 0.6;            ///< [rad] wheel angle at steering = 1
   double max_steer_rate = 1.2;       ///< [rad/s] steering actuator slew rate (lock to lock in 1 s)
   double max_engine_force = 3200.0;  ///< [N] total at throttle = 1 (four-wheel drive)
+  double max_reverse_throttle = 0.5; ///< [-] share of max_engine_force backwards, at throttle = -1
   double max_brake = 60.0;           ///< Bullet brake impulse per wheel at brake = 1
   double rolling_brake = 2.0;        ///< brake applied when throttle and brake are 0 (engine drag)
   double linear_damping = 0.05;      ///< [-] chassis air drag
@@ -40,7 +41,7 @@ struct VehicleParams {
 
 /// Drive-by-wire command.
 struct Command {
-  double throttle = 0.0;      ///< [-] 0..1
+  double throttle = 0.0;      ///< [-] -1..1; below 0: reverse gear (VehicleParams::max_reverse_throttle)
   double steering = 0.0;      ///< [-] -1 (right) .. 1 (left)
   double brake = 0.0;         ///< [-] 0..1
   double target_speed = 0.0;  ///< [m/s] what the stack asks for (idle/stuck detection)

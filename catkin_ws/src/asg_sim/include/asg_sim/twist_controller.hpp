@@ -9,7 +9,9 @@
 ///   - speed: PI on the speed error to throttle, brake above the commanded speed (the same law
 ///     as the paper's follower), full brake for a stop command at rest.
 /// The steering actuator's slew rate is the simulator's (PhysicsWorld), not repeated here.
-/// Reverse is not modelled: a negative speed is a stop. No ROS; time comes from the caller.
+/// A negative speed drives backwards (reverse gear, issue #55), up to `max_reverse_speed`; the
+/// steering law then turns the other way for the same yaw rate, as a car's does. No ROS; time
+/// comes from the caller.
 
 #include "asg_sim/physics.hpp"
 
@@ -26,6 +28,7 @@ struct TwistControllerParams {
   double brake_deadband = 0.3;   ///< [m/s] overspeed tolerated before braking
   double stop_speed = 0.05;      ///< [m/s] commanded speed below this is a stop: full brake
   double max_speed = 15.0;       ///< [m/s] commands above are clamped (bad input is not obeyed)
+  double max_reverse_speed = 3.0;  ///< [m/s] backwards: commands below -this are clamped
 
   /// The vehicle's geometry taken from the simulator's model (one home for those figures).
   static TwistControllerParams forVehicle(const VehicleParams& v) {
@@ -38,7 +41,7 @@ struct TwistControllerParams {
 
 /// A velocity command: what geometry_msgs/Twist carries for a ground vehicle.
 struct VelocityCommand {
-  double speed = 0.0;     ///< [m/s] forward (linear.x)
+  double speed = 0.0;     ///< [m/s] forward (linear.x); negative: backwards
   double yaw_rate = 0.0;  ///< [rad/s] counter-clockwise, left positive (angular.z)
 };
 

@@ -155,13 +155,14 @@ PhysicsWorld::~PhysicsWorld() = default;
 
 void PhysicsWorld::setCommand(const Command& cmd) {
   auto clamp = [](double v, double lo, double hi) { return std::isfinite(v) ? std::clamp(v, lo, hi) : 0.0; };
-  const double throttle = clamp(cmd.throttle, 0.0, 1.0);
+  const double throttle = clamp(cmd.throttle, -1.0, 1.0);
+  const double drive = throttle >= 0.0 ? throttle : throttle * params_.max_reverse_throttle;  // reverse gear
   const double brake = clamp(cmd.brake, 0.0, 1.0);
   steer_target_ = clamp(cmd.steering, -1.0, 1.0) * params_.max_steer;
   auto* v = impl_->vehicle.get();
   const double rolling = (throttle == 0.0 && brake == 0.0) ? params_.rolling_brake : 0.0;
   for (int i = 0; i < 4; ++i) {
-    v->applyEngineForce(throttle * params_.max_engine_force / 4.0, i);
+    v->applyEngineForce(drive * params_.max_engine_force / 4.0, i);
     v->setBrake(brake * params_.max_brake + rolling, i);
   }
 }

@@ -86,17 +86,28 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ro
 nav_msgs::Odometry odometry(const VehicleState& s, const ros::Time& stamp) {
   nav_msgs::Odometry odom;
   odom.header.stamp = stamp;
-  odom.header.frame_id = "map";
-  odom.child_frame_id = "base_link";
+  odom.header.frame_id = kOdomFrame;
+  odom.child_frame_id = kBaseFrame;
   toPose(s, &odom.pose.pose);
   toTwist(s, &odom.twist.twist);
   return odom;
 }
 
-tf2_msgs::TFMessage transforms(const VehicleState& s, const Eigen::Vector3d& m, const ros::Time& stamp) {
+tf2_msgs::TFMessage transforms(const VehicleState& s, const ros::Time& stamp) {
   tf2_msgs::TFMessage tf;
-  tf.transforms.push_back(toTransform(s.pose(), stamp, "map", "base_link"));
-  tf.transforms.push_back(toTransform(cameraMount(m.x(), m.y(), m.z()), stamp, "base_link", "camera"));
+  tf.transforms.push_back(toTransform(s.pose(), stamp, kOdomFrame, kBaseFrame));
+  return tf;
+}
+
+tf2_msgs::TFMessage staticTransforms(const Eigen::Vector3d& m, bool map_odom) {
+  tf2_msgs::TFMessage tf;
+  const ros::Time zero;  // static: valid at every time
+  if (map_odom) tf.transforms.push_back(toTransform(Eigen::Isometry3d::Identity(), zero, kMapFrame, kOdomFrame));
+  // The optical frame straight from base_link (the numbers the planner projects with, unchanged),
+  // and the camera's body frame (x forward, z up) beside it for stacks that want one.
+  tf.transforms.push_back(toTransform(cameraMount(m.x(), m.y(), m.z()), zero, kBaseFrame, kCameraOpticalFrame));
+  tf.transforms.push_back(
+      toTransform(Eigen::Isometry3d(Eigen::Translation3d(m)), zero, kBaseFrame, kCameraBodyFrame));
   return tf;
 }
 
@@ -116,7 +127,7 @@ sensor_msgs::CameraInfo cameraInfo(const CameraModel& c, const std_msgs::Header&
 sensor_msgs::PointCloud2 pointCloud(const std::vector<Eigen::Vector3f>& pts, const ros::Time& stamp) {
   sensor_msgs::PointCloud2 cloud;
   cloud.header.stamp = stamp;
-  cloud.header.frame_id = "camera";
+  cloud.header.frame_id = kCameraOpticalFrame;
   sensor_msgs::PointCloud2Modifier mod(cloud);
   mod.setPointCloud2FieldsByString(1, "xyz");
   mod.resize(pts.size());

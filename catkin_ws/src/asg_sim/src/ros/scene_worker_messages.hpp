@@ -7,6 +7,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
+#include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -21,16 +22,28 @@
 
 namespace asg_sim {
 
+// The frames, by REP 105 and REP 103: map -> odom (identity, static, unless the stack localizes
+// itself) -> base_link (the vehicle, x forward, z up) -> camera_optical (x right, y down, z
+// forward: images and clouds) and camera_link (the camera's body frame, base_link's axes).
+constexpr const char* kMapFrame = "map";
+constexpr const char* kOdomFrame = "odom";
+constexpr const char* kBaseFrame = "base_link";
+constexpr const char* kCameraOpticalFrame = "camera_optical";
+constexpr const char* kCameraBodyFrame = "camera_link";
+
 SceneSpec toSpec(const asg_msgs::SceneDescription& m);
 void toPose(const VehicleState& s, geometry_msgs::Pose* p);
 void toTwist(const VehicleState& s, geometry_msgs::Twist* t);
 geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ros::Time& stamp,
                                             const std::string& parent, const std::string& child);
 
-/// Odometry (map -> base_link, twist in base_link) of a vehicle state.
+/// Odometry (odom -> base_link, twist in base_link) of a vehicle state.
 nav_msgs::Odometry odometry(const VehicleState& s, const ros::Time& stamp);
-/// tf: map -> base_link -> camera.
-tf2_msgs::TFMessage transforms(const VehicleState& s, const Eigen::Vector3d& camera_mount, const ros::Time& stamp);
+/// tf: odom -> base_link at `stamp`.
+tf2_msgs::TFMessage transforms(const VehicleState& s, const ros::Time& stamp);
+/// tf_static: map -> odom (identity, when `map_odom`), base_link -> camera_optical and
+/// base_link -> camera_link, for the camera mounted at `camera_mount` [m] in base_link.
+tf2_msgs::TFMessage staticTransforms(const Eigen::Vector3d& camera_mount, bool map_odom);
 /// The pinhole camera's info (no distortion), with `header`.
 sensor_msgs::CameraInfo cameraInfo(const CameraModel& c, const std_msgs::Header& header, int w, int h);
 /// Points in the camera's optical frame (x right, y down, z forward) as x y z float32.
@@ -40,7 +53,7 @@ template <class T>
 void fillImage(sensor_msgs::Image* msg, const ros::Time& stamp, const std::string& encoding, int w, int h,
                int bytes_per_px, const std::vector<T>& data) {
   msg->header.stamp = stamp;
-  msg->header.frame_id = "camera";
+  msg->header.frame_id = kCameraOpticalFrame;
   msg->width = w;
   msg->height = h;
   msg->encoding = encoding;

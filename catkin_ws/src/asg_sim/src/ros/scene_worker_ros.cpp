@@ -15,7 +15,8 @@ namespace asg_sim {
 SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh) {
   readParameters();
   protocol_ = std::make_unique<asg_lockstep::WorkerProtocol>(
-      asg_lockstep::WorkerProtocol::Config{params_.stack_nodes, params_.labels_node, params_.lockstep});
+      asg_lockstep::WorkerProtocol::Config{params_.stack_acks ? params_.stack_nodes : std::vector<std::string>(),
+                                           params_.labels_node, params_.lockstep});
   // Run tokens differ across worker restarts too, so a stack that outlives its worker resets.
   current_run_ = uint32_t(std::chrono::system_clock::now().time_since_epoch().count() / 1000000) << 8;
   // llvmpipe reads LP_NUM_THREADS when the first context is made; an explicit environment wins.
@@ -32,17 +33,23 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   runner_ = std::make_unique<ScenarioRunner>(renderer_.get(), rc);
   twist_controller_ = std::make_unique<TwistController>(TwistControllerParams::forVehicle(rc.vehicle));
 
-  image_pub_ = nh_.advertise<sensor_msgs::Image>("camera/image", 4);
-  depth_pub_ = nh_.advertise<sensor_msgs::Image>("camera/depth", 4);
+  // image_pipeline's names: the colour camera's image_raw and camera_info, the depth camera's
+  // depth/image_raw and depth/camera_info (the same intrinsics), its cloud depth/points.
+  image_pub_ = nh_.advertise<sensor_msgs::Image>("camera/image_raw", 4);
+  depth_pub_ = nh_.advertise<sensor_msgs::Image>("camera/depth/image_raw", 4);
   info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("camera/camera_info", 4);
+  depth_info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("camera/depth/camera_info", 4);
   labels_pub_ = nh_.advertise<sensor_msgs::Image>("camera/labels_gt", 4);
   odom_pub_ = nh_.advertise<nav_msgs::Odometry>("odom", 16);
   tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("tf", 16);
+  tf_static_pub_ = nh_.advertise<tf2_msgs::TFMessage>("tf_static", 1, true);
+  if (params_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("clock", 16);
   tick_pub_ = nh_.advertise<asg_msgs::Tick>("tick", 4);
   scenario_pub_ = nh_.advertise<asg_msgs::ScenarioInfo>("scenario", 1, true);
   status_pub_ = nh_.advertise<asg_msgs::WorkerStatus>("status", 1, true);
   goal_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("goal", 1, true);
-  if (params_.publish_points) points_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("camera/points", 4);
+  if (params_.publish_points) points_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("camera/depth/points", 4);
+  publishStatic();
   if (twist()) {  // a stack of standard messages; lockstep answers come stamped (docs/your-stack.md)
     cmd_sub_ = nh_.subscribe("cmd_vel", 16, &SceneWorkerROS::onTwist, this, ros::TransportHints().tcpNoDelay());
     cmd_vel_sub_ = nh_.subscribe("cmd_vel_stamped", 16, &SceneWorkerROS::onTwistStamped, this,
@@ -59,8 +66,9 @@ SceneWorkerROS::SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   stage_pub_ = std::make_unique<asg_lockstep::StageTimesPublisher>(nh_, "scene_worker", &clock_);
   server_->start();
   publishStatus(asg_msgs::WorkerStatus::ONLINE_AND_READY, 0);
-  ROS_INFO("scene_worker ready in %s (stack: %zu node(s), lockstep %s)", nh_.getNamespace().c_str(),
-           params_.stack_nodes.size(), params_.lockstep ? "on" : "off");
+  ROS_INFO("scene_worker ready in %s (stack %s: %zu node(s), %s, %s)", nh_.getNamespace().c_str(),
+           params_.stack_name.empty() ? "unregistered" : params_.stack_name.c_str(), params_.stack_nodes.size(),
+           params_.lockstep ? "lockstep" : "free-running", params_.stack_sim_time ? "simulated time" : "wall time");
 }
 
 void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
@@ -72,9 +80,20 @@ void SceneWorkerROS::publishStatus(uint8_t status, uint32_t scenario_id) {
   status_pub_.publish(s);
 }
 
+// The transforms that never change (REP 105, tf2's static convention: one latched message).
+void SceneWorkerROS::publishStatic() {
+  tf_static_pub_.publish(staticTransforms(runner_->config().camera_mount, params_.publish_map_odom));
+}
+
 void SceneWorkerROS::publishState(const ros::Time& stamp) {
+  // The clock first: a node on simulated time is at `stamp` when the messages stamped so arrive.
+  if (params_.publish_clock) {
+    rosgraph_msgs::Clock c;
+    c.clock = stamp;
+    clock_pub_.publish(c);
+  }
   odom_pub_.publish(odometry(runner_->state(), stamp));
-  tf_pub_.publish(transforms(runner_->state(), runner_->config().camera_mount, stamp));
+  tf_pub_.publish(transforms(runner_->state(), stamp));
 }
 
 void SceneWorkerROS::publishCamera(const ros::Time& stamp) {
@@ -96,6 +115,7 @@ void SceneWorkerROS::publishCamera(const ros::Time& stamp) {
     labels_pub_.publish(lab);
   }
   info_pub_.publish(cameraInfo(renderer_->camera(), img.header, w, h));
+  if (depth_info_pub_.getNumSubscribers() > 0) depth_info_pub_.publish(cameraInfo(renderer_->camera(), img.header, w, h));
   // The depth image as a cloud in the camera's optical frame, every points_stride-th pixel with a return.
   if (params_.publish_points)
     points_pub_.publish(pointCloud(backProject(frame_.depth, renderer_->camera(), params_.points_stride), stamp));
@@ -159,7 +179,12 @@ bool SceneWorkerROS::afterStep(std::string* error) {
   }
   bool go_on = true;
   if (!params_.lockstep) {  // free-running: hold simulated time to wall time x factor
-    std::this_thread::sleep_until(run_start_ + std::chrono::duration<double>(runner_->time() / params_.realtime_factor));
+    const auto due = run_start_ + std::chrono::duration<double>(runner_->time() / params_.realtime_factor);
+    const double behind = std::chrono::duration<double>(std::chrono::steady_clock::now() - due).count();
+    if (behind > kBehindWarnS)  // the worker (rendering, physics) cannot hold the factor
+      ROS_WARN_THROTTLE(5.0, "scene_worker: free-running at %.2fx, simulated t = %.2f s is %.2f s behind wall time",
+                        params_.realtime_factor, runner_->time(), behind);
+    std::this_thread::sleep_until(due);
     std::lock_guard<std::mutex> lock(mutex_);
     if (server_->isPreemptRequested()) {
       go_on = false;
@@ -235,12 +260,13 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
   bool acked;
   {
     auto t = clock_.time(kAcks);
-    acked = waitForAcks(goal->scenario_id, &missing);
+    acked = params_.stack_acks ? waitForAcks(goal->scenario_id, &missing) : waitForNodes(&missing);
   }
   if (!acked)
     return fail(!protocol_->error().empty() ? protocol_->error()
-                                      : "stack node(s) did not acknowledge the scenario within " +
-                                            formatSeconds(params_.ack_timeout) + ": " + missing);
+                : std::string(params_.stack_acks ? "stack node(s) did not acknowledge the scenario within "
+                                                 : "stack node(s) not up within ") +
+                      formatSeconds(params_.ack_timeout) + ": " + missing);
 
   // The lockstep run loop of the simulator core; this class is its stack side (below).
   run_start_ = std::chrono::steady_clock::now();

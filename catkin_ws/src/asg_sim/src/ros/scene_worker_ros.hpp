@@ -19,6 +19,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -55,11 +56,17 @@ class SceneWorkerROS : private LoopStack {
     double visibility_full_px = 100.0;
     std::string labels_node;               // node publishing `labels` (named when it falls silent)
     std::string command_interface = "vehicle_command";  // or "twist" (cmd_vel, docs/your-stack.md)
-    bool publish_points = false;           // camera/points: PointCloud2 from depth
+    bool publish_points = false;           // camera/depth/points: PointCloud2 from depth
     int points_stride = 2;                 // [px] pixel step of that cloud in u and v
+    bool publish_clock = true;             // `clock` (rosgraph_msgs/Clock): this worker's simulated time
+    bool publish_map_odom = true;          // map -> odom (identity) on tf_static; false: the stack localizes
+    std::string stack_name;                // the registration's stack/name ("": none, ~stack_nodes)
+    bool stack_sim_time = false;           // the registration's stack/sim_time
+    bool stack_acks = true;                // false: the stack has no client; its nodes need only be up
   };
   bool twist() const { return params_.command_interface == "twist"; }
   void readParameters();
+  void readRegistration(const std::function<void(bool, const std::string&)>& check);
   void execute(const asg_msgs::RunScenarioGoalConstPtr& goal);
   void onCommand(const asg_msgs::VehicleCommandConstPtr& msg);
   void onTwist(const geometry_msgs::TwistConstPtr& msg);
@@ -75,7 +82,11 @@ class SceneWorkerROS : private LoopStack {
   void publishStatus(uint8_t status, uint32_t scenario_id);
   void publishState(const ros::Time& stamp);
   void publishCamera(const ros::Time& stamp);
+  void publishStatic();
   bool waitForAcks(uint32_t scenario_id, std::string* missing);
+  // A stack without acknowledgements (stack/acks false): every one of its nodes is registered
+  // with the master; false, naming the missing ones, after ~ack_timeout.
+  bool waitForNodes(std::string* missing);
   // Lockstep: waits for the command answering `stamp`; false on timeout or preemption.
   bool waitForCommand(const ros::Time& stamp, Command* out, std::string* why);
   // The run loop's stack side (LoopStack).
@@ -91,8 +102,8 @@ class SceneWorkerROS : private LoopStack {
   Params params_;
   std::unique_ptr<Renderer> renderer_;
   std::unique_ptr<ScenarioRunner> runner_;
-  ros::Publisher image_pub_, depth_pub_, info_pub_, labels_pub_, odom_pub_, tf_pub_, tick_pub_,
-      scenario_pub_, status_pub_, points_pub_, goal_pub_;
+  ros::Publisher image_pub_, depth_pub_, info_pub_, depth_info_pub_, labels_pub_, odom_pub_, tf_pub_,
+      tf_static_pub_, clock_pub_, tick_pub_, scenario_pub_, status_pub_, points_pub_, goal_pub_;
   ros::Subscriber cmd_sub_, cmd_vel_sub_, ack_sub_, error_sub_, labels_sub_;
   std::unique_ptr<actionlib::SimpleActionServer<asg_msgs::RunScenarioAction>> server_;
 
@@ -117,6 +128,7 @@ class SceneWorkerROS : private LoopStack {
   std::unique_ptr<asg_lockstep::StageTimesPublisher> stage_pub_;
   std::unique_ptr<asg_lockstep::StageClock::Section> physics_time_;  // open during a physics tick
   std::chrono::steady_clock::time_point run_start_;  // free-running: wall time of simulated t = 0
+  static constexpr double kBehindWarnS = 0.25;  // [s, wall] free-running: lag that is reported
 };
 
 }  // namespace asg_sim

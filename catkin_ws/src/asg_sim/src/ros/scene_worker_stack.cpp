@@ -2,7 +2,12 @@
 // stack sends (commands, velocity set points, acknowledgements, errors, labels) and the waits
 // for acknowledgements and for each tick's answer. The protocol core (asg_lockstep) decides what
 // counts; these only translate and wait on the condition variable with wall-clock deadlines.
+#include <algorithm>
 #include <chrono>
+#include <thread>
+
+#include <ros/master.h>
+#include <ros/names.h>
 #include <cstdio>
 
 #include "scene_worker_ros.hpp"
@@ -86,6 +91,22 @@ bool SceneWorkerROS::waitForAcks(uint32_t scenario_id, std::string* missing) {
   *missing = protocol_->missingAcks();
   (void)scenario_id;
   return missing->empty();
+}
+
+bool SceneWorkerROS::waitForNodes(std::string* missing) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.ack_timeout);
+  while (true) {
+    std::vector<std::string> up;
+    ros::master::getNodes(up);
+    missing->clear();
+    for (const auto& n : params_.stack_nodes) {
+      const std::string name = ros::names::append(nh_.getNamespace(), n);
+      if (std::find(up.begin(), up.end(), name) == up.end()) *missing += (missing->empty() ? "" : ", ") + name;
+    }
+    if (missing->empty()) return true;
+    if (!ros::ok() || server_->isPreemptRequested() || std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
 }
 
 bool SceneWorkerROS::waitForCommand(const ros::Time& stamp, Command* out, std::string* why) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -36,13 +37,12 @@ TEST(TwistController, SteeringFollowsTheBicycleModelAndItsSign) {
   EXPECT_NEAR(c.update({0.2, 0.1}, 0.2, 0.05).steering, std::atan(2.3 * 0.1 / 1.0) / 0.6, 1e-12);
 }
 
-TEST(TwistController, StopsOnZeroNegativeOrNonFiniteCommands) {
+TEST(TwistController, StopsOnZeroOrNonFiniteCommands) {
   TwistController c(kVehicle);
-  for (double v : {0.0, -2.0}) {
+  for (double v : {0.0, 0.04, -0.04}) {
     const Command s = c.update({v, 0.0}, 3.0, 0.05);
     EXPECT_EQ(s.throttle, 0.0);
     EXPECT_EQ(s.brake, 1.0);
-    EXPECT_EQ(s.target_speed, 0.0);
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Command n = c.update({nan, 0.0}, 3.0, 0.05);
@@ -65,6 +65,27 @@ TEST(TwistController, BrakesAboveTheCommandedSpeedOnly) {
   EXPECT_EQ(under.brake, 0.0);
 }
 
+TEST(TwistController, ReverseGearBelowZero) {
+  // Issue #55: a negative speed is reverse, not a stop.
+  TwistController c(kVehicle);
+  const Command back = c.update({-2.0, 0.0}, 0.0, 0.05);
+  EXPECT_LT(back.throttle, 0.0);
+  EXPECT_EQ(back.brake, 0.0);
+  EXPECT_EQ(back.target_speed, -2.0);
+  c.reset();
+  const Command rolling = c.update({-2.0, 0.0}, 3.0, 0.05);  // still rolling forward: brake first
+  EXPECT_GT(rolling.brake, 0.0);
+  EXPECT_EQ(rolling.throttle, 0.0);
+  EXPECT_EQ(c.update({-99.0, 0.0}, 0.0, 0.05).target_speed, -kVehicle.max_reverse_speed);
+  // Backwards, the same yaw rate turns the wheels the other way.
+  c.update({-2.0, 0.3}, -2.0, 0.05);
+  EXPECT_NEAR(c.wheelAngle(), std::atan(2.3 * 0.3 / -2.0), 1e-12);
+  // Forward commands are what they were: the same numbers as before reverse existed.
+  TwistController d(kVehicle);
+  const Command fwd = d.update({4.0, 0.2}, 3.0, 0.05);
+  EXPECT_NEAR(fwd.throttle, std::clamp(0.5 * 1.0 + 0.1 * 0.05, 0.0, 1.0), 1e-12);
+}
+
 TEST(TwistController, RejectsImpossibleParameters) {
   TwistControllerParams p = kVehicle;
   p.wheelbase = 0.0;
@@ -80,7 +101,8 @@ TEST(TwistController, TracksSpeedAndYawRateOnTheVehicleModel) {
   struct Case {
     double speed, yaw_rate;
   };
-  for (const Case k : {Case{4.0, 0.0}, Case{4.0, 0.25}, Case{3.0, -0.3}, Case{6.0, 0.15}}) {
+  for (const Case k : {Case{4.0, 0.0}, Case{4.0, 0.25}, Case{3.0, -0.3}, Case{6.0, 0.15}, Case{-2.0, 0.0},
+                       Case{-2.0, 0.2}}) {
     auto s = emptyScene();
     ScenarioRunner r(nullptr);
     r.reset(s);
@@ -95,7 +117,7 @@ TEST(TwistController, TracksSpeedAndYawRateOnTheVehicleModel) {
       w += traj[i].state.angular.z() / 60.0;
     }
     SCOPED_TRACE("speed " + std::to_string(k.speed) + " m/s, yaw rate " + std::to_string(k.yaw_rate));
-    EXPECT_NEAR(v, k.speed, 0.1 * k.speed);
+    EXPECT_NEAR(v, k.speed, 0.1 * std::abs(k.speed));
     EXPECT_NEAR(w, k.yaw_rate, 0.03 + 0.15 * std::abs(k.yaw_rate));
   }
 }

@@ -36,7 +36,7 @@ class SceneWorkerTest(unittest.TestCase):
             assert c.wait_for_server(rospy.Duration(60.0)), f"no action server in {ns}"
             cls.clients[ns] = c
         cls.images, cls.ticks, cls.infos = [], [], []
-        rospy.Subscriber("/worker_0/camera/image", Image, lambda m: cls.images.append(m), queue_size=100)
+        rospy.Subscriber("/worker_0/camera/image_raw", Image, lambda m: cls.images.append(m), queue_size=100)
         rospy.Subscriber("/worker_0/tick", Tick, lambda m: cls.ticks.append(m), queue_size=1000)
         rospy.Subscriber("/worker_0/scenario", ScenarioInfo, lambda m: cls.infos.append(m), queue_size=10)
         rospy.sleep(1.0)

@@ -13,6 +13,8 @@ import argparse
 import html
 import json
 import os
+
+import yaml
 import sys
 
 import numpy as np
@@ -20,12 +22,28 @@ from asg_agent.campaign.store import StoreError
 from asg_agent.scoring.attribution import FINDING, FINDING_STRONG
 
 
-def _baseline_html(experiment: str) -> str:
-    """The baseline of the campaign's experiment (results/baseline/<exp>.json), if measured."""
+def baseline_path(experiment: str, settings: dict) -> str:
+    """results/baseline/<exp>.json of the campaign's experiment, or else of its scenario (the
+    depth stack's exp1-depth runs exp1's layouts: its row is in exp1.json); "" if neither."""
     from asg_agent.cli.baseline import REPO
 
-    path = os.path.join(REPO, "results", "baseline", f"{experiment}.json")
-    if not os.path.isfile(path):
+    names = [experiment]
+    source = settings.get("experiment_file", "")
+    if source and os.path.isfile(source):
+        with open(source, encoding="utf-8") as f:
+            scenario = (yaml.safe_load(f) or {}).get("scenario", "")
+        names.append(os.path.splitext(os.path.basename(str(scenario)))[0])
+    for n in names:
+        path = os.path.join(REPO, "results", "baseline", f"{n}.json")
+        if n and os.path.isfile(path):
+            return path
+    return ""
+
+
+def _baseline_html(experiment: str, settings: dict) -> str:
+    """The baseline of the campaign's experiment (baseline_path), if measured."""
+    path = baseline_path(experiment, settings)
+    if not path:
         return (
             f"<h2>Baseline</h2><p>No baseline of {html.escape(experiment)} yet: "
             f"<code>bash scripts/repro/baseline.sh {html.escape(experiment)}</code> measures it.</p>"
@@ -43,6 +61,13 @@ def _baseline_html(experiment: str) -> str:
         "<table><tr><th>stack</th><th>runs</th><th>proxy &gt;= 3</th><th>yaw term median / p90</th>"
         f"<th>PLR median / p90</th><th>collisions</th></tr>{rows}</table>"
     )
+
+
+def reference_words(settings: dict) -> str:
+    """What the reference stack of a single-reference attribution is, against the stack under test."""
+    if settings.get("stack", "paper") == "paper":
+        return "ground-truth labels, the same planner and follower"
+    return f"the paper's stack on ground-truth labels: another planner and follower than {settings['stack']}'s"
 
 
 def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: str, top: int) -> str:
@@ -172,7 +197,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
     if s["attributed"]:
         attribution = (
             f"<h2>Attribution</h2><p>{s['attributed']} scenarios also ran on the reference stack "
-            f"(ground-truth labels, the same planner and follower). Of the {s['proxy_ge_3']} with proxy "
+            f"({reference_words(settings)}). Of the {s['proxy_ge_3']} with proxy "
             f"&gt;= 3, <b>{s['perception_ge3']}</b> are the perception's (reference proxy &lt; 2) and "
             f"<b>{s['stack_ge3']}</b> the stack's own (reference &gt;= 3); proxy &minus; reference "
             f"&gt;= 1 on {s['differential_ge1']}. Reward: {html.escape(str(settings.get('reward', 'proxy')))}. "
@@ -181,7 +206,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
             f"<b>{s['stack_collisions']}</b> the stack's (the reference collided too).</p>"
         )
     attribution += _three_stack_html(store, store_path, campaign, s, out_dir, top)
-    baseline = _baseline_html(c["experiment"])
+    baseline = _baseline_html(c["experiment"], settings)
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
 <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;
 padding:4px 8px;text-align:right}}code{{font-size:85%}}</style></head><body>

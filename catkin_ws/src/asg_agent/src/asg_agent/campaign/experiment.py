@@ -50,14 +50,12 @@ from asg_scenario import ScenarioError, load_scenario
 from asg_scenario.schema import TEXTURAL_FIELDS, strict_yaml_load
 from asg_scenario.layout import RouteFrame, instance_count, with_positions
 
+from asg_agent.campaign import stacks
+
 
 class ExperimentError(ValueError):
     pass
 
-
-#: the stacks under test a campaign knows how to check on its workers: the paper's, and the depth
-#: stack of asg_depth_stack (standard messages, Twist on cmd_vel; issue #39)
-STACKS = ("paper", "depth")
 
 KEYS = {
     "name",
@@ -91,13 +89,15 @@ LEGACY_UNET_BACKEND = "channels_last"
 class Experiment:
     name: str
     scenario: dict  #: the fixed attributes, validated
-    stack: str = "paper"  #: STACKS: which stack under test the workers run
+    stack: str = "paper"  #: the name of the stack under test (its registration's, campaign.stacks)
     perception: str = "unet"
     model: str = "flawed"
     planner_config: str = "planner.yaml"
     episode_steps: int = 5
     unet_backend: str = DEFAULT_UNET_BACKEND  #: part of the stack's identity: labels differ by backend
     source: str = ""
+    stack_file: str = ""  #: the stack's registration launch file, absolute (campaign.stacks)
+    sim_time: bool = False  #: the stack runs on simulated time (its registration's sim_time)
     text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
     #: (textural key, lo, hi) the search sets, in this order after the positions in the action
     textural_free: list = field(default_factory=list)
@@ -211,8 +211,11 @@ def load_experiment(path: str) -> Experiment:
     for key in ("name", "scenario"):
         if not isinstance(data.get(key), str) or not data.get(key):
             problems.append(f"{key}: required, a non-empty string")
-    if data.get("stack", "paper") not in STACKS:
-        problems.append(f"stack: {data.get('stack')!r}, must be one of {', '.join(STACKS)}")
+    registration = None
+    try:
+        registration = stacks.load(data.get("stack", "paper"), os.path.dirname(os.path.abspath(path)))
+    except stacks.RegistrationError as e:
+        problems.append(str(e))
     if data.get("perception", "unet") not in ("unet", "ground_truth"):
         problems.append(f"perception: {data.get('perception')!r}, must be unet or ground_truth")
     if data.get("unet_backend", DEFAULT_UNET_BACKEND) not in UNET_BACKENDS:
@@ -325,7 +328,9 @@ def load_experiment(path: str) -> Experiment:
     return Experiment(
         name=data["name"],
         scenario=scenario,
-        stack=data.get("stack", "paper"),
+        stack=registration.name,
+        stack_file=registration.path,
+        sim_time=registration.sim_time,
         perception=data.get("perception", "unet"),
         model=data.get("model", "flawed"),
         planner_config=data.get("planner_config", "planner.yaml"),

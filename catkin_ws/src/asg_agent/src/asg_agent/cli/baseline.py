@@ -369,12 +369,25 @@ def summary_cmd(a) -> int:
     return 0
 
 
+def registered_labels() -> tuple:
+    """The names of the stacks registered in stacks/ (issue #55) that are not labels already."""
+    from asg_agent.campaign import stacks
+
+    names = sorted(f[: -len(".launch")] for f in os.listdir(stacks.builtin_dir()) if f.endswith(".launch"))
+    return tuple(n for n in names if n not in STACKS and n != "paper")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="baseline", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run", help="run the layouts on running workers of one stack")
     r.add_argument("experiment")
-    r.add_argument("--stack", required=True, choices=STACKS, help="which stack the workers run (a label)")
+    r.add_argument(
+        "--stack",
+        required=True,
+        choices=STACKS + registered_labels(),
+        help="which stack the workers run (a label: a perception of the paper's stack, or a registered stack's name)",
+    )
     r.add_argument("--layouts", type=int, default=500, help="layouts 0..N-1")
     r.add_argument("--workers", default="2", help="count or comma-separated namespaces")
     r.add_argument("--root", default="", help="results folder (default results/baseline)")

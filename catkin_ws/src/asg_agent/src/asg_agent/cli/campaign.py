@@ -461,12 +461,25 @@ def campaign_settings(a, exp, workers, roles, candidates) -> dict:
         "experiment_file": exp.source,
         **({"experiment_repo_file": repo_relative(exp.source)} if repo_relative(exp.source) else {}),
         "stack": exp.stack,
-        **({"command_interface": "twist"} if exp.stack == "depth" else {}),
-        "perception": exp.perception if exp.stack == "paper" else "depth",
+        **(registered_settings(exp) if exp.stack != "paper" else {}),
+        "perception": exp.perception if exp.stack == "paper" else exp.stack,
         "model": exp.model,
         "unet_backend": exp.unet_backend,
         "planner_config": exp.planner_config,
         "fake": bool(a.fake_workers),
+    }
+
+
+def registered_settings(exp) -> dict:
+    """What a campaign records of a stack registered by a file (campaign.stacks): the file, and
+    what its registration says; the identity parameters' values are added by check_stacks."""
+    from asg_agent.campaign import stacks
+
+    reg = stacks.read(exp.stack_file)
+    return {
+        "command_interface": reg.command,
+        "stack_file": repo_relative(reg.path) or reg.path,
+        "registration": {"mode": reg.mode, "command": reg.command, "sim_time": reg.sim_time, "identity": reg.identity},
     }
 
 
@@ -478,6 +491,14 @@ def check_stacks(exp, settings: dict, workers, roles):
     from asg_agent.ros.stack_identity import segmenter_numerics, stack_mismatch
 
     wrong = [m for w in workers for m in stack_mismatch(w, settings)]
+    if exp.stack != "paper" and not wrong:
+        # a registered stack's identity parameters: the same on every worker, recorded
+        from asg_agent.ros.stack_identity import identity_values
+
+        seen = {w: identity_values(w) for w in workers}
+        if any(v != seen[workers[0]] for v in seen.values()):
+            wrong.append(f"the workers' {exp.stack} stacks differ in their identity parameters: {seen}")
+        settings["identity"] = seen[workers[0]]
     for role, ws in roles.items():
         wrong += [m for w in ws for m in stack_mismatch(w, settings["references"][role])]
     groups = [(settings, workers)] + [(settings["references"][r], ws) for r, ws in roles.items()]

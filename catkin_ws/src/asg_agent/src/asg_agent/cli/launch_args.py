@@ -14,6 +14,7 @@ import os
 import sys
 from typing import Dict, List
 
+from asg_agent.campaign import stacks
 from asg_agent.campaign.experiment import Experiment, ExperimentError, load_experiment
 from asg_perception.numerics import refuse_emulated, resolve_backend
 
@@ -21,7 +22,7 @@ REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)),
 #: train.launch's default experiment (asg_bringup/experiments is the repository's experiments/)
 DEFAULT_EXPERIMENT = os.path.join(REPO, "experiments", "exp1.yaml")
 #: the train.launch arguments an experiment decides, in the order they are printed
-STACK_KEYS = ("stack", "perception", "model", "unet_backend", "planner_config")
+STACK_KEYS = ("stack", "sim_time", "perception", "model", "unet_backend", "planner_config")
 
 
 def planner_path(name: str) -> str:
@@ -33,7 +34,11 @@ def planner_path(name: str) -> str:
 
 def implied(exp: Experiment) -> Dict[str, str]:
     """The train.launch arguments of STACK_KEYS the experiment sets (only those its stack uses)."""
-    out = {"stack": exp.stack}
+    # a registered stack of this project by its name, any other by its registration file
+    builtin = os.path.dirname(exp.stack_file) == os.path.realpath(stacks.builtin_dir())
+    out = {"stack": exp.stack if builtin else exp.stack_file}
+    if exp.sim_time:
+        out["sim_time"] = "true"
     if exp.stack == "paper":
         out["perception"] = exp.perception
         if exp.perception == "unet":
@@ -45,6 +50,11 @@ def implied(exp: Experiment) -> Dict[str, str]:
 def _same(key: str, given: str, want: str) -> bool:
     if key == "unet_backend":
         return resolve_backend(given) == resolve_backend(want)
+    if key == "stack":
+        try:
+            return stacks.resolve(given) == stacks.resolve(want)
+        except stacks.RegistrationError:
+            return False
     if key == "planner_config":
         return os.path.realpath(planner_path(given)) == os.path.realpath(want)
     return given == want

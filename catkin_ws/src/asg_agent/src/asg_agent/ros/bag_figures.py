@@ -118,6 +118,10 @@ def snapshot(bag_path: str, out: str, t: float, ns: str = "worker_0"):
     plt.close(fig)
 
 
+#: topics renamed by issue #55 (image_pipeline's names): the old name each one had in older bags
+OLD_TOPICS = {"camera/image_raw": ("camera/image",), "camera/depth/image_raw": ("camera/depth",)}
+
+
 def bag_image(bag_path: str, topic: str, t: float, ns: str) -> "np.ndarray":
     """The last image of `ns`/`topic` stamped at or before simulated time `t` (H x W x 3)."""
     import rosbag
@@ -126,7 +130,9 @@ def bag_image(bag_path: str, topic: str, t: float, ns: str) -> "np.ndarray":
     img = None
     with rosbag.Bag(bag_path) as bag:
         base = _bag_base(bag, w)
-        for _, msg, _ in bag.read_messages(topics=[f"{w}/{topic}"]):
+        # bags recorded before issue #55's image_pipeline names hold camera/image
+        names = [f"{w}/{topic}"] + [f"{w}/{old}" for old in OLD_TOPICS.get(topic, ())]
+        for _, msg, _ in bag.read_messages(topics=names):
             if msg.header.stamp.to_sec() <= base + t + 1e-9:
                 img = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, -1)[..., :3]
     if img is None:
@@ -167,7 +173,7 @@ def pair_figure(rows, times, out: str, title: str, ns: str = "replay_worker", ce
             if centre is not None:
                 axes[i][j].set_xlim(centre[0] - half, centre[0] + half)
                 axes[i][j].set_ylim(centre[1] - half, centre[1] + half)
-        for j, (topic, name) in enumerate((("camera/image", "camera"), ("replay/labels_rgb", "labels voted from"))):
+        for j, (topic, name) in enumerate((("camera/image_raw", "camera"), ("replay/labels_rgb", "labels voted from"))):
             ax = axes[i][len(times) + j]
             ax.imshow(bag_image(bag, topic, times[-1], ns))
             ax.set_title(f"{label}: {name}, t = {times[-1]:.1f} s", fontsize=7)

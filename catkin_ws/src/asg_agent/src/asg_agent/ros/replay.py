@@ -34,13 +34,15 @@ from asg_agent.campaign.store import Store, unpack_trajectory
 from asg_agent.ros.stack_identity import stack_mismatch
 
 BAG_TOPICS = [
-    "camera/image",
+    "camera/image_raw",
     "camera/labels_gt",
     "labels",
-    "camera/depth",
+    "camera/depth/image_raw",
     "camera/camera_info",
     "odom",
     "tf",
+    "tf_static",
+    "clock",
     "tick",
     "cmd",
     "planner/state",
@@ -245,6 +247,10 @@ def main(argv=None):
         under_test = "paper" if a.perception else settings.get("stack", "paper")
         stack = {
             "stack": under_test,
+            # a stack registered by a file outside this project: its file (repository-relative
+            # when it is one of the repository's), and whether it runs on simulated time
+            "stack_file": settings.get("stack_file", "") if under_test != "paper" else "",
+            "sim_time": bool((settings.get("registration") or {}).get("sim_time")) and under_test != "paper",
             "perception": a.perception
             or (settings.get("perception", "unet") if under_test == "paper" else "ground_truth"),
             "model": a.model or settings.get("model", "flawed"),
@@ -282,6 +288,19 @@ def bf16_refusal(settings: dict) -> str:
     return f"the campaign ran the bf16 fast mode on oneDNN {isa}; its runs replay bit for bit only there ({where})"
 
 
+def registration_arg(stack: dict) -> str:
+    """worker.launch's stack:= for a stored stack: its registration file (a relative path is the
+    repository's), or the name of a registered stack of this project where none was stored."""
+    path = stack.get("stack_file", "")
+    if not path:
+        return stack.get("stack", "paper")
+    return path if os.path.isabs(path) else os.path.join(_repo(), path)
+
+
+def _repo() -> str:
+    return os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+
+
 def bring_up_worker(stack: dict, port: int):
     """roslaunch asg_bringup's worker.launch with the stack of the stored run, on a private master."""
     import rospkg
@@ -299,7 +318,8 @@ def bring_up_worker(stack: dict, port: int):
         str(port),
         worker_launch,
         "ns:=replay_worker",
-        f"stack:={stack.get('stack', 'paper')}",
+        f"stack:={registration_arg(stack)}",
+        f"sim_time:={str(stack.get('sim_time', False)).lower()}",
         f"perception:={stack['perception']}",
         f"model:={stack['model']}",
         f"unet_backend:={stack.get('unet_backend', LEGACY_UNET_BACKEND)}",
@@ -351,7 +371,7 @@ def run_replay(a, request, row, settings) -> int:
             subs = dict(master.getSystemState()[1])
             if all(
                 any(n.startswith("/record") for n in subs.get(f"{worker}/{t}", []))
-                for t in ("odom", "camera/image", "planner/state")
+                for t in ("odom", "camera/image_raw", "planner/state")
             ):
                 break
             time.sleep(0.2)

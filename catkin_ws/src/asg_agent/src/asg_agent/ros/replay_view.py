@@ -75,6 +75,7 @@ def screenshot(bag: str, out: str, ns: str = "", at: float = 1.0, display: str =
                 "-d",
                 rviz_config(),
                 f"/tf:=/{ns}/tf",
+                f"/tf_static:=/{ns}/tf_static",
                 "__name:=replay_view_rviz",
                 f"__ns:=/{ns}",
             ],

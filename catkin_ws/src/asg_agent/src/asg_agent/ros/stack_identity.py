@@ -15,13 +15,17 @@ def stack_mismatch(worker: str, settings: dict) -> list:
     import rospy
 
     out = []
-    interface = rospy.get_param(f"{worker}/scene_worker/command_interface", "vehicle_command")
-    if settings.get("stack", "paper") == "depth":
-        if not rospy.has_param(f"{worker}/depth_stack/arcs"):
-            out.append(f"the campaign ran the depth stack, {worker} has no depth_stack node")
-        if interface != "twist":
-            out.append(f"the depth stack drives by cmd_vel, {worker}'s scene worker takes {interface!r}")
-        return out
+    # A registered stack (stacks/*.launch) names itself in the worker's namespace; a worker
+    # without a registration runs the paper's stack by its own parameters.
+    interface = rospy.get_param(
+        f"{worker}/stack/command", rospy.get_param(f"{worker}/scene_worker/command_interface", "vehicle_command")
+    )
+    want_stack = settings.get("stack", "paper")
+    name = rospy.get_param(f"{worker}/stack/name", "paper")
+    if name != want_stack:
+        return [f"the campaign ran stack {want_stack!r}, {worker} runs {name!r}"]
+    if want_stack != "paper":
+        return out + registered_mismatch(worker, settings, interface)
     if interface != "vehicle_command":
         out.append(f"the paper's stack sends VehicleCommand, {worker}'s scene worker takes {interface!r}")
     want = settings.get("perception")
@@ -56,6 +60,32 @@ def stack_mismatch(worker: str, settings: dict) -> list:
     elif want == "ground_truth" and has_seg:
         out.append(f"the campaign ran ground-truth labels, {worker} runs a segmenter")
     return out
+
+
+def registered_mismatch(worker: str, settings: dict, interface: str) -> list:
+    """A stack of a registration file against the campaign's record of it: its command interface
+    and mode, and every identity parameter present with the value recorded (identity_values)."""
+    import rospy
+
+    out = []
+    want = settings.get("registration") or {}
+    if want.get("command", interface) != interface:
+        out.append(f"stack {settings.get('stack')!r} sends {want.get('command')}, {worker}'s takes {interface!r}")
+    for key, value in sorted((settings.get("identity") or {}).items()):
+        if not rospy.has_param(f"{worker}/{key}"):
+            out.append(f"{worker} has no parameter {key} (the stack's identity, its registration)")
+        elif rospy.get_param(f"{worker}/{key}") != value:
+            out.append(f"{worker}'s {key} is {rospy.get_param(f'{worker}/{key}')!r}, the campaign's was {value!r}")
+    return out
+
+
+def identity_values(worker: str) -> dict:
+    """{parameter: value} of the identity parameters the worker's stack registration names
+    (what a campaign records, and a replay compares); missing ones are left out."""
+    import rospy
+
+    keys = rospy.get_param(f"{worker}/stack/identity", [])
+    return {k: rospy.get_param(f"{worker}/{k}") for k in keys if rospy.has_param(f"{worker}/{k}")}
 
 
 def segmenter_numerics(worker: str, timeout: float = 0.0) -> str:

@@ -4,11 +4,12 @@ input subscribers and its `cmd_vel` publisher through the client instead of rosp
 
     lock = LockstepClient("my_stack", on_run=my_stack.reset)
     lock.Subscriber("odom", Odometry, my_stack.on_odom)
-    lock.Subscriber("camera/points", PointCloud2, my_stack.on_points)
+    lock.Subscriber("camera/depth/points", PointCloud2, my_stack.on_points)
     lock.Subscriber("goal", PoseStamped, my_stack.on_goal)
     cmd = lock.Publisher("cmd_vel", Twist, queue_size=1)
 
-In lockstep (the node's `~lockstep` parameter, true by default), the client acknowledges each run,
+In lockstep (the node's `~lockstep` parameter; without it, its stack registration's `stack/mode`,
+lockstep by default), the client acknowledges each run,
 holds the inputs back and, at each control tick, hands them to the stack's callbacks in stamp order
 on one thread (asg_lockstep.gate), then answers the tick with the stack's latest `cmd_vel`, as a
 geometry_msgs/TwistStamped on `cmd_vel_stamped` stamped with the tick. With `~lockstep` false the
@@ -53,7 +54,9 @@ class LockstepClient:
         `on_run`: called at every new run before it is acknowledged (reset the stack there);
         `lockstep`: default the private parameter `~lockstep` (true)."""
         self.node = node or rospy.get_name().rsplit("/", 1)[-1]
-        self.lockstep = bool(rospy.get_param("~lockstep", True) if lockstep is None else lockstep)
+        if lockstep is None:  # the node's own parameter, else its stack's registration (stacks/*.launch)
+            lockstep = rospy.get_param("~lockstep", rospy.get_param("stack/mode", "lockstep") == "lockstep")
+        self.lockstep = bool(lockstep)
         self._on_run = on_run
         self._on_tick: List[Callable[[float], None]] = []
         self._protocol = StackProtocol(ScenarioInfo.RUN_WINDOW * 10**9)
@@ -133,7 +136,7 @@ class LockstepClient:
                         WAIT_REPORT_S,
                         f"{self.node}: control tick t = {self._protocol.seconds(stamp):.3f} s still waits for "
                         f"{', '.join(self._gate.missing())} (is the worker publishing it? "
-                        "camera/points needs the worker's ~publish_points)",
+                        "camera/depth/points needs the worker's ~publish_points)",
                     )
             batch = self._gate.release()
         try:
