@@ -34,6 +34,9 @@ def random_exp1(seed, scenario_id, sim_timeout=30.0):
 
 
 def client(ns, timeout=90.0):
+    from asg_agent.ros.node import wait_for_time
+
+    wait_for_time()  # under /use_sim_time, ROS-time timeouts mean nothing before the first /clock
     c = actionlib.SimpleActionClient(f"/{ns}/run_scenario", RunScenarioAction)
     assert c.wait_for_server(rospy.Duration(timeout)), f"no action server in /{ns}"
     return c

@@ -124,7 +124,9 @@ def run(a) -> int:
     )
     if not todo:
         return 0
-    rospy.init_node("baseline", anonymous=True, disable_signals=True)
+    from asg_agent.ros.node import init_node
+
+    init_node("baseline", anonymous=True, disable_signals=True)
     pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
     bar = tqdm(total=len(todo), desc=f"{exp.name}/{a.stack}", unit="run", dynamic_ncols=True)
     with open(path, "a") as f:

@@ -377,8 +377,10 @@ def make_pools(a, exp, workers, roles):
     import rospy
     from asg_agent.ros.pool import WorkerPool
 
-    rospy.init_node("campaign", anonymous=True, disable_signals=True)
+    from asg_agent.ros.node import init_node
+
     try:
+        init_node("campaign", anonymous=True, disable_signals=True)
         pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
         for role, ws in roles.items():
             references[role] = WorkerPool(ws, answer_timeout=a.answer_timeout)

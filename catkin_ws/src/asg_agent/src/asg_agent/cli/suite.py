@@ -73,7 +73,9 @@ def main(argv=None) -> int:
         from asg_agent.cli.campaign import worker_names
         from asg_agent.ros.pool import WorkerPool
 
-        rospy.init_node("suite", anonymous=True, disable_signals=True)
+        from asg_agent.ros.node import init_node
+
+        init_node("suite", anonymous=True, disable_signals=True)
         try:
             pool = WorkerPool(worker_names(a.workers))
         except (RuntimeError, ValueError) as err:

@@ -338,7 +338,9 @@ def run_replay(a, request, row, settings) -> int:
     from asg_scenario.convert import to_goal_msg
     from asg_agent.ros.pool import result_to_outcome
 
-    rospy.init_node("replay", anonymous=True, disable_signals=True)
+    from asg_agent.ros.node import init_node
+
+    init_node("replay", anonymous=True, disable_signals=True)
     worker = "/" + a.worker.strip("/")
     if settings and not a.force:
         problems = stack_mismatch(worker, settings)

@@ -78,7 +78,9 @@ def run(a) -> int:
     except ValueError as e:
         print(f"rerun: {e}", file=sys.stderr)
         return 2
-    rospy.init_node("rerun", anonymous=True, disable_signals=True)
+    from asg_agent.ros.node import init_node
+
+    init_node("rerun", anonymous=True, disable_signals=True)
     pool = WorkerPool(worker_names(a.workers), answer_timeout=300.0)
     results = {}
     t0 = time.time()
