@@ -107,7 +107,6 @@ def run_requests(pool, requests: List[dict], todo: List[int], on_row, max_attemp
 
 
 def run(a) -> int:
-    import rospy
     from asg_agent.cli.campaign import worker_names
     from asg_agent.ros.pool import WorkerPool
     from tqdm import tqdm

@@ -374,7 +374,6 @@ def make_pools(a, exp, workers, roles):
         for k, (role, ws) in enumerate(roles.items()):  # stand-in reference stacks that wiggle less
             references[role] = FakePool(len(ws), seed=int(time.time()) + 1 + k, gain=0.3, prefix=f"fake_{role}")
         return pool, references
-    import rospy
     from asg_agent.ros.pool import WorkerPool
 
     from asg_agent.ros.node import init_node

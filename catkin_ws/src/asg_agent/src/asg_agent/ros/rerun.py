@@ -69,7 +69,6 @@ def top_requests(export: str, top: int, select: str = "proxy"):
 
 
 def run(a) -> int:
-    import rospy
     from asg_agent.ros.pool import WorkerPool
     from asg_agent.cli.campaign import worker_names
 
