@@ -15,7 +15,7 @@ sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import stack_util as su  # noqa: E402
 
 from asg_agent.cli.baseline import layouts, out_path, read_rows, row_of  # noqa: E402
-from asg_agent.campaign.experiment import load_experiment  # noqa: E402
+from asg_agent.records.experiment import load_experiment  # noqa: E402
 from asg_agent.ros.pool import result_to_outcome  # noqa: E402
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))

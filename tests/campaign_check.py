@@ -10,7 +10,7 @@ import unittest
 import rospy
 import rostest
 
-from asg_agent.campaign.store import Store, unpack_trajectory
+from asg_agent.records.store import Store, unpack_trajectory
 
 import stack_util as su
 from asg_perception.numerics import DEFAULT_BACKEND
@@ -154,7 +154,7 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertGreater(px["plan"], 50, px)
         self.assertGreater(px["trajectory"], 100, px)
         # A planner snapshot from the bag and the campaign's HTML report.
-        from asg_agent.analysis.report import campaign_report
+        from asg_analysis.report import campaign_report
         from asg_agent.ros.bag_figures import snapshot
 
         snap = os.path.join(os.path.dirname(path), "snapshot.png")

@@ -15,7 +15,7 @@ import unittest
 import rospy
 import rostest
 
-from asg_agent.campaign.store import Store
+from asg_agent.records.store import Store
 
 import stack_util as su
 

@@ -170,7 +170,7 @@ def python_scenario(path):
 
 def python_experiment(path):
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_agent.campaign.experiment import ExperimentError, load_experiment
+    from asg_agent.records.experiment import ExperimentError, load_experiment
 
     try:
         load_experiment(path)

@@ -19,7 +19,7 @@ import yaml
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 
-from asg_agent.campaign.store import Store
+from asg_agent.records.store import Store
 
 import stack_util as su
 

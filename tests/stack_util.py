@@ -218,7 +218,7 @@ def record_cpu_class(path, here, note=""):
     import datetime
     import json
 
-    from asg_agent.campaign.store import provenance
+    from asg_agent.records.store import provenance
     from asg_perception.numerics import best_isa, cpu_flags, native_bf16
 
     model = provenance()["cpu"]

@@ -15,7 +15,7 @@ import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_agent.campaign.store import Store  # noqa: E402
+from asg_agent.records.store import Store  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
 ENV = dict(

@@ -5,7 +5,7 @@ import glob
 import json
 import os
 
-from asg_agent.analysis.bench import before_after, before_after_sentence
+from asg_analysis.bench import before_after, before_after_sentence
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 TAG = os.path.join(REPO, "results", "bench", "r4-arch")

@@ -72,7 +72,26 @@ def test_the_summary_names_each_failure_and_fails_on_it(tmp_path):
     assert res.stdout.splitlines()[-1] == "tests: 1 passed, 1 failed, 1 skipped"
     (tmp_path / "a.xml").write_text('<testsuite><testcase classname="A" name="ok"/></testsuite>')
     res = summarize(tmp_path)
-    assert res.returncode == 0 and res.stdout.strip() == "tests: 1 passed, 0 failed, 0 skipped"
+    assert res.returncode == 0 and res.stdout.splitlines()[-1] == "tests: 1 passed, 0 failed, 0 skipped"
+
+
+def test_the_summary_lists_the_slowest_test_files(tmp_path):
+    (tmp_path / "pytest").mkdir()
+    (tmp_path / "pytest" / "asg_agent.xml").write_text(
+        '<testsuites><testsuite><testcase classname="test.test_campaign" name="a" time="30.5"/>'
+        '<testcase classname="test.test_campaign" name="b" time="10"/>'
+        '<testcase classname="test.test_td3.TestAgent" name="c" time="2"/></testsuite></testsuites>'
+    )
+    (tmp_path / "rosunit-suite.xml").write_text(
+        '<testsuite><testcase classname="S" name="t" time="95.25"/></testsuite>'
+    )
+    lines = summarize(tmp_path).stdout.splitlines()
+    at = lines.index("slowest test files (3 files, 2.3 min in all):")
+    assert lines[at + 1 : at + 4] == [
+        "      95.2 s  rosunit-suite.xml",
+        "      40.5 s  asg_agent: test.test_campaign",
+        "       2.0 s  asg_agent: test.test_td3",
+    ]
 
 
 def test_an_error_outside_any_test_case_is_a_failure(tmp_path):

@@ -1,6 +1,6 @@
 """Issue #37: the counts of the committed exports checked by a second implementation written apart
-from the project's (it imports none of scoring/attribution.py, campaign/store.py's rules or
-analysis/export.py's counts; only the file reader), so that a wrong rule in the project's code
+from the project's (it imports none of scoring/attribution.py, records/store.py's rules or
+records/export.py's counts; only the file reader), so that a wrong rule in the project's code
 fails here instead of being checked against itself.
 
 The rules, restated from docs/agent.md: a run fails when it ends in a collision, a timeout, a flip
@@ -20,7 +20,7 @@ import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_agent.analysis.export import counts  # noqa: E402  (the implementation under test)
+from asg_agent.records.export import counts  # noqa: E402  (the implementation under test)
 
 BAD_ENDS = {"COLLISION", "FLIPPED", "SIM_TIMEOUT", "IDLING_TIMEOUT", "STUCK_TIMEOUT", "OUT_OF_BOUNDS"}
 

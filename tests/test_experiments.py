@@ -8,9 +8,9 @@ import sys
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_agent.analysis import campaign_metrics, experiments  # noqa: E402
-from asg_agent.analysis.export import counts, read_export  # noqa: E402
-from asg_agent.campaign.store import Store  # noqa: E402
+from asg_analysis import campaign_metrics, experiments  # noqa: E402
+from asg_agent.records.export import counts, read_export  # noqa: E402
+from asg_agent.records.store import Store  # noqa: E402
 
 MANIFEST = os.path.join(REPO, "results", "experiments.yaml")
 
@@ -73,7 +73,7 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
     with open(os.path.join(REPO, "docs", "experiments.md")) as f:
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")
-    assert quoted == generated, "docs/experiments.md is stale: run `python3 -m asg_agent.analysis.experiments`"
+    assert quoted == generated, "docs/experiments.md is stale: run `python3 -m asg_analysis.experiments`"
     # The differential campaigns, round 2's and round 3's: every count is the export's.
     diffs = list((summary.get("differentials") or {}).values())
     if "differential" in summary:
@@ -158,15 +158,17 @@ def test_shadow_ahead_sees_a_cast_shadow_in_front_not_behind():
     vehicle 10 m before the tree and driving at it has the shadow ahead; driving away, it has not."""
     import numpy as np
 
+    from asg_agent.records import scenes
+
     camp, rows = read_export(os.path.join(REPO, "results", "campaigns", "exp1-random-s0.jsonl.gz"))
     r = dict(rows[0])
     r["positions"] = [[95.0, 95.0]] * len(r["positions"])
     r["positions"][r["meshes"].index("juniper")] = [50.0, 50.0]
-    req = campaign_metrics.scenario_of(camp, r)
+    req = scenes.scenario_of(camp, r)
     towards = np.array([[40.0 + 0.5 * k, 51.0] for k in range(30)])
     away = towards[::-1] - np.array([20.0, 0.0])
-    assert campaign_metrics.shadow_ahead(req, towards, 0)
-    assert not campaign_metrics.shadow_ahead(req, away, 0)
+    assert scenes.shadow_ahead(req, towards, 0)
+    assert not scenes.shadow_ahead(req, away, 0)
 
 
 def test_distinct_counts_clusters_of_near_copies_once():
@@ -410,10 +412,10 @@ def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_
 def test_round3_seed_tables_are_the_exports_and_the_prose_holds():
     # Issue #37: the intervals and tests of docs/experiments.md "Round 3 over seeds" are generated;
     # the page's block is what the exports give now, and the prose beside it says what they say.
-    from asg_agent.analysis import seed_tables, stats
-    from asg_agent.analysis.export import read_export
+    from asg_analysis import seed_tables, stats
+    from asg_agent.records.export import read_export
 
-    assert seed_tables.main(["--check"]) == 0, "docs/experiments.md: run python3 -m asg_agent.analysis.seed_tables"
+    assert seed_tables.main(["--check"]) == 0, "docs/experiments.md: run python3 -m asg_analysis.seed_tables"
 
     rows = {
         (a, s): read_export(os.path.join(REPO, "results", "comparison", p.format(s) + ".jsonl.gz"))[1]

@@ -32,7 +32,7 @@ def test_the_doc_block_is_in_step_with_the_exports():
         [
             "/usr/bin/python3",
             "-m",
-            "asg_agent.analysis.protocol",
+            "asg_analysis.protocol",
             "status",
             os.path.join(REPO, "experiments", "protocol-flaw-study.yaml"),
             FOLDER,

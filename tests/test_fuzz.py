@@ -51,7 +51,7 @@ def test_both_loaders_refuse_with_their_own_error(tmp_path, name, data, needle, 
 
 def test_experiment_loader_refuses_bytes_and_duplicates(tmp_path):
     sys.path.insert(0, os.path.join(fuzz_inputs.REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_agent.campaign.experiment import ExperimentError, load_experiment
+    from asg_agent.records.experiment import ExperimentError, load_experiment
 
     for data, needle in ((b"name: e\xff\n", "not UTF-8"), (b"name: a\nname: b\n", "given twice")):
         p = tmp_path / "e.yaml"

@@ -92,7 +92,7 @@ def test_the_experiment_backends_are_the_segmenters():
 
     for pkg in ("asg_agent", "asg_perception", "asg_scenario"):
         sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", pkg, "src"))
-    from asg_agent.campaign.experiment import DEFAULT_UNET_BACKEND, UNET_BACKENDS, ExperimentError, load_experiment
+    from asg_agent.records.experiment import DEFAULT_UNET_BACKEND, UNET_BACKENDS, ExperimentError, load_experiment
     from asg_perception.numerics import BACKENDS, DEFAULT_BACKEND
 
     # one home (asg_perception.numerics): the others are that object, not a copy of it

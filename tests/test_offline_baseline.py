@@ -1,5 +1,5 @@
 """Issue #23: `baseline offline` runs planner variants on the baseline layouts without ROS, through
-asg_planner's asg_closed_loop and asg_agent's proxy. It is only worth its figures if, with the
+asg_planner_harness's asg_closed_loop and asg_agent's proxy. It is only worth its figures if, with the
 default planner, it reproduces what the ROS ground-truth stack stored in results/baseline: the
 same ending, simulated time and proxy on every layout it runs."""
 
@@ -16,7 +16,7 @@ from asg_agent.cli import baseline  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
 STORED = os.path.join(REPO, "results", "baseline", "exp1", "ground_truth.jsonl")
-TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner", "asg_closed_loop")
+TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner_harness", "asg_closed_loop")
 LAYOUTS = 6
 
 

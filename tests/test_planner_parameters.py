@@ -9,7 +9,7 @@ import subprocess
 import yaml
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
-TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner", "asg_closed_loop")
+TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner_harness", "asg_closed_loop")
 CONFIG = os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config")
 DISPLAY = {"ack_name", "publish_markers"}  # the ROS adapter's own (docs/planner.md, below the table)
 

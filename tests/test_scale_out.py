@@ -150,7 +150,7 @@ def test_campaign_uses_workers_of_two_hosts(hosts, tmp_path):
         uri0, uri1 = lookup.stdout.split()
         assert hosts.a_ip in uri0 and hosts.b_ip in uri1, lookup.stdout + lookup.stderr
         sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-        from asg_agent.campaign.store import Store
+        from asg_agent.records.store import Store
 
         rows = list(Store(store).rows("two-hosts"))
         assert len(rows) == SCENARIOS

@@ -62,7 +62,7 @@ def test_the_search_against_random_table_is_what_the_exports_say():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_agent.analysis import stack_study
+    from asg_analysis import stack_study
 
     s = stack_study.study(os.path.join(REPO, "results", "depth"), SEARCH, BASELINE)
     for arm in (SEARCH, BASELINE):
@@ -84,7 +84,7 @@ def test_the_seeds_table_is_what_the_exports_say():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_agent.analysis import stack_study
+    from asg_analysis import stack_study
 
     searches = [f"exp1-depth-td3-per-asp-s{k}" for k in (0, 1, 2)]
     baselines = [f"exp1-depth-random-s{k}" for k in (0, 1, 2)]

@@ -1,6 +1,8 @@
 #!/usr/bin/python3
 """Count test cases in the JUnit XML files under a folder; print one line per failure with the last
-lines of its message, and the closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or error, or if nothing ran.
+lines of its message, the slowest test files with their time (so that the suite's time stays
+visible, issue #56), and the closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or
+error, or if nothing ran.
 
 A suite's own errors and failures count too: a Python test whose setUpClass raises is written by
 rosunit as <testsuite errors="1" tests="0"> with no test case, and would otherwise vanish."""
@@ -31,8 +33,29 @@ def suite_level(path, root, suite):
     return out
 
 
+def file_of(path, root, case):
+    """The test file a case belongs to: a pytest case's module (its classname without a test
+    class), otherwise the result file (one per gtest binary or rostest)."""
+    rel = os.path.relpath(path, root)
+    if rel.split(os.sep)[0] == "pytest":
+        parts = (case.get("classname") or "").split(".")
+        while len(parts) > 1 and parts[-1][:1].isupper():
+            parts.pop()
+        return f"{os.path.splitext(os.path.basename(path))[0]}: {'.'.join(parts)}"
+    return rel
+
+
+def slowest(times, top=15):
+    """Lines for the `top` files that took longest, and the total."""
+    lines = [f"slowest test files ({len(times)} files, {sum(times.values()) / 60:.1f} min in all):"]
+    for name, t in sorted(times.items(), key=lambda kv: -kv[1])[:top]:
+        lines.append(f"  {t:8.1f} s  {name}")
+    return lines
+
+
 def main(root):
     passed, failed, skipped, bad_files = 0, [], 0, []
+    times = {}
     for path in sorted(glob.glob(os.path.join(root, "**", "*.xml"), recursive=True)):
         try:
             tree = ET.parse(path)
@@ -42,6 +65,12 @@ def main(root):
         for suite in tree.getroot().iter("testsuite"):
             failed.extend(suite_level(path, root, suite))
         for case in tree.getroot().iter("testcase"):
+            try:
+                seconds = float(case.get("time", "0") or 0)
+            except ValueError:
+                seconds = 0.0
+            key = file_of(path, root, case)
+            times[key] = times.get(key, 0.0) + seconds
             name = f"{os.path.relpath(path, root)}::{case.get('classname', '')}.{case.get('name')}"
             bad = case.find("failure")
             bad = bad if bad is not None else case.find("error")
@@ -59,6 +88,8 @@ def main(root):
     for line in bad_files:
         print(f"FAILED {line}")
     total_failed = len(failed) + len(bad_files)
+    if times:
+        print("\n".join(slowest(times)))
     print(f"tests: {passed} passed, {total_failed} failed, {skipped} skipped")
     return 1 if total_failed or passed == 0 else 0
 

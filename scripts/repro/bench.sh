@@ -23,7 +23,7 @@ TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
 files=()
 EXPF="$REPO/experiments/${BENCH_EXPERIMENT:-exp1}.yaml"
-read -r BACKEND MODEL < <(/usr/bin/python3 -c "from asg_agent.campaign.experiment import load_experiment; e = load_experiment('$EXPF'); print(e.unet_backend, e.model)")
+read -r BACKEND MODEL < <(/usr/bin/python3 -c "from asg_agent.records.experiment import load_experiment; e = load_experiment('$EXPF'); print(e.unet_backend, e.model)")
 BASE_ARGS=(experiment:="$EXPF" unet_backend:="$BACKEND" model:="$MODEL" attribution:="${BENCH_ATTRIBUTION:-false}")
 MODEL_PATH="$MODEL"
 [[ "$MODEL" == */* || "$MODEL" == *.pt ]] || MODEL_PATH="$WS/src/asg_perception/models/$MODEL.pt"
@@ -43,4 +43,4 @@ for w in $COUNTS; do
   grep -E "stage report|proxy >= 3" "$TMP/w$w.log" || true
   files+=("$OUT/$TAG-w$w.json")
 done
-/usr/bin/python3 -m asg_agent.analysis.bench table "${files[@]}"
+/usr/bin/python3 -m asg_analysis.bench table "${files[@]}"

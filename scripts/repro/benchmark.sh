@@ -13,8 +13,12 @@ log "simulator core (render, shadow pass, physics, in-process scripted run)"
 for e in 1 3; do taskset -c 0 "$BIN/asg_sim/asg_sim_benchmark" "$REPO/scenarios/exp$e.yaml" 200 7; done
 log "planner core (votes per frame, A* per replan)"
 for e in 1 3; do
-  taskset -c 0 "$BIN/asg_planner/asg_planner_benchmark" "$REPO/scenarios/exp$e.yaml" 5 5 150 7
-  taskset -c 0 "$BIN/asg_planner/asg_planner_benchmark" "$REPO/scenarios/exp$e.yaml" 1 2 150 7
+  # the planner's two shipped configurations: planner.yaml (5 m grids) and its planner_fine.yaml overlay
+  CFG="$WS/src/asg_planner/config"
+  taskset -c 0 "$BIN/asg_planner_harness/asg_planner_benchmark" --repeats 7 --planner "$CFG/planner.yaml" \
+    "$REPO/scenarios/exp$e.yaml"
+  taskset -c 0 "$BIN/asg_planner_harness/asg_planner_benchmark" --repeats 7 --planner "$CFG/planner.yaml" \
+    --planner "$CFG/planner_fine.yaml" "$REPO/scenarios/exp$e.yaml"
 done
 export ROS_MASTER_URI="http://127.0.0.1:${ASG_BENCH_PORT:-11398}" ROS_HOSTNAME=127.0.0.1
 TMP="$(mktemp -d)"

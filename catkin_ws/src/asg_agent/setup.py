@@ -8,7 +8,7 @@ setup(
             "asg_agent.search",
             "asg_agent.scoring",
             "asg_agent.campaign",
-            "asg_agent.analysis",
+            "asg_agent.records",
             "asg_agent.ros",
             "asg_agent.cli",
         ],

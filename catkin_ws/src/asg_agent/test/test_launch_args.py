@@ -8,7 +8,7 @@ import os
 
 import pytest
 
-from asg_agent.campaign.experiment import ExperimentError
+from asg_agent.records.experiment import ExperimentError
 from asg_agent.cli import launch_args as la
 from asg_perception import numerics as nm
 
@@ -86,7 +86,7 @@ def test_replay_refuses_a_bf16_run_on_another_isa(monkeypatch):
     assert replay.bf16_refusal({"numerics": "bf16 isa=AVX512_CORE_BF16 threads=1 torch=1.13.0a0"}) == ""
     assert replay.bf16_refusal({"numerics": "channels_last isa=AVX2 threads=1 torch=1.13.0a0"}) == ""
     # the refusal comes before any worker is brought up, with the rerun command
-    from asg_agent.campaign.store import Store
+    from asg_agent.records.store import Store
 
     db = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"replay_bf16_{os.getpid()}.sqlite")
     s = Store(db)

@@ -6,8 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from asg_agent.analysis import stats
-from asg_agent.campaign.experiment import load_experiment
+from asg_agent.records.experiment import load_experiment
 from asg_agent.search.methods import make_method
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
@@ -44,30 +43,8 @@ def test_route_random_puts_every_obstacle_in_its_band_and_repeats():
         make_method("route-random", exp, 0, options={"band": 0.0})
 
 
-def test_statistics_over_seeds():
-    lo, hi = stats.bootstrap_ci([4, 5, 6, 5, 4, 6, 5, 5])
-    assert 4.4 < lo < 5.0 < hi < 5.6
-    assert stats.bootstrap_ci([3, 3, 3]) == (3.0, 3.0)
-    # Every seed of a above every seed of b: the smallest exact two-sided p for 8 against 8.
-    mw = stats.mann_whitney([10, 11, 12, 13, 14, 15, 16, 17], [1, 2, 3, 4, 5, 6, 7, 8])
-    assert mw["effect"] == 1.0 and mw["p"] == pytest.approx(2 / 12870, rel=1e-6)
-    assert stats.mann_whitney([1, 2, 3], [1, 2, 3])["p"] == pytest.approx(1.0)
-    ratio, rlo, rhi = stats.ratio_ci([6, 6, 6, 6], [2, 2, 2, 2])
-    assert (ratio, rlo, rhi) == (3.0, 3.0, 3.0)
-    rows = stats.compare({"td3": [6, 7, 8], "random": [1, 2, 3], "route": [5, 6, 7]}, "td3")
-    assert [r["arm"] for r in rows] == ["td3", "random", "route"]
-    assert rows[0]["p"] is None and rows[1]["ratio"] == pytest.approx(3.5) and rows[1]["effect"] == 1.0
-    with pytest.raises(ValueError, match="default"):
-        stats.compare({"a": [1]}, "b")
-    # The design loop's endpoint counts flaw and model findings, nothing else, over the first jobs.
-    rows = [{"job": j, "attribution": c} for j, c in enumerate(["flaw", "model", "stack", None, "flaw", "model"])]
-    assert stats.per_thousand(rows, "findings", 4) == 500.0
-    assert stats.per_thousand(rows, "findings", 6) == pytest.approx(4000 / 6)
-    assert stats.per_thousand(rows, "flaw", 6) == pytest.approx(2000 / 6)
-
-
 def test_failure_modes_of_findings():
-    from asg_agent.analysis import failure_modes as fm
+    from asg_agent.records import failure_modes as fm
     from asg_scenario.layout import with_positions
 
     exp = load_experiment(EXP)
@@ -107,7 +84,7 @@ def test_failure_modes_of_findings():
 def test_dense_rewards_see_how_close_a_run_came():
     from asg_agent.campaign.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
-    from asg_agent.campaign.store import Store
+    from asg_agent.records.store import Store
     from asg_agent.scoring import attribution as attr
     from asg_agent.scoring import rewards as rw
     from asg_scenario.layout import with_positions
@@ -221,7 +198,7 @@ def test_the_route_action_space_places_obstacles_along_the_route_and_random_on_i
 
 
 def test_experiment_action_space_keys_are_checked(tmp_path):
-    from asg_agent.campaign.experiment import ExperimentError
+    from asg_agent.records.experiment import ExperimentError
 
     scen = os.path.join(REPO, "scenarios", "exp1.yaml")
     for body, msg in (

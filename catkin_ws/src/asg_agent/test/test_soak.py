@@ -1,4 +1,4 @@
-"""cli.soak and analysis.soak_report (issue #14's soak, in Python since issue #38): the killer's
+"""cli.soak and campaign.soak_check (issue #14's soak, in Python since issue #38): the killer's
 draws, its kills and log, the two legs with a stand-in agent process, and the accounting."""
 
 import collections
@@ -7,11 +7,11 @@ import random
 import sys
 import time
 
-from asg_agent.analysis import soak_report
-from asg_agent.campaign.experiment import load_experiment
+from asg_agent.campaign import soak_check
+from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign as Loop
-from asg_agent.campaign.store import Store
+from asg_agent.records.store import Store
 from asg_agent.cli import soak
 from asg_agent.search.methods import make_method
 
@@ -109,12 +109,12 @@ def test_the_report_counts_lost_and_doubled_scenarios(tmp_path):
     kills.write_text("1 /worker_0/planner 5\n2 agent 6\n3 /worker_1/planner 7\n")
     log = tmp_path / "agent.log"
     log.write_text("x agent exited: restarting with --resume\njob 3: scene worker died, retrying elsewhere\n")
-    res = soak_report.report(store.path, "soak", 20, str(kills), str(log), 0.0, 7200.0)
+    res = soak_check.report(store.path, "soak", 20, str(kills), str(log), 0.0, 7200.0)
     assert (res["lost"], res["duplicates"], res["finished"], res["hours"]) == (0, 0, True, 2.0)
     assert res["kills"] == {"planner": 2, "agent": 1} and res["agent_restarts"] == 1
     assert res["retries_by_reason"] == {"scene worker died": 1}
-    assert soak_report.passed(res)
+    assert soak_check.passed(res)
     store.db.execute("DELETE FROM scenarios WHERE campaign = 'soak' AND job = 4")
     store.db.commit()
-    res = soak_report.report(store.path, "soak", 20, str(kills), str(log), 0.0, 7200.0)
-    assert res["lost"] == 1 and not soak_report.passed(res)
+    res = soak_check.report(store.path, "soak", 20, str(kills), str(log), 0.0, 7200.0)
+    assert res["lost"] == 1 and not soak_check.passed(res)

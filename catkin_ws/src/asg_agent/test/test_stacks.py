@@ -1,11 +1,11 @@
-"""campaign.stacks: stacks registered by a launch file (issue #55), read and checked without ROS."""
+"""records.stacks: stacks registered by a launch file (issue #55), read and checked without ROS."""
 
 import os
 
 import pytest
 
-from asg_agent.campaign import stacks
-from asg_agent.campaign.experiment import ExperimentError, load_experiment
+from asg_agent.records import stacks
+from asg_agent.records.experiment import ExperimentError, load_experiment
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 

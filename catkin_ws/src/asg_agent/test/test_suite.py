@@ -8,11 +8,11 @@ import xml.etree.ElementTree as ET
 import pytest
 import yaml
 
-from asg_agent.analysis.export import export
-from asg_agent.campaign.experiment import load_experiment
+from asg_agent.records.export import export
+from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
-from asg_agent.campaign.store import Store
+from asg_agent.records.store import Store
 from asg_agent.campaign import suite as st
 from asg_agent.cli.suite import main as suite_cli
 from asg_agent.scoring import attribution as attr
@@ -48,6 +48,12 @@ def campaign_export(tmp_path):
 
 
 def test_export_run_record_and_regress(tmp_path, campaign_export):
+    export_run_record_and_regress(tmp_path, campaign_export)
+
+
+def export_run_record_and_regress(tmp_path, campaign_export):
+    """Exports a suite, runs, records and regresses it (asserting each step); the suite's folder
+    and the recorded stack's compared results (asg_analysis's picture test draws them)."""
     out = str(tmp_path / "suite")
     s = st.export_suite([campaign_export], out)
     n = len(s["scenarios"])
@@ -100,22 +106,7 @@ def test_export_run_record_and_regress(tmp_path, campaign_export):
     assert root.get("tests") == str(n) and root.get("failures") == "1"
     bad = [tc for tc in root.iter("testcase") if tc.find("failure") is not None]
     assert bad[0].get("name").startswith("000-") and "regression: collision" in bad[0].find("failure").get("message")
-    # The JSON keeps each path driven (10 Hz): a failure before and after drawn from two results.
-    import json
-
-    from asg_agent.analysis import hardening
-
-    with open(tmp_path / "r.json") as f:
-        failed = json.load(f)
-    assert failed[0]["fails"] and len(failed[0]["trajectory_xy"]) >= 2
-    passed = json.loads(json.dumps(res2, default=str))
-    png = str(tmp_path / "before_after.png")
-    args = ["picture", out, failed[0]["file"], png, f"before={tmp_path / 'r.json'}"]
-    with open(tmp_path / "after.json", "w") as f:
-        json.dump(passed, f)
-    assert hardening.main(args + [f"after={tmp_path / 'after.json'}"]) == 0 and os.path.getsize(png) > 10_000
-    assert hardening.main(["picture", out, "no-such.yaml", png, f"before={tmp_path / 'r.json'}"]) == 2
-    assert hardening.main(args + ["after"]) == 2  # LABEL=RESULTS.json, named as wrong
+    return out, res2
 
 
 def test_trajectories_are_compared_only_where_the_numerics_repeat(tmp_path, campaign_export):
@@ -163,7 +154,7 @@ def test_bad_suites_are_refused_by_name(tmp_path, campaign_export):
 
 
 def test_run_each_retries_an_error_and_answers_every_request_once():
-    from asg_agent.campaign.experiment import load_experiment as load
+    from asg_agent.records.experiment import load_experiment as load
     from asg_agent.campaign.loop import run_each
 
     exp = load(os.path.join(REPO, "experiments", "exp1.yaml"))

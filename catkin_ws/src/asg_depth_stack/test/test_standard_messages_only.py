@@ -1,5 +1,6 @@
 """Issue #39: the depth stack is a stack a user could have written: it imports standard ROS
-packages, numpy and itself, and of this project only the lockstep client."""
+packages, numpy and itself, and of this project only asg_lockstep, the package a stack adds to
+run in lockstep: its client and its parameter tables (issue #56)."""
 
 import ast
 import glob
@@ -20,10 +21,12 @@ ALLOWED_ROOTS = {
 }
 ALLOWED_PROJECT = {
     "asg_lockstep.ros",
+    "asg_lockstep.params",
     "asg_depth_stack",
     "asg_depth_stack.arcs",
     "asg_depth_stack.grid",
     "asg_depth_stack.node",
+    "asg_depth_stack.params",
 }
 
 

@@ -13,6 +13,7 @@ from sensor_msgs.msg import PointCloud2
 
 from asg_depth_stack.arcs import ArcParams, ArcPlanner, rollout
 from asg_depth_stack.grid import ElevationGrid, GridParams
+from asg_depth_stack.params import DEPTH_STACK
 
 #: A jump of the vehicle this large between two odometry messages is a new run (free-running
 #: without the lockstep client: the stack sees the teleport to the next start).
@@ -152,23 +153,25 @@ class Markers:
 
 
 def read_params():
+    """Every parameter through the node's table (params.DEPTH_STACK): a bad one is named."""
+    from asg_lockstep.params import read
+
+    p = read(DEPTH_STACK, lambda name, default: rospy.get_param("~" + name, default))
     g, a = GridParams(), ArcParams()
     for obj, prefix in ((g, "grid"), (a, "arcs")):
-        for name, default in vars(obj).items():
-            setattr(obj, name, type(default)(rospy.get_param(f"~{prefix}/{name}", default)))
-    return g.check(), a.check()
+        for name in vars(obj):
+            setattr(obj, name, p[f"{prefix}/{name}"])
+    return p, g.check(), a.check()
 
 
 def main():
     rospy.init_node("depth_stack")
     try:
-        grid, arcs = read_params()
+        p, grid, arcs = read_params()
     except (ValueError, TypeError) as e:
         rospy.logfatal(f"depth_stack: bad parameter: {e}")
         raise SystemExit(2)
-    stack = DepthStack(
-        grid, arcs, rospy.get_param("~camera_frame", "camera_optical"), rospy.get_param("~base_frame", "base_link")
-    )
+    stack = DepthStack(grid, arcs, p["camera_frame"], p["base_frame"])
     tf_buffer = tf2_ros.Buffer()
     tf2_ros.TransformListener(tf_buffer)
 
@@ -189,17 +192,17 @@ def main():
             stack.mount = camera_mount()  # fixed on the vehicle: looked up once
         stack.on_points(msg)
 
-    if rospy.get_param("~use_lockstep_client", True):
-        from asg_lockstep.ros import LockstepClient  # the only import of this project
+    if p["use_lockstep_client"]:
+        from asg_lockstep.ros import LockstepClient  # asg_lockstep: the one package of this project it uses
 
-        lock = LockstepClient(rospy.get_param("~ack_name", "depth_stack"), on_run=stack.reset)
+        lock = LockstepClient(p["ack_name"], on_run=stack.reset)  # reads ~lockstep (its table)
         sub, pub = lock.Subscriber, lock.Publisher
     else:
         sub, pub = rospy.Subscriber, rospy.Publisher
     stack.cmd = pub("cmd_vel", Twist, queue_size=1)
     # In lockstep, messages of one stamp reach the callbacks in this order: the cloud is held
     # until the odometry of its instant places it.
-    if rospy.get_param("~publish_markers", True):
+    if p["publish_markers"]:
         stack.show = Markers()
     sub("goal", PoseStamped, stack.on_goal)
     sub("camera/depth/points", PointCloud2, on_points)

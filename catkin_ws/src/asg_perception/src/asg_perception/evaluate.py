@@ -42,7 +42,7 @@ def panels(path: str, frames, models: dict, picks):
     canvas.save(path)
 
 
-def main(argv=None):
+def parser():
     p = argparse.ArgumentParser(prog="evaluate_unet", description=__doc__.split("\n\n")[0])
     p.add_argument("models", nargs="+", help="model files (name=path or path)")
     p.add_argument("--data", required=True, help="held-apart dataset folder")
@@ -56,6 +56,11 @@ def main(argv=None):
         help="inference backend (asg_perception.inference): "
         "eager (the model as trained, batched), channels_last, frozen or bf16 (frame by frame)",
     )
+    return p
+
+
+def main(argv=None):
+    p = parser()
     a = p.parse_args(argv)
     from .inference import BACKENDS, Segmenter
 

@@ -12,13 +12,14 @@ import threading
 
 import numpy as np
 import rospy
-from asg_lockstep import StackProtocol
+from asg_lockstep import StackProtocol, params
 from asg_lockstep.stack_protocol import Run
 from asg_msgs.msg import ScenarioInfo, StackAck, StackError, StageTimes
 from sensor_msgs.msg import Image
 
 from . import numerics
 from .inference import Segmenter
+from .node_params import SEGMENTER
 from .numerics import resolve_backend
 from .stage_clock import StageClock
 
@@ -39,23 +40,16 @@ def resolve_model(name: str) -> str:
 
 class SegmenterNode:
     def __init__(self):
-        model = rospy.get_param("~model", "flawed")
-        # empty or unset: the shipped default (asg_perception.numerics, its one home)
-        try:
-            backend = resolve_backend(rospy.get_param("~backend", ""))
-        except ValueError as e:
-            raise ValueError(f"~backend: {e}") from None
-        threads = int(rospy.get_param("~threads", 1))
-        width = int(rospy.get_param("~width", 256))
-        height = int(rospy.get_param("~height", 256))
-        self.ack_name = rospy.get_param("~ack_name", "segmenter")
+        # every parameter through the node's table (node_params.SEGMENTER): a bad one is named
+        p = params.read(SEGMENTER, lambda name, default: rospy.get_param("~" + name, default))
+        model, threads, width, height = p["model"], p["threads"], p["width"], p["height"]
+        backend = resolve_backend(p["backend"])  # empty: the shipped default (numerics, its one home)
+        self.ack_name = p["ack_name"]
         rospy.set_param("~backend", backend)  # the one it runs, for whoever reads the parameter
         refused = numerics.refuse_emulated(backend)
         if refused:  # bf16 is a fast mode for CPUs that run it natively (issue #53)
             rospy.set_param("~refused", refused)  # for whoever waits for ~numerics
             raise ValueError(refused)
-        if not 1 <= threads <= 64:
-            raise ValueError(f"~threads = {threads}: must be 1..64")
         path = resolve_model(model)
         self.segmenter = Segmenter(path, backend, threads, height, width)
         # What decides the labels' numerics on this CPU (numerics.py): the campaign stores it,

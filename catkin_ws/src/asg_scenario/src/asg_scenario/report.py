@@ -8,17 +8,10 @@ from typing import List, Optional, Sequence
 import yaml
 
 from .catalogue import MESHES
+from .schema import TERMINATIONS
 
-TERMINATION_NAMES = [
-    "SUCCESS",
-    "COLLISION",
-    "FLIPPED",
-    "SIM_TIMEOUT",
-    "IDLING_TIMEOUT",
-    "STUCK_TIMEOUT",
-    "OUT_OF_BOUNDS",
-    "ERROR",
-]
+#: the terminations' names by value (schema.TERMINATIONS, the one declaration)
+TERMINATION_NAMES = [name for name, _, _ in sorted(TERMINATIONS, key=lambda t: t[1])]
 
 
 def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:

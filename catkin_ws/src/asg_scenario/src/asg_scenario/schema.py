@@ -203,6 +203,22 @@ OPERATIONAL_FIELDS = [
     Field("allow_collisions", bool, "-", None, None, "Contact with obstacles does not end the run.", False),
 ]
 
+#: How a run ends: (name, value, meaning), declared once. RunScenario.action's constants, the C++
+#: enum (asg_sim/scene_schema.hpp, generated from this file) and the agent's failure set follow it
+#: (tests/test_scenario_schema.py holds the action file to it).
+TERMINATIONS = [
+    ("SUCCESS", 0, "within goal_radius of the goal"),
+    ("COLLISION", 1, "contact with an obstacle (unless allow_collisions)"),
+    ("FLIPPED", 2, "roll or pitch beyond max_roll_deg / max_pitch_deg"),
+    ("SIM_TIMEOUT", 3, "sim_timeout reached"),
+    ("IDLING_TIMEOUT", 4, "no command moved the vehicle for idle_timeout"),
+    ("STUCK_TIMEOUT", 5, "commanded but not moving for stuck_timeout"),
+    ("OUT_OF_BOUNDS", 6, "left the landscape"),
+    ("ERROR", 7, "the run could not be completed (the stack failed, a bad scene)"),
+]
+#: The terminations that are a failure of the stack under test (not SUCCESS, not ERROR).
+FAILED_TERMINATIONS = tuple(name for name, _, _ in TERMINATIONS if name not in ("SUCCESS", "ERROR"))
+
 #: Sections of the format, for docs and iteration: (path, fields).
 SECTIONS = [
     ("", TOP_FIELDS),

@@ -5,6 +5,7 @@
 /// record the trajectory. The caller (the ROS node, a benchmark, a test) owns the loop, so the
 /// lockstep protocol lives outside and this class stays free of ROS and of wall-clock time.
 
+#include "asg_sim/scene_schema.hpp"
 #include <Eigen/Geometry>
 #include <memory>
 #include <string>
@@ -17,17 +18,8 @@
 namespace asg_sim {
 
 /// Termination reasons, same values as asg_msgs/RunScenarioResult.
-enum class Termination : int {
-  kNone = -1,
-  kSuccess = 0,
-  kCollision = 1,
-  kFlipped = 2,
-  kSimTimeout = 3,
-  kIdlingTimeout = 4,
-  kStuckTimeout = 5,
-  kOutOfBounds = 6,
-  kError = 7,
-};
+/// How a run ends: declared once, in the scenario schema (asg_scenario/schema.py TERMINATIONS).
+using Termination = schema::Termination;
 const char* terminationName(Termination t);
 
 struct RunnerConfig {

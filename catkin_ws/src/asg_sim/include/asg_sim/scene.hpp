@@ -4,6 +4,7 @@
 /// validation, and the safety-radius filter. Units: metres, seconds, radians unless a name ends
 /// in Deg. Frame: map (x east, y north, z up, landscape corner at the origin).
 
+#include "asg_sim/scene_schema.hpp"
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -76,12 +77,12 @@ class SceneError : public std::runtime_error {
 };
 
 /// The scene budget (docs/scenario-format.md): what one worker can build and run in bounded
-/// memory and time. asg_scenario's Python validator enforces the same numbers.
-constexpr size_t kMaxObstacles = 512;          ///< [-] obstacle instances, all layouts
-constexpr double kMaxLandscapeSize = 1000.0;   ///< [m] side of the nominal square
-constexpr double kMaxBorder = 1000.0;          ///< [m]
-constexpr double kMaxGroundCellsPerSide = 2048.0;  ///< [-] subdivisions x (size + 2 border) / size
-constexpr double kMaxSimTimeout = 3600.0;      ///< [s] sim_timeout is required to be finite
+/// memory and time; from the one schema (asg_scenario/schema.py, scene_schema.hpp).
+constexpr size_t kMaxObstacles = schema::kMaxObstacles;  ///< [-] obstacle instances, all layouts
+constexpr double kMaxLandscapeSize = schema::kLandscapeSize.hi;  ///< [m] side of the nominal square
+constexpr double kMaxBorder = schema::kLandscapeBorder.hi;       ///< [m]
+constexpr double kMaxGroundCellsPerSide = schema::kMaxGroundCellsPerSide;  ///< [-] subdivisions x (size + 2 border) / size
+constexpr double kMaxSimTimeout = schema::kOperationalSimTimeout.hi;  ///< [s] sim_timeout is required to be finite
 
 /// Throws SceneError listing every problem (NaN, out of range, unknown mesh, too many
 /// obstacles, start inside an obstacle that the safety radius keeps).

@@ -6,6 +6,7 @@
 /// and the vehicle's placement. A spec with amplitude 0 and no hill is the flat ground z = 0 of
 /// every scene before terrain existed, exactly.
 
+#include "asg_sim/scene_schema.hpp"
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
@@ -32,18 +33,18 @@ struct TerrainSpec {
 };
 
 constexpr int kTerrainWaves = 3;          ///< [-] plane waves of the rolling ground
-constexpr size_t kMaxHills = 32;          ///< [-] hills and ditches in one scene
-constexpr double kMaxTerrainAmplitude = 5.0;  ///< [m]
-constexpr double kMaxHillHeight = 10.0;   ///< [m] |height_m|
+constexpr size_t kMaxHills = schema::kMaxHills;  ///< [-] hills and ditches in one scene
+constexpr double kMaxTerrainAmplitude = schema::kTerrainAmplitudeM.hi;  ///< [m]
+constexpr double kMaxHillHeight = schema::kHillHeightM.hi;  ///< [m] |height_m|
 /// Steepness bounds (so roll and pitch limits, not the ground, decide what is drivable):
 /// amplitude_m <= wavelength_m / 10 (rolling slopes below about 42 deg) and
 /// |height_m| <= radius_m / 2 (hill flanks below about 38 deg).
-constexpr double kMaxAmplitudePerWavelength = 0.1;
+constexpr double kMaxAmplitudePerWavelength = schema::kMaxAmplitudePerWavelength;
 /// [-] cells per side of a shaped ground's mesh and heightfield, whatever `subdivisions` asks
 /// (the scene budget: a shaped ground at the format's 2048 cells per side would be 4 million
 /// vertices to shade every frame); a flat ground is drawn with 8 x 8 cells anyway.
 constexpr int kMaxTerrainCellsPerSide = 512;
-constexpr double kMaxHillHeightPerRadius = 0.5;
+constexpr double kMaxHillHeightPerRadius = schema::kMaxHillHeightPerRadius;
 
 class Terrain {
  public:

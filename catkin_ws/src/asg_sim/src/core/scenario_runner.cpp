@@ -5,18 +5,9 @@
 namespace asg_sim {
 
 const char* terminationName(Termination t) {
-  switch (t) {
-    case Termination::kNone: return "NONE";
-    case Termination::kSuccess: return "SUCCESS";
-    case Termination::kCollision: return "COLLISION";
-    case Termination::kFlipped: return "FLIPPED";
-    case Termination::kSimTimeout: return "SIM_TIMEOUT";
-    case Termination::kIdlingTimeout: return "IDLING_TIMEOUT";
-    case Termination::kStuckTimeout: return "STUCK_TIMEOUT";
-    case Termination::kOutOfBounds: return "OUT_OF_BOUNDS";
-    case Termination::kError: return "ERROR";
-  }
-  return "UNKNOWN";
+  const int k = static_cast<int>(t);
+  if (t == Termination::kNone) return "NONE";
+  return k >= 0 && k < schema::kTerminationCount ? schema::kTerminationNames[k] : "UNKNOWN";
 }
 
 ScenarioRunner::ScenarioRunner(Renderer* renderer, const RunnerConfig& config)

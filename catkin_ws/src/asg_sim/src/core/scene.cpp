@@ -31,6 +31,11 @@ class Problems {
                      unit + (allow_disable ? ", or -1 to disable" : ""));
     }
   }
+  // A field of the one schema (scene_schema.hpp): its range, unit and whether -1 disables it.
+  void range(const std::string& field, double v, const schema::Field& f) {
+    range(field, v, f.lo, f.hi, f.unit, f.disable);
+  }
+  void range(double v, const schema::Field& f) { range(f.key, v, f); }
   static std::string num(double v) {
     std::ostringstream s;
     s << v;
@@ -56,9 +61,9 @@ size_t instanceCount(const SceneSpec& spec) {
 void validateScene(const SceneSpec& spec) {
   Problems p;
   const auto& L = spec.landscape;
-  p.range("structural.landscape.size", L.size, 1.0, kMaxLandscapeSize, "m");
-  p.range("structural.landscape.subdivisions", L.subdivisions, 1, 4096, "");
-  p.range("structural.landscape.border", L.border, 0.0, kMaxBorder, "m");
+  p.range(L.size, schema::kLandscapeSize);
+  p.range(L.subdivisions, schema::kLandscapeSubdivisions);
+  p.range(L.border, schema::kLandscapeBorder);
   if (std::isfinite(L.size) && std::isfinite(L.border) && L.size >= 1.0 && L.border >= 0.0) {
     const double cells = L.subdivisions * (L.size + 2.0 * L.border) / L.size;
     if (cells > kMaxGroundCellsPerSide)
@@ -83,9 +88,9 @@ void validateScene(const SceneSpec& spec) {
     return ok;
   };
   const auto& T = spec.terrain;
-  p.range("structural.terrain.amplitude_m", T.amplitude_m, 0.0, kMaxTerrainAmplitude, "m");
+  p.range(T.amplitude_m, schema::kTerrainAmplitudeM);
   // The wavelength matters only with an amplitude: a message that leaves both 0 is flat.
-  if (T.amplitude_m != 0.0) p.range("structural.terrain.wavelength_m", T.wavelength_m, 5.0, 1000.0, "m");
+  if (T.amplitude_m != 0.0) p.range(T.wavelength_m, schema::kTerrainWavelengthM);
   if (std::isfinite(T.amplitude_m) && std::isfinite(T.wavelength_m) && T.amplitude_m > 0.0 &&
       T.amplitude_m > kMaxAmplitudePerWavelength * T.wavelength_m)
     p.add("structural.terrain.amplitude_m",
@@ -98,8 +103,8 @@ void validateScene(const SceneSpec& spec) {
     const auto& h = T.hills[i];
     const std::string hp = "structural.terrain.hills[" + std::to_string(i) + "].";
     inside(hp, h.x, h.y);
-    p.range(hp + "radius_m", h.radius_m, 1.0, 200.0, "m");
-    p.range(hp + "height_m", h.height_m, -kMaxHillHeight, kMaxHillHeight, "m");
+    p.range(hp + "radius_m", h.radius_m, schema::kHillRadiusM);
+    p.range(hp + "height_m", h.height_m, schema::kHillHeightM);
     if (std::isfinite(h.radius_m) && std::isfinite(h.height_m) &&
         std::abs(h.height_m) > kMaxHillHeightPerRadius * h.radius_m)
       p.add(hp + "height_m", "= " + Problems::num(h.height_m) + ": too steep for radius_m " +
@@ -108,19 +113,19 @@ void validateScene(const SceneSpec& spec) {
   const auto& O = spec.operational;
   inside("operational.start_", O.start_x, O.start_y);
   inside("operational.goal_", O.goal_x, O.goal_y);
-  p.range("operational.start_yaw", O.start_yaw, -2 * M_PI, 2 * M_PI, "rad");
-  p.range("operational.goal_radius", O.goal_radius, 0.1, 1000.0, "m");
-  p.range("operational.safety_radius", O.safety_radius, 0.0, 1000.0, "m");
-  p.range("operational.speed", O.speed, 0.1, 30.0, "m/s");
-  p.range("operational.sim_timeout", O.sim_timeout, 0.1, kMaxSimTimeout, "s");
-  p.range("operational.idle_timeout", O.idle_timeout, 0.1, kMaxSimTimeout, "s", true);
-  p.range("operational.stuck_timeout", O.stuck_timeout, 0.1, kMaxSimTimeout, "s", true);
-  p.range("operational.max_roll_deg", O.max_roll_deg, 1.0, 180.0, "deg");
-  p.range("operational.max_pitch_deg", O.max_pitch_deg, 1.0, 180.0, "deg");
-  p.range("textural.sun_inclination_deg", spec.textural.sun_inclination_deg, 0.0, 90.0, "deg");
-  p.range("textural.sun_yaw_deg", spec.textural.sun_yaw_deg, -360.0, 360.0, "deg");
-  p.range("textural.fog_visibility_m", spec.textural.fog_visibility_m, 0.0, 100000.0, "m");
-  p.range("textural.cloud_cover", spec.textural.cloud_cover, 0.0, 1.0, "-");
+  p.range(O.start_yaw, schema::kOperationalStartYaw);
+  p.range(O.goal_radius, schema::kOperationalGoalRadius);
+  p.range(O.safety_radius, schema::kOperationalSafetyRadius);
+  p.range(O.speed, schema::kOperationalSpeed);
+  p.range(O.sim_timeout, schema::kOperationalSimTimeout);
+  p.range(O.idle_timeout, schema::kOperationalIdleTimeout);
+  p.range(O.stuck_timeout, schema::kOperationalStuckTimeout);
+  p.range(O.max_roll_deg, schema::kOperationalMaxRollDeg);
+  p.range(O.max_pitch_deg, schema::kOperationalMaxPitchDeg);
+  p.range(spec.textural.sun_inclination_deg, schema::kTexturalSunInclinationDeg);
+  p.range(spec.textural.sun_yaw_deg, schema::kTexturalSunYawDeg);
+  p.range(spec.textural.fog_visibility_m, schema::kTexturalFogVisibilityM);
+  p.range(spec.textural.cloud_cover, schema::kTexturalCloudCover);
 
   const size_t n = instanceCount(spec);
   if (n > kMaxObstacles) {
@@ -140,8 +145,8 @@ void validateScene(const SceneSpec& spec) {
         const auto& inst = layout.instances[j];
         const std::string ip = lp + ".instances[" + std::to_string(j) + "].";
         bool ok = inside(ip, inst.x, inst.y);
-        p.range(ip + "yaw", inst.yaw, -2 * M_PI, 2 * M_PI, "rad");
-        p.range(ip + "scale", inst.scale, 0.01, 100.0, "");
+        p.range(ip + "yaw", inst.yaw, schema::kInstanceYaw);
+        p.range(ip + "scale", inst.scale, schema::kInstanceScale);
         ok = ok && std::isfinite(inst.scale) && inst.scale > 0;
         if (!ok || !mesh || !inst.visible || mesh->height * inst.scale <= kTraversableHeight)
           continue;

@@ -25,7 +25,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+from asg_agent.paths import REPO
+
 DATASET_TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "asg_sim_dataset")
 FORMAT = "asg_hardening/1"
 
@@ -70,7 +71,7 @@ class Source:
 
 
 def _rows_by_job(path: str):
-    from asg_agent.analysis.export import read_export
+    from asg_agent.records.export import read_export
 
     camp, rows = read_export(path)
     return camp, {int(r["job"]): r for r in rows}
@@ -79,7 +80,7 @@ def _rows_by_job(path: str):
 def _source(camp: dict, row: dict, name: str, request: Optional[dict] = None) -> Source:
     from asg_scenario import validate_scenario
 
-    from asg_agent.analysis.campaign_metrics import scenario_of
+    from asg_agent.records.scenes import scenario_of
 
     xy = np.asarray(row.get("trajectory_xy") or [], dtype=np.float64).reshape(-1, 2)
     if len(xy) < 2:

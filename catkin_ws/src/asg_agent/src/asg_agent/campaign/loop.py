@@ -24,10 +24,10 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 
 
-from asg_agent.campaign.experiment import Experiment
+from asg_agent.records.experiment import Experiment
 from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
 from asg_agent.search.methods import SearchMethod
-from asg_agent.campaign.store import Store, pack_trajectory, provenance, unpack_trajectory
+from asg_agent.records.store import Store, pack_trajectory, provenance, unpack_trajectory
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring import rewards
 from asg_agent.search.td3 import load_checked, save_atomic
@@ -155,6 +155,36 @@ class RefJob:
     avoid: Dict[str, str] = field(default_factory=dict)
 
 
+def reference_setup(reward, references, reference, candidates, collision_bonus):
+    """The campaign's reference stacks by role and its candidate rule, checked against the reward
+    (ValueError naming what does not fit); `reference` alone is round 3's single-reference mode."""
+    if reward not in REWARDS:
+        raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
+    references = dict(references or {})
+    if reference is not None:
+        if references:
+            raise ValueError("give `reference` (ground truth, every scenario) or `references`, not both")
+        references = {attr.TRUTH: reference}
+        candidates = candidates or "all"
+    unknown = sorted(set(references) - set(attr.ROLES))
+    if unknown:
+        raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")
+    if references and attr.TRUTH not in references:
+        raise ValueError(f"attribution needs a {attr.TRUTH!r} reference stack")
+    candidates = candidates or "failures"
+    if candidates not in CANDIDATE_RULES:
+        raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
+    if reward == "differential" and not references:
+        raise ValueError("the differential reward needs a reference stack")
+    if reward in ("differential", "regret") and candidates != "all":
+        raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
+    if reward == "regret" and attr.FULL not in references:
+        raise ValueError(f"the regret reward needs the {attr.FULL!r} reference stack")
+    if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
+        raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
+    return references, candidates
+
+
 class Campaign:
     def __init__(
         self,
@@ -200,30 +230,7 @@ class Campaign:
         # (with a ground-truth reference: only where it reached the goal), since the proxy itself
         # scores a collision like any short run (issue #27). Rewards that read a reference wait
         # for it before the search learns, so a campaign stays a function of its seed.
-        if reward not in REWARDS:
-            raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
-        references = dict(references or {})
-        if reference is not None:
-            if references:
-                raise ValueError("give `reference` (ground truth, every scenario) or `references`, not both")
-            references = {attr.TRUTH: reference}
-            candidates = candidates or "all"
-        unknown = sorted(set(references) - set(attr.ROLES))
-        if unknown:
-            raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")
-        if references and attr.TRUTH not in references:
-            raise ValueError(f"attribution needs a {attr.TRUTH!r} reference stack")
-        candidates = candidates or "failures"
-        if candidates not in CANDIDATE_RULES:
-            raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
-        if reward == "differential" and not references:
-            raise ValueError("the differential reward needs a reference stack")
-        if reward in ("differential", "regret") and candidates != "all":
-            raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
-        if reward == "regret" and attr.FULL not in references:
-            raise ValueError(f"the regret reward needs the {attr.FULL!r} reference stack")
-        if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
-            raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
+        references, candidates = reference_setup(reward, references, reference, candidates, collision_bonus)
         self.references, self.candidates = references, candidates
         self.reward, self.collision_bonus = reward, float(collision_bonus)
         # The single-reference mode stores each row with its reference run, as round 3 did.

@@ -9,7 +9,7 @@ A suite is a folder a user can commit:
                                      (keyed by a label), and the replay command
     SUITE/scenarios/NNN-NAME.yaml    each a scenario file (docs/scenario-format.md)
 
-`export_suite` picks, from campaign exports, one finding per failure mode (analysis/failure_modes.py)
+`export_suite` picks, from campaign exports, one finding per failure mode (records/failure_modes.py)
 of the chosen attribution classes. `load_suite` refuses a suite of another format version, or a
 scenario the current validator rejects, naming the file and the problem. `run_suite` runs every
 scenario on a pool of workers (any stack) and gives each a verdict: it *fails* when it ends in a
@@ -81,9 +81,9 @@ def export_suite(
     left out (the next finding of its mode may take its place), and listed in `dropped_shared`."""
     from asg_scenario import dump_scenario, validate_scenario
 
-    from asg_agent.analysis import failure_modes as fm
-    from asg_agent.analysis.campaign_metrics import scenario_of
-    from asg_agent.analysis.export import read_export
+    from asg_agent.records import failure_modes as fm
+    from asg_agent.records.scenes import scenario_of
+    from asg_agent.records.export import read_export
 
     from asg_agent.campaign import overlap
 

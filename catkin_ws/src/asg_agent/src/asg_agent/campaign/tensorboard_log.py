@@ -22,7 +22,7 @@ which this project does not need).
 import json
 from typing import Optional
 
-from asg_agent.campaign.store import attribute
+from asg_agent.records.store import attribute
 
 AGENT_KEYS = {
     "critic_loss": "agent/critic_loss",

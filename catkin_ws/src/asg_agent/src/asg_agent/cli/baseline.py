@@ -14,7 +14,7 @@ layout k), so a baseline of N layouts is the first N scenarios of that campaign.
 `run` talks to running workers (scripts/repro/baseline.sh launches them per stack) and appends one JSON
 line per layout to results/baseline/<exp>/<stack>.jsonl as each run ends, so an interrupted run
 resumes where it stopped. `summary` needs no ROS. `offline` runs the ground-truth stack on the
-same layouts without ROS, through asg_planner's `asg_closed_loop` (the same cores in the lockstep
+same layouts without ROS, through asg_planner_harness's `asg_closed_loop` (the same cores in the lockstep
 order; its proxies equal the ROS stack's), for a planner or follower variant: it writes
 results/baseline/<exp>/offline/<label>.jsonl and compares it with the stored ground-truth rows.
 """
@@ -27,13 +27,14 @@ from typing import Dict, List
 
 import numpy as np
 
-from asg_agent.campaign.experiment import load_experiment
+from asg_agent.records.experiment import load_experiment
 from asg_agent.scoring.proxy import run_terms
 from asg_agent.search.methods import RandomSearch
-from asg_agent.campaign.store import attribute
+from asg_agent.records.store import attribute
 from asg_agent.scoring.attribution import FINDING
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+from asg_agent.paths import REPO
+
 STACKS = (
     "ground_truth",
     "flawed",
@@ -107,7 +108,7 @@ def run_requests(pool, requests: List[dict], todo: List[int], on_row, max_attemp
 
 
 def run(a) -> int:
-    from asg_agent.cli.campaign import worker_names
+    from asg_agent.campaign.policy import worker_names
     from asg_agent.ros.pool import WorkerPool
     from tqdm import tqdm
 
@@ -147,7 +148,7 @@ def run(a) -> int:
 def closed_loop_tool() -> str:
     """The built asg_closed_loop of this workspace (or $ASG_CLOSED_LOOP)."""
     tool = os.environ.get("ASG_CLOSED_LOOP") or os.path.join(
-        REPO, "catkin_ws", "devel", "lib", "asg_planner", "asg_closed_loop"
+        REPO, "catkin_ws", "devel", "lib", "asg_planner_harness", "asg_closed_loop"
     )
     if not os.access(tool, os.X_OK):
         raise SystemExit(
@@ -372,7 +373,7 @@ def summary_cmd(a) -> int:
 
 def registered_labels() -> tuple:
     """The names of the stacks registered in stacks/ (issue #55) that are not labels already."""
-    from asg_agent.campaign import stacks
+    from asg_agent.records import stacks
 
     names = sorted(f[: -len(".launch")] for f in os.listdir(stacks.builtin_dir()) if f.endswith(".launch"))
     return tuple(n for n in names if n not in STACKS and n != "paper")

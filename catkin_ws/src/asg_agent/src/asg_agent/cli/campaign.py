@@ -18,11 +18,13 @@ import sys
 import time
 
 from asg_agent.campaign.loop import CANDIDATE_RULES, REWARDS, Campaign
+from asg_agent.campaign.policy import CampaignError, campaign_settings, reference_roles, worker_names
+from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collector
 from asg_agent.cli.signals import stop_on_signals
 from asg_agent.scoring import attribution as attr
-from asg_agent.campaign.experiment import ExperimentError, load_experiment
+from asg_agent.records.experiment import ExperimentError, load_experiment
 from asg_agent.search.methods import METHODS, make_method
-from asg_agent.campaign.store import Store, StoreError, checkpoint_path
+from asg_agent.records.store import Store, StoreError, checkpoint_path
 from asg_agent.search.td3 import TD3Config
 
 
@@ -178,68 +180,6 @@ def parse(argv):
     return a
 
 
-def worker_names(spec: str):
-    if spec.isdigit():
-        n = int(spec)
-        if n < 1:
-            raise ValueError("--workers must be >= 1")
-        return [f"/worker_{i}" for i in range(n)]
-    return ["/" + s.strip().strip("/") for s in spec.split(",") if s.strip()]
-
-
-def reference_roles(a, workers):
-    """{role: worker namespaces} of the reference stacks: --reference ROLE=WORKERS (each count
-    numbered after the workers named before it), or --reference-workers (ground truth)."""
-    specs = [r.partition("=")[::2] for r in a.reference]
-    if a.reference_workers:
-        specs = [(attr.TRUTH, a.reference_workers)]
-    roles, taken = {}, list(workers)
-    for role, spec in specs:
-        if spec.isdigit():
-            n = int(spec)
-            if n < 1:
-                raise ValueError(f"reference {role}: at least one worker")
-            first = len(taken)
-            ws = (
-                [f"fake_{role}_{i}" for i in range(n)] if a.fake_workers else [f"/worker_{first + i}" for i in range(n)]
-            )
-        else:
-            ws = worker_names(spec)
-        if not ws or set(ws) & set(taken):
-            raise ValueError(f"reference {role}: its workers must be others than --workers and the other references'")
-        roles[role] = ws
-        taken += ws
-    return roles
-
-
-def reference_settings(a, exp, roles, candidates) -> dict:
-    """What the campaign stores of its reference stacks: each role's identity (perception, model,
-    backend: what the workers are checked against), the candidate rule and the thresholds."""
-    if not roles:
-        return {}
-    out = {}
-    for role, ws in roles.items():
-        if role == attr.FULL:
-            model = a.full_model or attr.unflawed(exp.model)
-            if not model:
-                raise SystemExit(
-                    f"campaign: --reference full: the experiment's model {exp.model!r} has no known unflawed "
-                    "counterpart: name it with --full-model"
-                )
-            out[role] = {"workers": ws, "perception": "unet", "model": model, "unet_backend": exp.unet_backend}
-        else:
-            out[role] = {"workers": ws, "perception": "ground_truth"}
-    return {
-        "references": out,
-        "candidates": candidates,
-        "attribution_thresholds": {
-            "finding": attr.FINDING,
-            "reference_clear": attr.REFERENCE_CLEAR,
-            "candidate": attr.CANDIDATE,
-        },
-    }
-
-
 def stack_line(camp) -> str:
     """The summary's line naming the stack under test and its numerics (issue #53); for bf16, the
     fast mode, that its findings replay only where oneDNN runs the recorded ISA."""
@@ -309,7 +249,7 @@ def print_summary(store, name, out=sys.stdout):
 
 
 def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu, groups=None):
-    from asg_agent.analysis.bench import breakdown, stack_costs
+    from asg_agent.records.stage_costs import breakdown, stack_costs
 
     wall, cpu = time.time() - t_wall, time.process_time() - t_cpu
     first, last = {}, {}
@@ -346,10 +286,6 @@ def write_stage_report(a, c, store, name, collector, workers, t_wall, t_cpu, gro
     print(f"stage report: {a.stage_report} ({out['rate_per_hour']:.0f} scenarios an hour)", file=sys.stderr)
 
 
-class CampaignError(Exception):
-    """What stops the command before it runs (printed as `campaign: ...`, exit status 2)."""
-
-
 def open_store(a, name: str) -> Store:
     try:
         os.makedirs(os.path.dirname(os.path.abspath(a.store)), exist_ok=True)
@@ -361,44 +297,6 @@ def open_store(a, name: str) -> Store:
     if not a.resume and store.campaign(name) is not None:
         raise CampaignError(f"{name!r} already exists in {a.store}: add --resume to continue it, or --name")
     return store
-
-
-def make_pools(a, exp, workers, roles):
-    """The pool of workers under test and one pool per reference role: ROS workers, or the
-    in-process stand-in with --fake-workers. ROS workers must run the experiment's planner."""
-    references = {}
-    if a.fake_workers:
-        from asg_agent.campaign.fake_pool import FakePool
-
-        pool = FakePool(a.fake_workers, seed=int(time.time()))
-        for k, (role, ws) in enumerate(roles.items()):  # stand-in reference stacks that wiggle less
-            references[role] = FakePool(len(ws), seed=int(time.time()) + 1 + k, gain=0.3, prefix=f"fake_{role}")
-        return pool, references
-    from asg_agent.ros.pool import WorkerPool
-
-    from asg_agent.ros.node import init_node
-
-    try:
-        init_node("campaign", anonymous=True, disable_signals=True)
-        pool = WorkerPool(workers, answer_timeout=a.answer_timeout)
-        for role, ws in roles.items():
-            references[role] = WorkerPool(ws, answer_timeout=a.answer_timeout)
-    except RuntimeError as e:
-        raise CampaignError(str(e)) from e
-    # The planner is part of the stack's identity: every worker must run the experiment's
-    # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
-    from asg_agent.ros.stack_identity import planner_mismatch
-
-    ref_workers = [w for ws in roles.values() for w in ws]
-    checked = (list(workers) if exp.stack == "paper" else []) + ref_workers
-    wrong = [m for w in checked for m in planner_mismatch(w, exp.planner_config)]
-    if wrong:
-        raise CampaignError(
-            f"the experiment's planner_config is {exp.planner_config}, but:\n  "
-            + "\n  ".join(wrong[:8])
-            + "\n(launch the workers with planner_config:=... of that file)"
-        )
-    return pool, references
 
 
 def make_search(a, exp):
@@ -442,96 +340,6 @@ def progress_bar(a):
         )
 
     return bar, progress
-
-
-def repo_relative(path: str) -> str:
-    """`path` relative to the repository this code runs from, or "" when it lies outside it."""
-    repo = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
-    rel = os.path.relpath(os.path.realpath(path), repo) if path else ".."
-    return "" if rel.startswith("..") else rel
-
-
-def campaign_settings(a, exp, workers, roles, candidates) -> dict:
-    """What the store keeps of the campaign: workers, references, reward and the stack's identity."""
-    return {
-        "workers": workers,
-        "reference_workers": [w for ws in roles.values() for w in ws],
-        **reference_settings(a, exp, roles, candidates),
-        "reward": a.reward,
-        **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
-        "experiment_file": exp.source,
-        **({"experiment_repo_file": repo_relative(exp.source)} if repo_relative(exp.source) else {}),
-        "stack": exp.stack,
-        **(registered_settings(exp) if exp.stack != "paper" else {}),
-        "perception": exp.perception if exp.stack == "paper" else exp.stack,
-        "model": exp.model,
-        "unet_backend": exp.unet_backend,
-        "planner_config": exp.planner_config,
-        "fake": bool(a.fake_workers),
-    }
-
-
-def registered_settings(exp) -> dict:
-    """What a campaign records of a stack registered by a file (campaign.stacks): the file, and
-    what its registration says; the identity parameters' values are added by check_stacks."""
-    from asg_agent.campaign import stacks
-
-    reg = stacks.read(exp.stack_file)
-    return {
-        "command_interface": reg.command,
-        "stack_file": repo_relative(reg.path) or reg.path,
-        "registration": {"mode": reg.mode, "command": reg.command, "sim_time": reg.sim_time, "identity": reg.identity},
-    }
-
-
-def check_stacks(exp, settings: dict, workers, roles):
-    """The stack identity stored with the campaign must be what the workers run (issue #24: a
-    backend left at another value than the experiment's would be recorded falsely); the U-Net's
-    numerics on each worker's machine are recorded in `settings` (issue #36: one campaign, one
-    numerics, so that a replay elsewhere can tell whether it repeats the runs)."""
-    from asg_agent.ros.stack_identity import segmenter_numerics, stack_mismatch
-
-    wrong = [m for w in workers for m in stack_mismatch(w, settings)]
-    if exp.stack != "paper" and not wrong:
-        # a registered stack's identity parameters: the same on every worker, recorded
-        from asg_agent.ros.stack_identity import identity_values
-
-        seen = {w: identity_values(w) for w in workers}
-        if any(v != seen[workers[0]] for v in seen.values()):
-            wrong.append(f"the workers' {exp.stack} stacks differ in their identity parameters: {seen}")
-        settings["identity"] = seen[workers[0]]
-    for role, ws in roles.items():
-        wrong += [m for w in ws for m in stack_mismatch(w, settings["references"][role])]
-    groups = [(settings, workers)] + [(settings["references"][r], ws) for r, ws in roles.items()]
-    for where, ws in groups:
-        if where.get("perception") != "unet":
-            continue
-        seen = {w: segmenter_numerics(w, timeout=60.0) for w in ws}
-        if len(set(seen.values())) > 1 or "" in seen.values():
-            wrong.append(
-                "the segmenters do not all run the same numerics: "
-                + ", ".join(f"{w}: {v or 'none reported'}" for w, v in seen.items())
-            )
-        else:
-            where["numerics"] = next(iter(seen.values()))
-    if wrong:
-        raise CampaignError(f"the workers do not run the experiment's stack ({exp.source}): " + "; ".join(wrong))
-
-
-def stage_collector(exp, settings: dict, workers, roles):
-    """--stage-report: the collector of every node's stage times, once each has published."""
-    from asg_agent.ros.stages import StageCollector
-
-    collector = StageCollector(list(workers) + [w for ws in roles.values() for w in ws])
-    nodes = (1 if exp.stack != "paper" else 3 if exp.perception == "unet" else 2) * len(workers)
-    nodes += sum((3 if settings["references"][r]["perception"] == "unet" else 2) * len(ws) for r, ws in roles.items())
-    if not collector.wait_for(nodes, timeout=15.0):
-        print(
-            "campaign: --stage-report: not every worker, segmenter and planner published stage_times "
-            "within 15 s; the breakdown will lack them",
-            file=sys.stderr,
-        )
-    return collector
 
 
 def run(a, c: Campaign, store: Store, name: str, bar, progress, collector, workers, roles) -> int:

@@ -14,11 +14,12 @@ import os
 import sys
 from typing import Dict, List
 
-from asg_agent.campaign import stacks
-from asg_agent.campaign.experiment import Experiment, ExperimentError, load_experiment
+from asg_agent.records import stacks
+from asg_agent.records.experiment import Experiment, ExperimentError, load_experiment
 from asg_perception.numerics import refuse_emulated, resolve_backend
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+from asg_agent.paths import REPO
+
 #: train.launch's default experiment (asg_bringup/experiments is the repository's experiments/)
 DEFAULT_EXPERIMENT = os.path.join(REPO, "experiments", "exp1.yaml")
 #: the train.launch arguments an experiment decides, in the order they are printed

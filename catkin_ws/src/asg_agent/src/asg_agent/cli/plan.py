@@ -30,7 +30,7 @@ from typing import Callable, List, Optional
 
 from asg_agent.cli.signals import stop_on_signals
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+from asg_agent.paths import REPO
 
 
 FIELDS = ("NAME", "SCENARIOS", "LAUNCH")  # the words a plan line starts with, then ARGS
@@ -103,7 +103,7 @@ def launch_args(c: Campaign, repo: str, default_store: str):
 
 def complete(export_path: str, scenarios: int) -> bool:
     """True when the export is of a finished campaign of at least `scenarios` scenarios."""
-    from asg_agent.analysis.export import read_export
+    from asg_agent.records.export import read_export
 
     if not os.path.isfile(export_path):
         return False
@@ -151,8 +151,8 @@ def run_plan(
     runner: Callable = train,
     say: Callable[[str], None] = lambda s: print(f"[asg] {s}", flush=True),
 ) -> int:
-    from asg_agent.analysis.export import export
-    from asg_agent.campaign.store import Store, checkpoint_path, park, unpark
+    from asg_agent.records.export import export
+    from asg_agent.records.store import Store, checkpoint_path, park, unpark
 
     for c in plan:
         if not re.search(only, c.name):

@@ -9,7 +9,7 @@ random (a scene worker, a planner, a segmenter on a worker that has one, or the 
 worker.launch respawns the nodes and the agent is restarted with --resume whenever it dies. When
 the time is up the killer stops and the agent is killed a last time. Leg 2 resumes it with its
 budget cut to the scenarios it has begun, so the campaign drains and finishes. Then every scenario
-0..N-1 must be stored exactly once (asg_agent.analysis.soak_report).
+0..N-1 must be stored exactly once (asg_agent.campaign.soak_check).
 
     python3 -m asg_agent.cli.soak [--hours 2] [--gaps 60 240] [--method random] [--seed 1]
         [--experiment exp1] [--reference 0|N|three] [--extra "--bc-weight 1.0"]
@@ -27,7 +27,8 @@ import time
 from dataclasses import dataclass
 from typing import Callable, List, Optional
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
+from asg_agent.paths import REPO
+
 BIG = 1_000_000  # the budget while the kills go on: the clock, not the count, ends leg 1
 KINDS = ("scene_worker", "planner", "segmenter")
 
@@ -146,8 +147,8 @@ def leg_two(agent: Agent, budget: int, retry_s: float = 1.0):
 
 
 def main(argv=None) -> int:
-    from asg_agent.analysis import soak_report
-    from asg_agent.campaign.store import Store
+    from asg_agent.campaign import soak_check
+    from asg_agent.records.store import Store
 
     p = argparse.ArgumentParser(prog="asg_agent.cli.soak", description=__doc__.split("\n\n")[0])
     p.add_argument("--hours", type=float, default=2.0, help="[h] length of leg 1 (the kills)")
@@ -213,7 +214,7 @@ def main(argv=None) -> int:
         leg_one(agent, killer, start + a.hours * 3600.0, resume, kills_log)
         budget = max(Store(a.store).jobs(name)) + 1
         leg_two(agent, budget)
-        res = soak_report.report(a.store, name, budget, kills_log, agent_log, start, time.time())
+        res = soak_check.report(a.store, name, budget, kills_log, agent_log, start, time.time())
     finally:
         for proc in reversed(procs):
             proc.terminate()
@@ -227,7 +228,7 @@ def main(argv=None) -> int:
     with open(os.path.join(out, "soak.json"), "w", encoding="utf-8") as f:
         json.dump(res, f, indent=1)
     print(json.dumps(res, indent=1))
-    return 0 if soak_report.passed(res) else 1
+    return 0 if soak_check.passed(res) else 1
 
 
 if __name__ == "__main__":

@@ -70,7 +70,7 @@ def main(argv=None) -> int:
     else:
         import rospy
 
-        from asg_agent.cli.campaign import worker_names
+        from asg_agent.campaign.policy import worker_names
         from asg_agent.ros.pool import WorkerPool
 
         from asg_agent.ros.node import init_node

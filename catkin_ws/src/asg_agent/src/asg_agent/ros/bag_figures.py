@@ -1,7 +1,7 @@
 """Figures from bags of replays (rosbag; ROS is needed for the replays themselves): what the
 planner believed at a simulated time, and a stored scenario replayed on the campaign's stack and on
 the ground-truth reference side by side (the paper's Figures 9-10). Moved out of
-asg_agent.analysis.report (issue #38: analysis/ reads stores and exports only).
+asg_analysis.report (issue #38: analysis/ reads stores and exports only).
 
     python3 -m asg_agent.ros.bag_figures snapshot RUN.bag OUT.png --time 6.0 [--ns worker_0]
     python3 -m asg_agent.ros.bag_figures perception STORE CAMPAIGN JOB OUT.png [--work DIR]
@@ -216,7 +216,7 @@ def perception_replay(store: str, campaign: str, job: int, out: str, work: str =
         print(p.stdout.strip(), file=sys.stderr)
     end, where = bag_end(bags["test"], "replay_worker")
     times = [max(0.5, end - d) for d in (5.0, 2.5, 0.5)]
-    from asg_agent.campaign.store import Store
+    from asg_agent.records.store import Store
 
     row = next(r for r in Store(store, create=False).rows(campaign, job - 1) if r["job"] == job)
     ref = json.loads(row["reference"]) if row["reference"] else {}

@@ -28,9 +28,9 @@ import numpy as np
 from asg_scenario import ScenarioError, load_scenario
 
 from asg_agent.campaign.loop import Outcome, kept_xy
-from asg_agent.campaign.experiment import LEGACY_UNET_BACKEND
+from asg_agent.records.experiment import LEGACY_UNET_BACKEND
 from asg_agent.scoring.proxy import run_terms
-from asg_agent.campaign.store import Store, unpack_trajectory
+from asg_agent.records.store import Store, unpack_trajectory
 from asg_agent.ros.stack_identity import stack_mismatch
 
 BAG_TOPICS = [

@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from asg_agent.analysis.export import read_export
+from asg_agent.records.export import read_export
 from asg_agent.scoring.attribution import FINDING, RERUN_CLASSES, rerun_class, still_failing
 from asg_agent.campaign.loop import run_each
 from asg_agent.scoring.proxy import run_terms, term_values
@@ -44,7 +44,7 @@ def top_requests(export: str, top: int, select: str = "proxy"):
     """[(campaign row, request)] to re-run: the `top` of largest proxy, or (select 'perception')
     the perception-attributable ones, class by class. Raises ValueError for an unknown `select`
     or a 'perception' selection from an export without reference runs."""
-    from asg_agent.analysis.campaign_metrics import scenario_of
+    from asg_agent.records.scenes import scenario_of
 
     camp, rows = read_export(export)
     rows = [r for r in rows if r["proxy"] is not None]
@@ -70,7 +70,7 @@ def top_requests(export: str, top: int, select: str = "proxy"):
 
 def run(a) -> int:
     from asg_agent.ros.pool import WorkerPool
-    from asg_agent.cli.campaign import worker_names
+    from asg_agent.campaign.policy import worker_names
 
     try:
         camp, todo = top_requests(a.export, a.top, a.select)

@@ -8,7 +8,7 @@ parameter server; the comparisons are plain functions of what it returns.
 import os
 import time
 
-from asg_agent.campaign.experiment import DEFAULT_UNET_BACKEND, LEGACY_UNET_BACKEND
+from asg_agent.records.experiment import DEFAULT_UNET_BACKEND, LEGACY_UNET_BACKEND
 
 
 def stack_mismatch(worker: str, settings: dict) -> list:

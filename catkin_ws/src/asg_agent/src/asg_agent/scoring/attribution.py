@@ -33,6 +33,8 @@ import math
 from dataclasses import dataclass
 from typing import Dict, Mapping, Optional
 
+from asg_scenario import schema
+
 FINDING = 3.0  # [-] a run with proxy at or above this is a finding (the paper's count)
 FINDING_STRONG = 4.0  # [-] the paper's second count (Table 2's ">= 4")
 REFERENCE_CLEAR = 2.0  # [-] a reference run below this (and at the goal) is clear of the failure
@@ -45,8 +47,9 @@ DIFFERENTIAL = 1.0  # [-] a differential finding: the proxy exceeds its referenc
 # that pass (306 of 313 there), which `docs/agent.md` says and the full re-run check measures.
 CANDIDATE = 2.0
 
-#: terminations that are failures whatever the proxy (SUCCESS is not; ERROR is no outcome at all)
-FAILED_TERMINATIONS = ("COLLISION", "FLIPPED", "SIM_TIMEOUT", "IDLING_TIMEOUT", "STUCK_TIMEOUT", "OUT_OF_BOUNDS")
+#: terminations that are failures whatever the proxy (SUCCESS is not; ERROR is no outcome at all):
+#: declared with the terminations, in the scenario schema
+FAILED_TERMINATIONS = schema.FAILED_TERMINATIONS
 
 FULL = "full"  # role of the unflawed-model reference
 TRUTH = "ground_truth"  # role of the ground-truth reference

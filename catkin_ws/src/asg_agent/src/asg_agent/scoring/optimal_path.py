@@ -215,28 +215,44 @@ def shortest_path(
             span = (a1 - a0) % (2 * math.pi)
             if _arc_free(k, a0, a1, ds, d.r):
                 add_edge(n0, n1, d.r * span)
-    # Dijkstra from the start to the goal node.
-    dist = [math.inf] * len(nodes)
-    prev = [-1] * len(nodes)
-    dist[0] = 0.0
-    heap = [(0.0, 0)]
+    dist, prev = _dijkstra(edges, 0, 1)
+    if not math.isfinite(dist[1]):
+        return OptimalPath(math.inf, [])
+    return OptimalPath(dist[1], _polyline(_chain(prev, 0, 1), nodes, on_disc, ds, dist, G, goal_radius))
+
+
+def _dijkstra(edges, source: int, target: int):
+    """Distances from `source` (math.inf where unreached) and each node's predecessor, settled up
+    to `target`."""
+    dist = [math.inf] * len(edges)
+    prev = [-1] * len(edges)
+    dist[source] = 0.0
+    heap = [(0.0, source)]
     while heap:
         du, u = heapq.heappop(heap)
         if du > dist[u]:
             continue
-        if u == 1:
+        if u == target:
             break
         for v, w in edges[u]:
             if du + w < dist[v] - 1e-12:
                 dist[v], prev[v] = du + w, u
                 heapq.heappush(heap, (dist[v], v))
-    if not math.isfinite(dist[1]):
-        return OptimalPath(math.inf, [])
-    chain = [1]
-    while chain[-1] != 0:
+    return dist, prev
+
+
+def _chain(prev, source: int, target: int) -> List[int]:
+    chain = [target]
+    while chain[-1] != source:
         chain.append(prev[chain[-1]])
     chain.reverse()
-    pts = [nodes[0]]
+    return chain
+
+
+def _polyline(chain, nodes, on_disc, ds, dist, G, goal_radius) -> List[Tuple[float, float]]:
+    """The path's points: straight legs between graph nodes, arcs along a disc's rim sampled every
+    0.5 m, and the last leg cut at the goal circle (node 1 is the goal)."""
+    pts = [nodes[chain[0]]]
     for a, b in zip(chain, chain[1:]):
         if b == 1:
             p = nodes[a]
@@ -259,7 +275,7 @@ def shortest_path(
             ]
         else:
             pts.append(nodes[b])
-    return OptimalPath(dist[1], pts)
+    return pts
 
 
 def obstacle_discs(scenario: dict, clearance: float, placed_mask: Optional[Sequence[bool]] = None) -> List[Disc]:

@@ -25,7 +25,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from asg_agent.campaign.experiment import Experiment
+from asg_agent.records.experiment import Experiment
 from asg_scenario.layout import RouteFrame
 from asg_agent.scoring.proxy import resample_path
 from asg_agent.search.td3 import TD3Agent, TD3Config

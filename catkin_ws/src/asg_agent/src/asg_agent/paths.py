@@ -1,0 +1,13 @@
+"""Where things are: the repository's root, found from this file (the devel space's package
+resolves to the source tree). The one place that walks up the folders."""
+
+import os
+
+#: the repository's root (the folder holding catkin_ws/, experiments/, results/, docs/)
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 5))
+
+
+def repo_relative(path: str) -> str:
+    """`path` relative to the repository this code runs from, or "" when it lies outside it."""
+    rel = os.path.relpath(os.path.realpath(path), REPO) if path else ".."
+    return "" if rel.startswith("..") else rel

@@ -1,0 +1,38 @@
+"""The scene of a stored or exported row: its request rebuilt from the experiment and the row's
+positions, and what the camera saw ahead of a trajectory point (no ROS)."""
+
+import os
+
+import numpy as np
+
+from asg_agent.paths import REPO
+
+
+def scenario_of(campaign: dict, row: dict) -> dict:
+    """The request of an exported row: the experiment's fixed attributes with its positions (and
+    its textural attributes, where the export has them)."""
+    from asg_scenario.layout import with_positions
+    from asg_agent.records.experiment import load_experiment
+
+    exp = load_experiment(os.path.join(REPO, "experiments", campaign["experiment"] + ".yaml"))
+    s = with_positions(exp.scenario, row["positions"])
+    s["textural"].update(row.get("textural") or {})
+    return s
+
+
+def shadow_ahead(req: dict, xy: np.ndarray, i: int, reach: float = 20.0, half_width: float = 5.0) -> bool:
+    """Whether an obstacle's cast shadow lies in the corridor `reach` m ahead of trajectory point i
+    (heading from the point 1 s later), `half_width` m to either side: ground the camera sees."""
+    from asg_scenario.votes import in_cast_shadow
+
+    j = min(len(xy) - 1, i + 10)
+    h = xy[j] - xy[i] if j > i else xy[i] - xy[max(0, i - 10)]
+    if np.linalg.norm(h) < 1e-6:
+        return False
+    h = h / np.linalg.norm(h)
+    n = np.array([-h[1], h[0]])
+    return any(
+        in_cast_shadow(req, *(xy[i] + a * h + b * n))
+        for a in np.arange(1.0, reach + 0.5, 1.0)
+        for b in np.arange(-half_width, half_width + 0.5, 1.0)
+    )

@@ -1,0 +1,540 @@
+"""A study fixed before its data (issue #37; no ROS): the protocol file names the experiment, the
+arms, seeds and budget, the endpoint and the statistics; this module turns it into campaign plans
+and reads the campaigns' exports back against it, printing every deviation.
+
+    python3 -m asg_analysis.protocol plan experiments/protocol-round4.yaml pilot > results/round4/pilot.txt
+    python3 -m asg_analysis.protocol choose experiments/protocol-round4.yaml results/round4
+    python3 -m asg_analysis.protocol plan experiments/protocol-round4.yaml confirmatory \\
+        --choice results/round4/pilot_choice.json > results/round4/plan.txt
+    python3 -m asg_analysis.protocol analyse experiments/protocol-round4.yaml results/round4
+
+Plans are lines of scripts/repro/campaigns.sh (NAME SCENARIOS LAUNCH ARGS...); campaigns are named
+PROTOCOL-ARM-sSEED (pilot: PROTOCOL-pilot-reward-REWARD-sSEED, PROTOCOL-pilot-band-BAND-sSEED).
+`choose` applies the pilot's stated rule to the pilot's exports and writes the choice; `analyse`
+counts, per arm and seed, the endpoint class per 1,000 scenarios and the secondary scores, and
+compares the default with every other arm (asg_analysis.stats).
+"""
+
+import argparse
+import json
+import os
+import sys
+from typing import Dict, List, Optional
+
+import yaml
+
+from asg_agent.scoring import attribution as attr
+
+REQUIRED = ("name", "version", "experiment", "budget", "workers", "attribution", "endpoint", "pilot", "arms", "target")
+
+
+class ProtocolError(ValueError):
+    pass
+
+
+def load(path: str) -> dict:
+    try:
+        with open(path, encoding="utf-8") as f:
+            p = yaml.safe_load(f)
+    except (OSError, yaml.YAMLError) as e:
+        raise ProtocolError(f"{path}: cannot read the protocol ({e})") from None
+    missing = [k for k in REQUIRED if not isinstance(p, dict) or k not in p]
+    if missing:
+        raise ProtocolError(f"{path}: the protocol lacks {', '.join(missing)}")
+    if p["endpoint"].get("class") not in attr.CLASSES:
+        raise ProtocolError(f"{path}: endpoint class {p['endpoint'].get('class')!r} is not one of {attr.CLASSES}")
+    if "default" not in p["arms"]:
+        raise ProtocolError(f"{path}: no 'default' arm")
+    for name, arm in p["arms"].items():
+        if not arm.get("seeds") or not arm.get("method"):
+            raise ProtocolError(f"{path}: arm {name!r} needs a method and seeds")
+        overlap = set(arm["seeds"]) & set(p["pilot"]["seeds"])
+        if overlap:
+            raise ProtocolError(f"{path}: arm {name!r} reuses pilot seeds {sorted(overlap)}")
+    p["_path"] = path
+    return p
+
+
+def _campaign(
+    p: dict,
+    name: str,
+    method: str,
+    seed: int,
+    reward: str = "proxy",
+    band: Optional[float] = None,
+    experiment: str = "",
+    budget: int = 0,
+):
+    experiment = experiment or p["experiment"]
+    args = [
+        f"method:={method}",
+        f"seed:={seed}",
+        f"experiment:={experiment}",
+        f"workers:={p['workers']}",
+        f"attribution:={p['attribution']}",
+        f"reward:={reward}",
+    ]
+    if band is not None:
+        args.append(f"route_band:={band:g}")
+    if reward == "regret":  # every scenario re-run on the references
+        args.append("candidates:=all")
+    return {
+        "name": name,
+        "budget": budget or p["budget"],
+        "method": method,
+        "seed": seed,
+        "reward": reward,
+        "band": band,
+        "experiment": experiment,
+        "args": args,
+    }
+
+
+def campaigns(p: dict, stage: str, choice: Optional[dict] = None) -> List[dict]:
+    """Every campaign of a stage ('pilot' or 'confirmatory'), each with its name and settings."""
+    n = p["name"]
+    out = []
+    if stage == "pilot" and "search" in p["pilot"]:  # version 2: named search arms
+        budget = p["pilot"].get("budget", p["budget"])
+        for arm, a in p["pilot"]["search"].items():
+            for s in p["pilot"]["seeds"]:
+                c = _campaign(
+                    p,
+                    f"{n}-pilot-{arm}-s{s}",
+                    a["method"],
+                    s,
+                    a.get("reward", "proxy"),
+                    experiment=a.get("experiment", ""),
+                    budget=budget,
+                )
+                out.append(dict(c, arm=arm))
+        for band in p["pilot"]["route_bands_m"]:
+            for s in p["pilot"]["seeds"]:
+                c = _campaign(p, f"{n}-pilot-band-{band:g}-s{s}", "route-random", s, band=float(band), budget=budget)
+                out.append(dict(c, arm=f"band {band:g} m"))
+        return out
+    if stage == "pilot":
+        for reward in p["pilot"]["rewards"]:
+            for s in p["pilot"]["seeds"]:
+                out.append(
+                    dict(
+                        _campaign(p, f"{n}-pilot-reward-{reward}-s{s}", "td3-per-asp", s, reward),
+                        arm=f"reward {reward}",
+                    )
+                )
+        for band in p["pilot"]["route_bands_m"]:
+            for s in p["pilot"]["seeds"]:
+                out.append(
+                    dict(
+                        _campaign(p, f"{n}-pilot-band-{band:g}-s{s}", "route-random", s, band=float(band)),
+                        arm=f"band {band:g} m",
+                    )
+                )
+        return out
+    if stage != "confirmatory":
+        raise ProtocolError(f"stage {stage!r}: pilot or confirmatory")
+    if choice is None:
+        raise ProtocolError("the confirmatory plan needs the pilot's choice (protocol choose ...)")
+    for arm, a in p["arms"].items():
+        # "pilot": what the pilot chose (version 2 also chooses the search's method and experiment)
+        method = choice["method"] if a["method"] == "pilot" else a["method"]
+        reward = choice["reward"] if a.get("reward") == "pilot" else a.get("reward", "proxy")
+        band = a.get("band_m")
+        band = choice["band_m"] if band == "pilot" else band
+        experiment = choice["experiment"] if a.get("experiment") == "pilot" else a.get("experiment", "")
+        for s in a["seeds"]:
+            c = _campaign(p, f"{n}-{arm}-s{s}", method, s, reward, band, experiment=experiment)
+            out.append(dict(c, arm=arm))
+    return out
+
+
+def plan_lines(cs: List[dict]) -> str:
+    return "".join(f"{c['name']}  {c['budget']} train {' '.join(c['args'])}\n" for c in cs)
+
+
+def per_seed(rows: List[dict], budget: int, cls: str) -> float:
+    """Findings of class `cls` per 1,000 scenarios among the first `budget` jobs."""
+    rows = [r for r in rows if r["job"] < budget]
+    return 1000.0 * sum(r.get("attribution") == cls for r in rows) / max(1, len(rows))
+
+
+def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
+    """What the export of campaign `c` does differently from the protocol (empty: nothing)."""
+    out = []
+    s = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp.get("settings", {})
+    jobs = {r["job"] for r in rows}
+    budget = c.get("budget", p["budget"])
+    if len(jobs & set(range(budget))) < budget:
+        out.append(f"{c['name']}: {len(jobs & set(range(budget)))} of the {budget} scenarios")
+    want = os.path.normpath(c.get("experiment") or p["experiment"])
+    ran = s.get("experiment_repo_file") or s.get("experiment_file", "")
+    if ran and not os.path.normpath(ran).endswith(want):
+        out.append(f"{c['name']}: experiment {ran}, the protocol says {want}")
+    for e in interruptions(s, rows):
+        out.append(f"{c['name']}: {e}")
+    if camp.get("method") != c["method"]:
+        out.append(f"{c['name']}: method {camp.get('method')!r}, the protocol says {c['method']!r}")
+    if camp.get("seed") != c["seed"]:
+        out.append(f"{c['name']}: seed {camp.get('seed')}, the protocol says {c['seed']}")
+    if s.get("reward", "proxy") != c["reward"]:
+        out.append(f"{c['name']}: reward {s.get('reward')!r}, the protocol says {c['reward']!r}")
+    refs = sorted((s.get("references") or {}).keys())
+    if refs != sorted(attr.ROLES):
+        out.append(f"{c['name']}: reference stacks {refs}, the protocol says {sorted(attr.ROLES)}")
+    if len(s.get("workers", [])) != p["workers"]:
+        out.append(f"{c['name']}: {len(s.get('workers', []))} workers under test, the protocol says {p['workers']}")
+    if c["band"] is not None and abs(float((s.get("method_config") or {}).get("band", -1)) - c["band"]) > 1e-9:
+        out.append(f"{c['name']}: band {(s.get('method_config') or {}).get('band')}, the protocol says {c['band']}")
+    if any(r.get("attribution") == attr.PENDING for r in rows):
+        out.append(f"{c['name']}: candidates still pending attribution")
+    return out
+
+
+#: [s] a pause between two finished scenarios longer than this is an interruption (a stop, a
+#: park) even where no event recorded it (campaigns before the events existed)
+GAP_S = 600.0
+
+
+def interruptions(settings: dict, rows: List[dict]) -> List[str]:
+    """Every resume, restart and long pause of a campaign, in words: from the events its store
+    recorded (Store.record_event) and from the gaps between its rows' finish times."""
+    out = []
+    for e in settings.get("events", []):
+        if e.get("kind") in ("resume", "restart"):
+            out.append(
+                f"{e['kind']} after {e.get('stored', '?')} stored scenarios"
+                + (f" on {e['cpu']}" if e.get("cpu") else "")
+                + (f" at commit {e['commit'][:10]}" if e.get("commit") else "")
+            )
+    fin = sorted((r["finished"], r["job"]) for r in rows if r.get("finished"))
+    for (t0, j0), (t1, _) in zip(fin, fin[1:]):
+        if t1 - t0 > GAP_S:
+            out.append(f"paused {t1 - t0:,.0f} s after job {j0}")
+    return out
+
+
+def cpu_hours(settings: dict, rows: List[dict], budget: int) -> float:
+    """[h] what a campaign cost: its measured CPU time (measured_cpu_hours) where every run of it
+    was measured, else wall_cpu_hours."""
+    m = measured_cpu_hours(settings)
+    return m if m is not None else wall_cpu_hours(settings, rows, budget)
+
+
+def measured_cpu_hours(settings: dict) -> Optional[float]:
+    """[h] the user + system CPU time of every run of the campaign (the plan's `cpu` events:
+    cli.plan.cpu_event, the process tree of train.sh), or None when a run of it went unmeasured
+    (a run outside a plan, or a campaign from before the protocol's amendment 1)."""
+    events = settings.get("events", [])
+    runs = sum(e.get("kind") in ("start", "resume", "restart") for e in events)
+    cpu = [e for e in events if e.get("kind") == "cpu"]
+    if not cpu or len(cpu) < runs:
+        return None
+    return sum(float(e["cpu_s"]) for e in cpu) / 3600.0
+
+
+def wall_cpu_hours(settings: dict, rows: List[dict], budget: int) -> float:
+    """[h] what the first `budget` scenarios of a campaign cost by the clock: the time from its
+    start to the last of them finishing, less the pauses longer than GAP_S, times the machine's
+    cores (each campaign of the project fills its machine: workers under test, references, the
+    search). It grows with whatever else shares the machine: the fallback of cpu_hours."""
+    fin = sorted(r["finished"] for r in rows if r.get("finished") and r["job"] < budget)
+    if not fin:
+        return 0.0
+    events = settings.get("events", [])
+    cores = next((e["cores"] for e in events if e.get("cores")), 2)
+    start = next((e["time"] for e in events if e.get("kind") == "start"), fin[0] - rows_wall(rows))
+    spans = [fin[0] - start] + [b - a for a, b in zip(fin, fin[1:])]
+    return cores * sum(d for d in spans if d <= GAP_S) / 3600.0
+
+
+def rows_wall(rows: List[dict]) -> float:
+    """[s] the first finished row's own wall time (the start of a campaign without a start event)."""
+    first = min((r for r in rows if r.get("finished")), key=lambda r: r["finished"], default=None)
+    return float(first.get("wall_time", 0.0)) if first else 0.0
+
+
+def read_arms(p: dict, folder: str, cs: List[dict]):
+    """({arm: {seed: rows}}, {campaign name: campaign header}, deviations)."""
+    from asg_agent.records.export import read_export
+
+    arms: Dict[str, Dict[int, list]] = {}
+    heads, devs = {}, []
+    for c in cs:
+        path = os.path.join(folder, c["name"] + ".jsonl.gz")
+        if not os.path.isfile(path):
+            devs.append(f"{c['name']}: no export ({path})")
+            continue
+        camp, rows = read_export(path)
+        heads[c["name"]] = camp
+        devs += deviations(p, c, camp, rows)
+        arms.setdefault(c["arm"], {})[c["seed"]] = rows
+    return arms, heads, devs
+
+
+def choose(p: dict, folder: str) -> dict:
+    """The pilot's choice by the protocol's rule: the reward and the band of largest mean endpoint
+    findings per 1,000 over the pilot seeds (ties: more distinct modes, then list order)."""
+    import numpy as np
+
+    cs = campaigns(p, "pilot")
+    arms, heads, devs = read_arms(p, folder, cs)
+    cls = p["endpoint"]["class"]
+    budget = p["pilot"].get("budget", p["budget"])
+
+    from asg_agent.records import failure_modes as fm
+
+    def score(arm):
+        """(mean endpoint findings per 1,000 over the seeds, distinct failure modes of them)."""
+        seeds = arms.get(arm, {})
+        if not seeds:
+            return (-1.0, -1)
+        camp = heads[next(c["name"] for c in cs if c["arm"] == arm and c["seed"] in seeds)]
+        modes = []
+        for rows in seeds.values():
+            keep = [r for r in rows if r["job"] < budget]
+            modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
+        return (float(np.mean([per_seed(r, budget, cls) for r in seeds.values()])), fm.distinct(modes))
+
+    bands = [(score(f"band {b:g} m"), -k, b) for k, b in enumerate(p["pilot"]["route_bands_m"])]
+    best_b = max(bands)
+    if "search" in p["pilot"]:  # version 2: the search arm (method, reward, experiment) and the band
+        search = [(score(arm), -k, arm) for k, arm in enumerate(p["pilot"]["search"])]
+        best = max(search)[2]
+        a = p["pilot"]["search"][best]
+        return {
+            "search": best,
+            "method": a["method"],
+            "reward": a.get("reward", "proxy"),
+            "experiment": a.get("experiment") or p["experiment"],
+            "band_m": float(best_b[2]),
+            "searches": {arm: sc[0] for sc, _, arm in search},
+            "bands_m": {f"{b:g}": sc[0] for sc, _, b in bands},
+            "deviations": devs,
+            "protocol": p["_path"],
+        }
+    rewards = [(score(f"reward {r}"), -k, r) for k, r in enumerate(p["pilot"]["rewards"])]
+    best_r = max(rewards)
+    return {
+        "reward": best_r[2],
+        "band_m": float(best_b[2]),
+        "rewards": {r: s[0] for s, _, r in rewards},
+        "bands_m": {f"{b:g}": s[0] for s, _, b in bands},
+        "deviations": devs,
+        "protocol": p["_path"],
+    }
+
+
+def analyse(p: dict, folder: str, choice: dict) -> dict:
+    from asg_agent.records import failure_modes as fm
+    from asg_analysis import stats
+
+    cs = campaigns(p, "confirmatory", choice)
+    arms, heads, devs = read_arms(p, folder, cs)
+    cls, budget = p["endpoint"]["class"], p["budget"]
+    table = {}
+    for arm, seeds in arms.items():
+        camp = heads[next(c["name"] for c in cs if c["arm"] == arm and c["seed"] in seeds)]
+        modes, meshes = [], []
+        for rows in seeds.values():
+            keep = [r for r in rows if r["job"] < budget]
+            modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
+            meshes = meshes or (keep[0]["meshes"] if keep else [])
+        names = {c["seed"]: c["name"] for c in cs if c["arm"] == arm}
+        hours = {}
+        for s_, r in sorted(seeds.items()):
+            st = heads[names[s_]].get("settings") or "{}"
+            hours[s_] = cpu_hours(json.loads(st) if isinstance(st, str) else st, r, budget)
+        table[arm] = {
+            "per_cpu_hour": {
+                s_: (
+                    sum(x["job"] < budget and x.get("attribution") == cls for x in r) / hours[s_] if hours[s_] else None
+                )
+                for s_, r in sorted(seeds.items())
+            },
+            "cpu_hours": hours,
+            "per_seed": {s: per_seed(r, budget, cls) for s, r in sorted(seeds.items())},
+            "model": {s: per_seed(r, budget, "model") for s, r in sorted(seeds.items())},
+            "stack": {s: per_seed(r, budget, "stack") for s, r in sorted(seeds.items())},
+            "distinct_modes": fm.distinct(modes),
+            "coverage": fm.coverage(modes, meshes) if meshes else 0.0,
+        }
+    rows, rows_hour = [], []
+    if "default" in table:
+        rows = stats.compare({a: list(t["per_seed"].values()) for a, t in table.items()}, "default")
+        if all(v is not None for t in table.values() for v in t["per_cpu_hour"].values()):
+            rows_hour = stats.compare({a: list(t["per_cpu_hour"].values()) for a, t in table.items()}, "default")
+    t = p["target"]
+    ref = next((r for r in rows if r["arm"] == t["ratio_over"]), None)
+    ref_hour = next((r for r in rows_hour if r["arm"] == t["ratio_over"]), None)
+    met = None
+    if ref is not None and "default" in table:
+        met = bool(
+            ref["ratio"] >= t["ratio"]
+            and ref["p"] < t["p"]
+            and table["default"]["distinct_modes"] >= t["distinct_modes"]
+            and (
+                not t.get("per_cpu_hour")
+                or (ref_hour is not None and ref_hour["ratio"] >= t["ratio"] and ref_hour["p"] < t["p"])
+            )
+        )
+    return {
+        "arms": table,
+        "comparison": rows,
+        "comparison_per_cpu_hour": rows_hour,
+        "target_met": met,
+        "deviations": devs,
+        "choice": choice,
+    }
+
+
+BEGIN, END = "<!-- flaw study status: begin (generated) -->", "<!-- flaw study status: end -->"
+
+
+def status(p: dict, folder: str) -> dict:
+    """Every campaign of the protocol so far, each with its endpoint (first `budget` scenarios),
+    cost and interruptions; nothing compared (that waits for complete stages)."""
+    from asg_agent.records import failure_modes as fm
+    from asg_agent.records.export import read_export
+    from asg_analysis.stack_study import exact_interval
+
+    cs = campaigns(p, "pilot")
+    choice_path = os.path.join(folder, "pilot_choice.json")
+    if os.path.isfile(choice_path):
+        with open(choice_path) as f:
+            cs += campaigns(p, "confirmatory", json.load(f))
+    out = {}
+    for c in cs:
+        path = os.path.join(folder, c["name"] + ".jsonl.gz")
+        if not os.path.isfile(path):
+            out[c["name"]] = {"arm": c["arm"], "seed": c["seed"], "budget": c["budget"], "scenarios": 0}
+            continue
+        camp, rows = read_export(path)
+        settings = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp["settings"]
+        keep = [r for r in rows if r["job"] < c["budget"]]
+        count = {k: sum(r.get("attribution") == k for r in keep) for k in ("flaw", "model", "stack")}
+        lo, hi = exact_interval(count["flaw"], len(keep)) if keep else (0.0, 0.0)
+        hours = cpu_hours(settings, rows, c["budget"])
+        cpus = sorted({e.get("cpu", "") for e in settings.get("events", []) if e.get("cpu")})
+        out[c["name"]] = dict(
+            arm=c["arm"],
+            seed=c["seed"],
+            budget=c["budget"],
+            scenarios=len(keep),
+            **count,
+            flaw_per_1000=1000.0 * count["flaw"] / max(1, len(keep)),
+            flaw_interval=[1000.0 * lo, 1000.0 * hi],
+            modes=fm.distinct(fm.modes_of(camp, keep, lambda r: r.get("attribution") == "flaw")),
+            cpu_hours=hours,
+            cpu_measured=measured_cpu_hours(settings) is not None,
+            flaw_per_cpu_hour=count["flaw"] / hours if hours else None,
+            cpu=", ".join(cpus),
+            deviations=[d.split(": ", 1)[1] for d in deviations(p, c, camp, rows) if "of the" not in d],
+        )
+    return out
+
+
+def status_markdown(st: dict) -> str:
+    lines = [
+        BEGIN,
+        "| campaign | arm | seed | scenarios | flaw per 1,000 (95 % exact) | flaw | model | stack | distinct flaw modes "
+        "| CPU-hours | flaw per CPU-hour | CPU | deviations |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, c in st.items():
+        if not c["scenarios"]:
+            lines.append(f"| {name} | {c['arm']} | {c['seed']} | 0 of {c['budget']} | | | | | | | | | |")
+            continue
+        done = c["scenarios"] >= c["budget"]
+        lo, hi = c["flaw_interval"]
+        per_h = "" if c["flaw_per_cpu_hour"] is None else f"{c['flaw_per_cpu_hour']:.1f}"
+        lines.append(
+            f"| {name} | {c['arm']} | {c['seed']} | {c['scenarios']}{'' if done else ' of ' + str(c['budget'])} | "
+            f"{c['flaw_per_1000']:.1f} ({lo:.1f}-{hi:.1f}) | {c['flaw']} | {c['model']} | {c['stack']} | "
+            f"{c['modes']} | {c['cpu_hours']:.2f}{'' if c.get('cpu_measured') else ' †'} | {per_h} | {c['cpu']} | {'; '.join(c['deviations']) or 'none'} |"
+        )
+    done = sum(c["scenarios"] >= c["budget"] for c in st.values())
+    lines += ["", f"{done} of {len(st)} campaigns complete."]
+    if any(c["scenarios"] and not c.get("cpu_measured") for c in st.values()):
+        lines += [
+            "",
+            "† CPU-hours by the clock (wall time x cores, protocol.wall_cpu_hours): a campaign run before "
+            "the protocol's amendment 1, or with a run the plan did not measure; the others count the "
+            "CPU time measured (protocol.measured_cpu_hours).",
+        ]
+    lines.append(END)
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="protocol", description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    a = sub.add_parser("plan")
+    a.add_argument("protocol")
+    a.add_argument("stage", choices=("pilot", "confirmatory"))
+    a.add_argument("--choice", default="")
+    c = sub.add_parser("choose")
+    c.add_argument("protocol")
+    c.add_argument("folder")
+    t = sub.add_parser("status", help="every campaign so far into the doc's generated block")
+    t.add_argument("protocol")
+    t.add_argument("folder")
+    t.add_argument("--doc", default="")
+    t.add_argument("--check", action="store_true", help="only say whether the doc's block is stale (exit 1)")
+    n = sub.add_parser("analyse")
+    n.add_argument("protocol")
+    n.add_argument("folder")
+    n.add_argument("--json", default="")
+    args = ap.parse_args(argv)
+    try:
+        p = load(args.protocol)
+        if args.cmd == "plan":
+            choice = None
+            if args.choice:
+                with open(args.choice) as f:
+                    choice = json.load(f)
+            sys.stdout.write(plan_lines(campaigns(p, args.stage, choice)))
+            return 0
+        if args.cmd == "status":
+            block = status_markdown(status(p, args.folder))
+            if not args.doc:
+                print(block)
+                return 0
+            from asg_analysis.seed_tables import rewrite_block
+
+            return rewrite_block(args.doc, BEGIN, END, block, args.check, "protocol status")
+        if args.cmd == "choose":
+            ch = choose(p, args.folder)
+            out = os.path.join(args.folder, "pilot_choice.json")
+            with open(out, "w") as f:
+                json.dump(ch, f, indent=1, sort_keys=True)
+                f.write("\n")
+            for d in ch["deviations"]:
+                print(f"deviation: {d}")
+            what = f"search {ch['search']}, " if "search" in ch else ""
+            print(f"pilot choice: {what}reward {ch['reward']}, route band {ch['band_m']:g} m ({out})")
+            return 0
+        with open(os.path.join(args.folder, "pilot_choice.json")) as f:
+            choice = json.load(f)
+        res = analyse(p, args.folder, choice)
+    except (ProtocolError, OSError, ValueError, KeyError) as e:
+        print(f"protocol: {e}", file=sys.stderr)
+        return 2
+    for d in res["deviations"]:
+        print(f"deviation: {d}")
+    for r in res["comparison"]:
+        vs = (
+            ""
+            if r["p"] is None
+            else f"; default / this {r['ratio']:.2f} ({r['ratio_lo']:.2f}-{r['ratio_hi']:.2f}), p = {r['p']:.4f}"
+        )
+        print(
+            f"{r['arm']}: {r['mean']:.2f} per 1,000 ({r['lo']:.2f}-{r['hi']:.2f}) over {r['seeds']} seeds {r['counts']}{vs}"
+        )
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=1, sort_keys=True, default=str)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

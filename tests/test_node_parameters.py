@@ -1,0 +1,83 @@
+"""Issue #56: every Python node's parameters come from its table (asg_lockstep.params): the
+segmenter (asg_perception.node_params), the depth stack (asg_depth_stack.params) and the lockstep
+client (asg_lockstep.params.CLIENT). docs/ quotes each table's Markdown; a bad value is refused
+naming the parameter and what is allowed; the depth stack's YAML holds the table's defaults. (The
+planner's C++ table: tests/test_planner_parameters.py.)"""
+
+import os
+import re
+
+import pytest
+import yaml
+
+from asg_depth_stack.params import DEPTH_STACK
+from asg_lockstep.params import CLIENT, Param, markdown, read
+from asg_perception.node_params import SEGMENTER
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+TABLES = {
+    ("perception.md", "segmenter"): SEGMENTER,
+    ("your-stack.md", "depth_stack"): DEPTH_STACK,
+    ("your-stack.md", "lockstep_client"): CLIENT,
+}
+
+
+def quoted(doc, name):
+    text = open(os.path.join(REPO, "docs", doc), encoding="utf-8").read()
+    m = re.search(rf"<!-- params:{name}:begin[^>]*-->\n(.*?)\n<!-- params:{name}:end -->", text, re.S)
+    assert m, f"docs/{doc} has no params:{name} block"
+    return m.group(1)
+
+
+@pytest.mark.parametrize("doc,name", list(TABLES))
+def test_the_docs_quote_each_table(doc, name):
+    assert quoted(doc, name) == markdown(TABLES[(doc, name)]), f"docs/{doc}: regenerate the {name} table"
+
+
+def test_every_table_reads_its_defaults_and_units_are_written():
+    for table in TABLES.values():
+        values = read(table, lambda n, d: d)
+        assert values == {p.name: p.default for p in table}
+        assert all(p.unit and p.doc for p in table)
+
+
+def test_bad_values_are_refused_by_name():
+    def with_(table, **bad):
+        return lambda n, d: bad.get(n.replace("/", "__"), d)
+
+    with pytest.raises(ValueError, match=r"~threads = 0: must be an integer in \[1, 64\]"):
+        read(SEGMENTER, with_(SEGMENTER, threads=0))
+    with pytest.raises(ValueError, match=r"~width = 100: .*a multiple of 32"):
+        read(SEGMENTER, with_(SEGMENTER, width=100))
+    with pytest.raises(ValueError, match=r"~backend = 'fp64': must be empty or 'eager'"):
+        read(SEGMENTER, with_(SEGMENTER, backend="fp64"))
+    with pytest.raises(ValueError, match=r"~arcs/arcs = 20: .*odd"):
+        read(DEPTH_STACK, with_(DEPTH_STACK, arcs__arcs=20))
+    with pytest.raises(ValueError, match=r"~grid/cell = 'half': must be a number"):
+        read(DEPTH_STACK, with_(DEPTH_STACK, grid__cell="half"))
+    # every bad one at once, each named
+    with pytest.raises(ValueError) as e:
+        read(DEPTH_STACK, with_(DEPTH_STACK, use_lockstep_client="yes", grid__min_points=1.5, arcs__speed=float("nan")))
+    assert all(k in str(e.value) for k in ("~use_lockstep_client", "~grid/min_points", "~arcs/speed"))
+    # an integer where a real is asked is taken; a bool where a number is asked is not
+    assert read([Param("x", float, 1.0, "m", "x")], lambda n, d: 2)["x"] == 2.0
+    with pytest.raises(ValueError):
+        read([Param("x", float, 1.0, "m", "x")], lambda n, d: True)
+
+
+def test_the_depth_stacks_yaml_holds_the_tables_defaults():
+    path = os.path.join(REPO, "catkin_ws", "src", "asg_depth_stack", "config", "depth_stack.yaml")
+    with open(path, encoding="utf-8") as f:
+        data = yaml.safe_load(f)
+
+    def flat(d, prefix=""):
+        for k, v in d.items():
+            if isinstance(v, dict):
+                yield from flat(v, f"{prefix}{k}/")
+            else:
+                yield f"{prefix}{k}", v
+
+    got = dict(flat(data))
+    lockstep = got.pop("lockstep")  # the lockstep client's (CLIENT)
+    assert lockstep == CLIENT[0].default
+    assert got == {p.name: p.default for p in DEPTH_STACK}
