@@ -142,7 +142,7 @@ def _doc_defaults(doc, section):
     for m in re.finditer(r"^\| ((?:`[^`]+`(?:, )?)+) \| [^|]* \| ([^|]+) \|", text, re.M):
         cell = m.group(2).strip().strip("`")
         for key in re.findall(r"`([^`]+)`", m.group(1)):
-            out[key] = yaml.safe_load(cell)
+            out[key.lstrip("~")] = yaml.safe_load(cell)  # a generated table names them ~key
     return out
 
 
