@@ -70,7 +70,12 @@ def main(root):
             except ValueError:
                 seconds = 0.0
             key = file_of(path, root, case)
-            times[key] = times.get(key, 0.0) + seconds
+            base = os.path.basename(path)
+            wrapped = base.startswith("rostest-") and os.path.exists(
+                os.path.join(os.path.dirname(path), "rosunit-" + base[len("rostest-") :])
+            )
+            if not wrapped:  # a rostest's own file times the rosunit run it wraps: counted once
+                times[key] = times.get(key, 0.0) + seconds
             name = f"{os.path.relpath(path, root)}::{case.get('classname', '')}.{case.get('name')}"
             bad = case.find("failure")
             bad = bad if bad is not None else case.find("error")
