@@ -429,3 +429,8 @@ def test_the_rebuilt_held_apart_sets_share_no_scene_with_any_training_source():
     assert dropped == [24, 27, 40, 65, 94, 110]
     doc = " ".join(open(os.path.join(REPO, "docs", "design-loop.md"), encoding="utf-8").read().split())
     assert f"{len(jobs)} of the 53 findings" in doc and "jobs 24, 27, 40, 65, 94 and 110" in doc
+    # the suite: the first one's 14 findings less the 4 shared, and two the export chose in their place
+    first = {24, 27, 94, 110, 114, 126, 128, 180, 201, 209, 214, 276, 335, 365}  # the first suite (git history)
+    now = {int(s[0].rsplit(" job ", 1)[1].rstrip(")")) for s in suite}
+    assert len(now & first) == 10 and sorted(now - first) == [116, 482]
+    assert "10 of the first suite's 14, and jobs 116 and 482" in doc and "4 of the first `suite-r4pilot`'s 14" in doc
