@@ -107,17 +107,24 @@ use_local_master() {
   export LP_NUM_THREADS=1 ROS_LOG_DIR="$2"
   mkdir -p "$ROS_LOG_DIR"
 }
-start_master() {
+start_master() {  # returns once the master answers: a roslaunch that finds none starts its own
   roscore -p "${ROS_MASTER_URI##*:}" >/dev/null 2>&1 &
   MASTER_PID=$!
-  sleep 3
+  local t
+  for t in $(seq 120); do  # a loaded machine (campaigns beside it) takes more than a few seconds
+    rosparam get /run_id >/dev/null 2>&1 && return 0
+    kill -0 "$MASTER_PID" 2>/dev/null || break
+    sleep 0.5
+  done
+  echo "start_master: no ROS master answers at $ROS_MASTER_URI after 60 s" >&2
+  return 1
 }
 start_workers() {
   local n="$1" w
   shift
   WORKER_PIDS=()
   for ((w = 0; w < n; w++)); do
-    roslaunch "$REPO/launch/worker.launch" ns:="worker_$w" markers:=false "$@" >/dev/null 2>&1 &
+    roslaunch --wait "$REPO/launch/worker.launch" ns:="worker_$w" markers:=false "$@" >/dev/null 2>&1 &
     WORKER_PIDS+=($!)
   done
 }

@@ -1,6 +1,7 @@
 """docs/design-loop.md's hardening tables, recomputed from the committed evaluation files and the
 outcomes recorded in the suites (issue #40)."""
 
+import json
 import os
 import re
 
@@ -21,7 +22,7 @@ def test_the_hardening_table_is_what_the_results_say():
     assert doc_table("hardening") == ah.markdown(t)
     # every arm on both suites, each suite's scenarios counted once per arm
     for arm in ("flawed", "full") + tuple(f"hardened-{a}-{r}" for a in ("findings", "random") for r in (1, 2)):
-        assert t["arms"][arm]["suite-exp1c"]["n"] == 12 and t["arms"][arm]["suite-r4pilot"]["n"] == 14
+        assert t["arms"][arm]["suite-exp1c"]["n"] == 12 and t["arms"][arm]["suite-r4pilot"]["n"] == 12
 
 
 def test_the_frames_only_table_is_what_its_results_say():
@@ -290,12 +291,12 @@ def test_the_prose_of_round_two_hardening_is_what_its_figures_say():
         assert px("hardened-random-2", s, "shadow") > px("hardened-random-1", s, "shadow")
     assert abs(px("hardened-findings-2", "test", "iou") - px("full", "test", "iou")) < 0.02
     assert px("hardened-findings-2", "heldout-findings", "iou") > px("full", "heldout-findings", "iou")
-    # suites: 10 of 12 for every hardened model; on the unseen 14, round 2 passes 1-2 more, random one more
+    # suites: 10 of 12 for every hardened model; on the unseen 12, round 2 passes 2-3 more, random one more
     passed = {a: (t[a]["suite-exp1c"]["passed"], t[a]["suite-r4pilot"]["passed"]) for a in t}
     for a in ("hardened-findings-1", "hardened-random-1", "hardened-findings-2", "hardened-random-2"):
-        assert passed[a][0] == 10 and t[a]["suite-exp1c"]["n"] == 12 and t[a]["suite-r4pilot"]["n"] == 14
+        assert passed[a][0] == 10 and t[a]["suite-exp1c"]["n"] == 12 and t[a]["suite-r4pilot"]["n"] == 12
     for arm in ("findings", "random"):
-        assert passed[f"hardened-{arm}-2"][1] - passed[f"hardened-{arm}-1"][1] in (1, 2)
+        assert passed[f"hardened-{arm}-2"][1] - passed[f"hardened-{arm}-1"][1] in (2, 3)
     assert passed["hardened-random-2"][1] == passed["hardened-findings-2"][1] + 1
     # round 1's arms, re-evaluated in round 2 on re-made frame sets, agree with their first figures
     for s in ("test", "heldout-findings"):
@@ -363,9 +364,10 @@ def test_the_corrected_sentences_of_issue_57_are_what_the_figures_say():
             if r.get("attribution") == "flaw" and r.get("collision_with") is not None:
                 hit[r["meshes"][r["collision_with"]]] += 1
     total = sum(hit.values())
+    flat = " ".join(doc.split())
     assert (
-        f"of its {total} flaw\n  findings over seeds 20-22, {hit['barberry']} are collisions with a barberry and {hit['juniper']} with a juniper"
-        in doc
+        f"Of its {total} flaw findings over seeds 20-22, {hit['barberry']} end against a barberry and "
+        f"{hit['juniper']} against a juniper" in flat
     )
     # round 2: the random arm's IoU rises less than the findings arm's on the test set, more on the held-apart findings
     t = ah.table(os.path.join(REPO, "results", "hardening"))["arms"]
@@ -381,7 +383,7 @@ def test_the_corrected_sentences_of_issue_57_are_what_the_figures_say():
 
     scen = load_scenario(
         os.path.join(
-            REPO, "results", "hardening", "suite-r4pilot", "scenarios", "005-round4-pilot-reward-proxy-s0-job126.yaml"
+            REPO, "results", "hardening", "suite-r4pilot", "scenarios", "002-round4-pilot-reward-proxy-s0-job126.yaml"
         )
     )
     obs = [(lay["mesh_name"], i["x"], i["y"]) for lay in scen["structural"]["layouts"] for i in lay["instances"]]
@@ -398,23 +400,37 @@ def test_the_corrected_sentences_of_issue_57_are_what_the_figures_say():
     assert "job 126: flawed hits a juniper, hardened-findings a barberry, hardened-random drives round both" in doc
 
 
-def test_the_stale_note_counts_the_shared_scenes():
-    """Section 3's stale note (issue #57): how many held-apart scenes the findings arm trained on."""
+def test_the_rebuilt_held_apart_sets_share_no_scene_with_any_training_source():
+    """Section 3's held-apart sets since issue #57: the per-pixel frame set (its sources in
+    results/hardening/heldout-findings.json) and suite-r4pilot share no scene with the training
+    sources of either round's arms; what was left out is what the old sets shared."""
     from asg_agent.campaign import overlap
-    from asg_agent.campaign.hardening import sources_from_export
 
-    training = overlap.scenes_of(os.path.join(REPO, "results", "attribution", "exp1c-td3-per-asp-s0.jsonl.gz"))
+    training = [
+        os.path.join(REPO, "results", *p)
+        for p in (
+            ("attribution", "exp1c-td3-per-asp-s0.jsonl.gz"),
+            ("comparison", "exp1b-random-s1.jsonl.gz"),
+            ("hardening", "loop-hf1-s20.jsonl.gz"),
+            ("comparison", "exp1b-random-s2.jsonl.gz"),
+        )
+    ]
+    with open(os.path.join(REPO, "results", "hardening", "heldout-findings.json"), encoding="utf-8") as f:
+        held = json.load(f)
+    jobs = {int(s["job"]) for s in held["sources"]}
+    pilot = overlap.scenes_of(os.path.join(REPO, "results", "round4", "round4-pilot-reward-proxy-s0.jsonl.gz"))
+    scenes = [s for s in pilot if int(s[0].rsplit(" ", 1)[1]) in jobs]
     suite = overlap.scenes_of(os.path.join(REPO, "results", "hardening", "suite-r4pilot"))
-    in_suite = {p["scene"] for p in overlap.shared(suite, training)}
-    held = sources_from_export(
-        os.path.join(REPO, "results", "round4", "round4-pilot-reward-proxy-s0.jsonl.gz"), classes=("flaw", "model")
-    )
-    shared = overlap.shared([overlap.request_scene(str(s.origin["job"]), s.request) for s in held], training)
-    jobs = sorted(int(p["scene"]) for p in shared)
-    doc = " ".join(
-        open(os.path.join(REPO, "docs", "design-loop.md"), encoding="utf-8").read().replace(">", " ").split()
-    )
-    assert jobs == [24, 27, 40, 65, 94, 110]
-    assert max(p["largest_m"] for p in shared) <= 0.005
-    assert f"{len(jobs)} of the {len(held)} `heldout-findings` scenes" in doc
-    assert f"{len(in_suite)} of the {len(suite)} `suite-r4pilot` findings" in doc
+    assert len(scenes) == len(jobs) == 47 and len(suite) == 12
+    for src in training:
+        t = overlap.scenes_of(src)
+        assert overlap.shared(scenes, t) == [] and overlap.shared(suite, t) == [], src
+    dropped = sorted(int(d.split(" = ")[0].rsplit(" ", 1)[1]) for d in held["made_from"]["dropped_shared"])
+    assert dropped == [24, 27, 40, 65, 94, 110]
+    doc = " ".join(open(os.path.join(REPO, "docs", "design-loop.md"), encoding="utf-8").read().split())
+    assert f"{len(jobs)} of the 53 findings" in doc and "jobs 24, 27, 40, 65, 94 and 110" in doc
+    # the suite: the first one's 14 findings less the 4 shared, and two the export chose in their place
+    first = {24, 27, 94, 110, 114, 126, 128, 180, 201, 209, 214, 276, 335, 365}  # the first suite (git history)
+    now = {int(s[0].rsplit(" job ", 1)[1].rstrip(")")) for s in suite}
+    assert len(now & first) == 10 and sorted(now - first) == [116, 482]
+    assert "10 of the first suite's 14, and jobs 116 and 482" in doc and "4 of the first `suite-r4pilot`'s 14" in doc

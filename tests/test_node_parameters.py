@@ -6,6 +6,7 @@ planner's C++ table: tests/test_planner_parameters.py.)"""
 
 import os
 import re
+import subprocess
 
 import pytest
 import yaml
@@ -81,3 +82,36 @@ def test_the_depth_stacks_yaml_holds_the_tables_defaults():
     lockstep = got.pop("lockstep")  # the lockstep client's (CLIENT)
     assert lockstep == CLIENT[0].default
     assert got == {p.name: p.default for p in DEPTH_STACK}
+
+
+WORKER = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "scene_worker")
+
+
+def worker_table():
+    assert os.access(WORKER, os.X_OK), f"{WORKER}: not built"
+    return subprocess.run([WORKER, "--params"], capture_output=True, text=True, check=True).stdout
+
+
+def test_the_scene_workers_table_is_quoted_and_its_yaml_states_its_defaults():
+    # The C++ table (asg_sim/src/ros/worker_parameters.hpp): docs/simulator.md quotes its output,
+    # and scene_worker.yaml gives each of its keys (stack_nodes, which the node requires, too).
+    table = worker_table()
+    assert quoted("simulator.md", "scene_worker") == table.rstrip("\n"), "docs/simulator.md: regenerate it"
+    rows = [line.split(" | ") for line in table.splitlines()[2:]]
+    keys = [r[0].strip("| `") for r in rows]
+    path = os.path.join(REPO, "catkin_ws", "src", "asg_sim", "config", "scene_worker.yaml")
+    with open(path, encoding="utf-8") as f:
+        data = yaml.safe_load(f)
+    flat = {
+        f"{k}/{kk}" if isinstance(v, dict) else k: vv if isinstance(v, dict) else v
+        for k, v in data.items()
+        for kk, vv in (v.items() if isinstance(v, dict) else [(None, v)])
+    }
+    assert set(flat) <= set(keys), f"scene_worker.yaml has keys the table lacks: {set(flat) - set(keys)}"
+    for key, row in zip(keys, rows):
+        if key == "labels_node":  # empty by default: the YAML leaves it out
+            continue
+        assert key in flat, f"scene_worker.yaml does not state {key}"
+        want = "required" if key == "stack_nodes" else yaml.safe_load(row[2].strip("`"))
+        assert want == "required" or flat[key] == want, (key, flat[key], want)
+    assert all(r[1].strip() for r in rows), "every row writes its unit"

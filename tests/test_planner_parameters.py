@@ -10,13 +10,14 @@ import yaml
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner_harness", "asg_closed_loop")
+NODE = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner", "planner")
 CONFIG = os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config")
 DISPLAY = {"ack_name", "publish_markers"}  # the ROS adapter's own (docs/planner.md, below the table)
 
 
-def table():
-    assert os.access(TOOL, os.X_OK), f"{TOOL}: not built"
-    res = subprocess.run([TOOL, "--params"], capture_output=True, text=True, check=True)
+def table(tool=TOOL):
+    assert os.access(tool, os.X_OK), f"{tool}: not built"
+    res = subprocess.run([tool, "--params"], capture_output=True, text=True, check=True)
     return res.stdout
 
 
@@ -40,7 +41,11 @@ def defaults():
 def test_the_docs_table_is_the_tables_output():
     with open(os.path.join(REPO, "docs", "planner.md"), encoding="utf-8") as f:
         docs = f.read()
-    assert table() in docs, "docs/planner.md: paste the output of `asg_closed_loop --params` as its table"
+    node = table(NODE)
+    assert node.startswith(table()), "the node's table is the core's, then its adapter's rows"
+    adapter = {line.split("|")[1].strip().strip("`") for line in node.splitlines()[2:]} - set(defaults())
+    assert adapter == DISPLAY, "the adapter's own parameters are the ones the tools skip"
+    assert node in docs, "docs/planner.md: paste the output of `planner --params` as its table"
 
 
 def test_planner_yaml_states_every_default_of_the_table():

@@ -18,6 +18,12 @@ OUT="$REPO/results/hardening"
 FINDINGS_EXPORT="${ASG_HARDEN_FINDINGS:-$REPO/results/attribution/exp1c-td3-per-asp-s0.jsonl.gz}"
 RANDOM_EXPORT="${ASG_HARDEN_RANDOM:-$REPO/results/comparison/exp1b-random-s1.jsonl.gz}"
 HELDOUT_EXPORT="$REPO/results/round4/round4-pilot-reward-proxy-s0.jsonl.gz"
+# The held-apart sets share no scene with any arm's training source of any round (issue #57): one
+# set serves every round, so it is built apart from the protocol's round 1 and round 2 sources,
+# this round's, and ASG_HARDEN_APART (comma-separated exports) for later rounds.
+APART="$REPO/results/attribution/exp1c-td3-per-asp-s0.jsonl.gz,$REPO/results/comparison/exp1b-random-s1.jsonl.gz"
+APART="$APART,$REPO/results/hardening/loop-hf1-s20.jsonl.gz,$REPO/results/comparison/exp1b-random-s2.jsonl.gz"
+APART="$APART,$FINDINGS_EXPORT,$RANDOM_EXPORT${ASG_HARDEN_APART:+,$ASG_HARDEN_APART}"
 FRAMES=1664
 install_packages
 build_workspace ON
@@ -35,7 +41,7 @@ SCENES=$(/usr/bin/python3 -c "import json,sys; print(len(json.load(open(sys.argv
   harden --export "$RANDOM_EXPORT" --scenes "$SCENES" --out "$WORK/random$ROUND" --frames $FRAMES --seed 0
 [ -f "$WORK/heldout-findings/frames/manifest.csv" ] ||
   harden --export "$HELDOUT_EXPORT" --classes flaw,model --out "$WORK/heldout-findings" --frames 848 --seed 1 \
-    --apart-from "$FINDINGS_EXPORT,$RANDOM_EXPORT" --drop-shared  # held apart from both arms' sources (issue #57)
+    --apart-from "$APART" --drop-shared  # held apart from every arm's sources (issue #57)
 [ -f "$WORK/test/manifest.csv" ] || "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/test" --count 600 --seed 3
 # the first FRAMES frames of flawed.pt's own training set (scripts/repro/make_models.sh: seed 2, barberries)
 [ -f "$WORK/rehearsal/manifest.csv" ] ||
@@ -71,7 +77,7 @@ done
 log "suite pass rates (one worker a stack, U-Net in fp32 channels_last)"
 [ -f "$OUT/suite-r4pilot/suite.yaml" ] ||
   /usr/bin/python3 -m asg_agent.cli.suite export "$HELDOUT_EXPORT" --out "$OUT/suite-r4pilot" --classes flaw,model \
-    --apart-from "$FINDINGS_EXPORT,$RANDOM_EXPORT" --drop-shared
+    --apart-from "$APART" --drop-shared
 [ -f "$OUT/suite-exp1c/suite.yaml" ] || cp -r "$REPO/tests/suites/exp1c-flaw" "$OUT/suite-exp1c"
 STACKS=("flawed-cl=perception:=unet model:=flawed unet_backend:=channels_last"
   "full-cl=perception:=unet model:=full unet_backend:=channels_last")

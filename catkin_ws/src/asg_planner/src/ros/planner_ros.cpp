@@ -1,5 +1,7 @@
 #include "planner_ros.hpp"
 
+#include <stdexcept>
+
 #include "planner_messages.hpp"
 
 #include <asg_msgs/PlannerState.h>
@@ -61,8 +63,29 @@ void PlannerROS::readParameters() {
     }
     setParameter(&params_, spec.name, v);  // throws naming the parameter and its range
   }
-  pnh_.param<std::string>("ack_name", ack_name_, "planner");
-  pnh_.param("publish_markers", publish_markers_, true);
+  // The adapter's two, by type: a wrong one is named, never silently replaced by the default.
+  AdapterParams a;
+  XmlRpc::XmlRpcValue x;
+  if (pnh_.getParam("ack_name", x)) {
+    if (x.getType() != XmlRpc::XmlRpcValue::TypeString || std::string(x).empty())
+      throw std::invalid_argument("planner parameter 'ack_name': must be a string, not empty");
+    a.ack_name = std::string(x);
+  }
+  if (pnh_.getParam("publish_markers", x)) {
+    if (x.getType() != XmlRpc::XmlRpcValue::TypeBoolean)
+      throw std::invalid_argument("planner parameter 'publish_markers': must be true or false");
+    a.publish_markers = bool(x);
+  }
+  ack_name_ = a.ack_name;
+  publish_markers_ = a.publish_markers;
+}
+
+std::string plannerNodeParameterTable() {
+  const AdapterParams a;
+  return parameterTableMarkdown() + "| `ack_name` | - | `" + a.ack_name +
+         "` | string, not empty | name used in `stack_ack` (the ROS adapter's) |\n" +
+         "| `publish_markers` | - | " + (a.publish_markers ? "true" : "false") +
+         " | bool | publish the rviz topics (the ROS adapter's) |\n";
 }
 
 void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {

@@ -26,6 +26,16 @@
 
 namespace asg_planner {
 
+/// The ROS adapter's own parameters (what the node is called and what it shows), beside the
+/// core's table (parameters.hpp). Defaults here; read by PlannerROS::readParameters.
+struct AdapterParams {
+  std::string ack_name = "planner";  ///< name used in `stack_ack`
+  bool publish_markers = true;       ///< publish the rviz topics
+};
+
+/// docs/planner.md's parameter table: the core's rows, then the adapter's (`planner --params`).
+std::string plannerNodeParameterTable();
+
 class PlannerROS {
  public:
   PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh);
@@ -49,7 +59,7 @@ class PlannerROS {
 
   ros::NodeHandle nh_, pnh_;
   PlannerParams params_;
-  std::string ack_name_;
+  std::string ack_name_;  // AdapterParams::ack_name
   bool publish_markers_ = true;
   std::unique_ptr<VotingPlanner> planner_;
   ros::Publisher cmd_pub_, ack_pub_, error_pub_, state_pub_, path_pub_, votes_pub_, lookahead_pub_, grid_pub_;

@@ -3,7 +3,7 @@
 // action, announces each scenario to the autonomy stack and waits for every stack node's ack,
 // then runs the simulator core's lockstep run loop (run_loop.hpp) as its stack side: odometry/tf
 // and camera frames out when due, and at each control tick a Tick out and the command stamped
-// with it in. Message conversions: scene_worker_messages.hpp; parameters: scene_worker_params.cpp.
+// with it in. Message conversions: scene_worker_messages.hpp; parameters: worker_parameters.hpp (the table), scene_worker_params.cpp (reading it).
 // Topics, parameters and the protocol: docs/simulator.md.
 
 #include <actionlib/server/simple_action_server.h>
@@ -32,6 +32,7 @@
 #include "asg_sim/run_loop.hpp"
 #include "asg_sim/scenario_runner.hpp"
 #include "asg_sim/twist_controller.hpp"
+#include "worker_parameters.hpp"
 #include "asg_lockstep/stage_clock.hpp"
 
 namespace asg_sim {
@@ -41,32 +42,10 @@ class SceneWorkerROS : private LoopStack {
   SceneWorkerROS(ros::NodeHandle nh, ros::NodeHandle pnh);
 
  private:
-  struct Params {
-    std::vector<std::string> stack_nodes;  // nodes that must acknowledge each scenario
-    double ack_timeout = 30.0;             // [s, wall]
-    double command_timeout = 10.0;         // [s, wall]
-    bool lockstep = true;
-    double realtime_factor = 1.0;          // free-running mode: simulated s per wall s
-    bool publish_labels = true;
-    bool odom_every_tick = false;          // false: odom/tf only at camera and control ticks
-    int render_threads = 1;
-    int width = 256, height = 256;
-    double fov_deg = 90.0;
-    int shadow_map_px = 2048;
-    double visibility_full_px = 100.0;
-    std::string labels_node;               // node publishing `labels` (named when it falls silent)
-    std::string command_interface = "vehicle_command";  // or "twist" (cmd_vel, docs/your-stack.md)
-    bool publish_points = false;           // camera/depth/points: PointCloud2 from depth
-    int points_stride = 2;                 // [px] pixel step of that cloud in u and v
-    bool publish_clock = true;             // `clock` (rosgraph_msgs/Clock): this worker's simulated time
-    bool publish_map_odom = true;          // map -> odom (identity) on tf_static; false: the stack localizes
-    std::string stack_name;                // the registration's stack/name ("": none, ~stack_nodes)
-    bool stack_sim_time = false;           // the registration's stack/sim_time
-    bool stack_acks = true;                // false: the stack has no client; its nodes need only be up
-  };
+  using Params = WorkerParams;  // worker_parameters.hpp: the table
   bool twist() const { return params_.command_interface == "twist"; }
   void readParameters();
-  void readRegistration(const std::function<void(bool, const std::string&)>& check);
+  void readRegistration(std::vector<std::string>* errors);
   void execute(const asg_msgs::RunScenarioGoalConstPtr& goal);
   void onCommand(const asg_msgs::VehicleCommandConstPtr& msg);
   void onTwist(const geometry_msgs::TwistConstPtr& msg);

@@ -15,6 +15,9 @@
 // FILE.csv has the header scenario,x,y,yaw: a scenario YAML (relative to FILE.csv's folder) and
 // the vehicle's pose on its ground ([m], [m], [rad]); perturbed scenes are scenario files of their
 // own. The manifest gets a last column, source: the scenario file of each frame.
+// Issue #57: --instances 1 (with --poses) writes NNNNNN_instances.png too, 16-bit: 1 + the index of
+// the obstacle seen at each pixel in the scenario's flat obstacle list (layouts in order, their
+// instances in order; the index of an export's `collision_with`), 0 where none is.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -46,6 +49,7 @@ struct Args {
   double terrain = 0.0;  ///< [-] share of scenes with terrain
   double weather = 0.0;  ///< [-] share of scenes with weather
   std::string poses;     ///< CSV of scenario poses (issue #40); empty: random scenes
+  bool instances = false;  ///< with --poses: write each frame's obstacle index image (issue #57)
 };
 
 /// One row of a --poses file.
@@ -58,7 +62,7 @@ struct PoseRow {
   std::fprintf(stderr,
                "error: %s\nusage: asg_sim_dataset --out DIR --count N [--seed S] "
                "[--meshes juniper,barberry] [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]\n"
-               "       asg_sim_dataset --out DIR --poses FILE.csv\n",
+               "       asg_sim_dataset --out DIR --poses FILE.csv [--instances 1]\n",
                why.c_str());
   std::exit(2);
 }
@@ -78,6 +82,7 @@ Args parse(int argc, char** argv) {
       else if (k == "--terrain") a.terrain = std::stod(v);
       else if (k == "--weather") a.weather = std::stod(v);
       else if (k == "--poses") a.poses = v;
+      else if (k == "--instances") a.instances = std::stoi(v) != 0;
       else if (k == "--meshes") {
         a.meshes.clear();
         std::stringstream ss(v);
@@ -91,6 +96,7 @@ Args parse(int argc, char** argv) {
     }
   }
   if (a.out.empty()) usage("--out is required");
+  if (a.instances && a.poses.empty()) usage("--instances needs --poses");
   if (!a.poses.empty()) return a;  // the rows give everything else
   if (a.count <= 0) usage("--count must be > 0");
   if (a.frames_per_scene <= 0) usage("--frames-per-scene must be > 0");
@@ -118,7 +124,7 @@ const char* kManifestHeader =
 /// frame's three PNG files and its manifest row (without a line end).
 void renderFrame(Renderer& renderer, const SceneSpec& spec, size_t obstacles, const std::string& meshes,
                  int index, int scene, double x, double y, double yaw, const std::string& img_dir,
-                 std::ostream& manifest) {
+                 std::ostream& manifest, const std::vector<uint16_t>* flat_of_id = nullptr) {
   const Terrain ground(spec.terrain);
   Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
   base.translation() << x, y, ground.height(x, y);
@@ -136,6 +142,14 @@ void renderFrame(Renderer& renderer, const SceneSpec& spec, size_t obstacles, co
   writePng(img_dir + "/" + name + "_rgb.png", bgr);
   writePng(img_dir + "/" + name + "_labels.png", cv::Mat(h, w, CV_8UC1, frame.labels.data.data()));
   writePng(img_dir + "/" + name + "_lit.png", cv::Mat(h, w, CV_8UC1, frame.lit.data.data()));
+  if (flat_of_id) {  // renderer ids -> 1 + the obstacle's index in the scenario's flat list
+    cv::Mat ids(h, w, CV_16UC1);
+    for (int k = 0; k < w * h; ++k) {
+      const uint16_t id = frame.instances.data[size_t(k)];
+      ids.at<uint16_t>(k / w, k % w) = id < flat_of_id->size() ? (*flat_of_id)[id] : 0;
+    }
+    writePng(img_dir + "/" + name + "_instances.png", ids);
+  }
   manifest << index << "," << scene << ",images/" << name << "_rgb.png,images/" << name
            << "_labels.png,images/" << name << "_lit.png," << spec.textural.sun_inclination_deg << ","
            << spec.textural.sun_yaw_deg << "," << meshes << "," << obstacles << "," << x << "," << y << ","
@@ -198,6 +212,7 @@ int renderPoses(const Args& a, const std::string& img_dir, std::ostream& manifes
   SceneSpec spec;
   size_t obstacles = 0;
   int scene = -1;
+  std::vector<uint16_t> flat_of_id;  // renderer id -> 1 + flat obstacle index (--instances)
   for (size_t i = 0; i < rows.size(); ++i) {
     const PoseRow& r = rows[i];
     if (r.scenario != key) {
@@ -215,10 +230,18 @@ int renderPoses(const Args& a, const std::string& img_dir, std::ostream& manifes
       placeObstacles(spec, &placed, &removed);
       renderer.setScene(spec, placed);
       obstacles = placed.size();
+      std::vector<size_t> offset(1, 0);
+      for (const auto& l : spec.layouts) offset.push_back(offset.back() + l.instances.size());
+      flat_of_id.assign(1, 0);
+      for (const auto& p : placed) {
+        if (flat_of_id.size() <= p.id) flat_of_id.resize(p.id + 1, 0);
+        flat_of_id[p.id] = uint16_t(1 + offset[p.layout_index] + p.instance_index);
+      }
       meshes.clear();
       for (const auto& l : spec.layouts) meshes += (meshes.empty() ? "" : "+") + l.mesh_name;
     }
-    renderFrame(renderer, spec, obstacles, meshes, int(i), scene, r.x, r.y, r.yaw, img_dir, manifest);
+    renderFrame(renderer, spec, obstacles, meshes, int(i), scene, r.x, r.y, r.yaw, img_dir, manifest,
+                a.instances ? &flat_of_id : nullptr);
     manifest << "," << rows[i].scenario.substr(rows[i].scenario.rfind('/') + 1) << "\n";
     progress(int(i) + 1, int(rows.size()));
   }
