@@ -34,7 +34,6 @@ SECONDS = (4.0, 3.0, 2.0, 1.0, 0.5)  #: [s] before the contact (the trajectory's
 HZ = 10.0  #: [Hz] the exports' trajectory rate
 MIN_HIT_PX = 50  #: [px] the hit obstacle counts as seen in a frame from this size
 SHADOW_LIT = 128  #: [0..255] ground darker than this in the lit map is in a cast shadow
-SETS = ("hit", "other", "shadow", "lit")  #: "other" is one set per obstacle class: "other juniper", ...
 TRAVERSABLE, NON_TRAVERSABLE = 0, 1
 FORMAT = 1
 
