@@ -1,8 +1,9 @@
-"""Issue #56: every Python node's parameters come from its table (asg_lockstep.params): the
+"""Issue #56: every node's parameters come from its table. Python (asg_lockstep.params): the
 segmenter (asg_perception.node_params), the depth stack (asg_depth_stack.params) and the lockstep
-client (asg_lockstep.params.CLIENT). docs/ quotes each table's Markdown; a bad value is refused
-naming the parameter and what is allowed; the depth stack's YAML holds the table's defaults. (The
-planner's C++ table: tests/test_planner_parameters.py.)"""
+client (asg_lockstep.params.CLIENT, which the C++ client reads through a generated header). C++:
+the scene worker and wall_clock (`--params`). docs/ quotes each table's Markdown; a bad value is
+refused naming the parameter and what is allowed; the YAML and launch files hold the tables'
+defaults. (The planner's C++ table: tests/test_planner_parameters.py.)"""
 
 import os
 import re
@@ -115,3 +116,26 @@ def test_the_scene_workers_table_is_quoted_and_its_yaml_states_its_defaults():
         want = "required" if key == "stack_nodes" else yaml.safe_load(row[2].strip("`"))
         assert want == "required" or flat[key] == want, (key, flat[key], want)
     assert all(r[1].strip() for r in rows), "every row writes its unit"
+
+
+def test_the_wall_clocks_table_is_quoted_and_its_launch_file_states_its_default():
+    # The C++ table of asg_sim/src/ros/wall_clock_node.cpp: docs/your-stack.md quotes its output,
+    # and sim_time.launch's `rate` argument defaults to the table's default.
+    binary = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "wall_clock")
+    assert os.access(binary, os.X_OK), f"{binary}: not built"
+    table = subprocess.run([binary, "--params"], capture_output=True, text=True, check=True).stdout
+    assert quoted("your-stack.md", "wall_clock") == table.rstrip("\n"), "docs/your-stack.md: regenerate it"
+    default = float(re.search(r"^\| `rate` \| [^|]+ \| ([0-9.]+) \|", table, re.M).group(1))
+    launch = os.path.join(REPO, "catkin_ws", "src", "asg_bringup", "launch", "sim_time.launch")
+    arg = re.search(r'<arg name="rate" default="([0-9.]+)"', open(launch, encoding="utf-8").read())
+    assert arg and float(arg.group(1)) == default, "sim_time.launch's rate default differs from the table's"
+
+
+def test_the_cpp_clients_header_is_generated_from_the_same_table():
+    # Both lockstep clients read params.CLIENT: the C++ one through a generated header, which
+    # must be what the generator writes now (regenerate: python3 -m asg_lockstep.cpp_params).
+    from asg_lockstep import cpp_params
+
+    with open(os.path.join(REPO, cpp_params.HEADER), encoding="utf-8") as f:
+        assert f.read() == cpp_params.header_text(), f"{cpp_params.HEADER} is stale: regenerate it"
+    assert '"lockstep", true, "-", "true or false",' in cpp_params.header_text()

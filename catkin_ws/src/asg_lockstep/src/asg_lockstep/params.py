@@ -87,7 +87,9 @@ def markdown(table: List[Param]) -> str:
     return "\n".join(rows)
 
 
-#: The lockstep client's own parameter (asg_lockstep.ros.LockstepClient), in the node that uses it.
+#: The lockstep client's own parameter, in the node that uses it: the Python client
+#: (asg_lockstep.ros.LockstepClient) reads this table, the C++ one (ros/lockstep_client.hpp) its
+#: generated header (include/asg_lockstep/client_params.hpp, `python3 -m asg_lockstep.cpp_params`).
 CLIENT = [
     Param(
         "lockstep",

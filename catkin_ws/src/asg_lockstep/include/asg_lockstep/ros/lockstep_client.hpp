@@ -6,12 +6,13 @@
 //   lock.subscribe<nav_msgs::Odometry>("odom", [&](const nav_msgs::OdometryConstPtr& m) { ... });
 //   auto cmd = lock.advertiseCmdVel("cmd_vel");   // cmd.publish(twist) as with ros::Publisher
 //
-// Lockstep (`~lockstep`, true by default): the client acknowledges each run, holds the inputs in
-// a TickGate (tick_gate.hpp) and at each control tick runs the stack's callbacks in stamp order on
-// its own thread, then answers the tick with the stack's last Twist as a TwistStamped on
-// `cmd_vel_stamped`. Inputs are received on a second thread of the client's, so the tick can wait
-// for them whatever the stack's own spinner does. Free-running: plain subscriptions on the
-// stack's node handle; the client still acknowledges runs.
+// Lockstep (`~lockstep`; unset, the stack registration's `stack/mode`, else true: the table both
+// clients read, client_params.hpp, decided in client_settings.hpp): the client acknowledges each
+// run, holds the inputs in a TickGate (tick_gate.hpp) and at each control tick runs the stack's
+// callbacks in stamp order on its own thread, then answers the tick with the stack's last Twist
+// as a TwistStamped on `cmd_vel_stamped`. Inputs are received on a second thread of the
+// client's, so the tick can wait for them whatever the stack's own spinner does. Free-running:
+// plain subscriptions on the stack's node handle; the client still acknowledges runs.
 #pragma once
 
 #include <asg_msgs/ScenarioInfo.h>
@@ -29,10 +30,12 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <stdexcept>
 #include <vector>
 
+#include "asg_lockstep/client_settings.hpp"
 #include "asg_lockstep/stack_protocol.hpp"
 #include "asg_lockstep/tick_gate.hpp"
 
@@ -60,7 +63,7 @@ class LockstepClient {
         on_run_(std::move(on_run)),
         protocol_(Nanos(asg_msgs::ScenarioInfo::RUN_WINDOW) * 1000000000LL),
         gate_(Nanos(asg_msgs::ScenarioInfo::RUN_WINDOW) * 1000000000LL) {
-    ros::NodeHandle("~").param("lockstep", lockstep_, true);
+    lockstep_ = readLockstep();
     ack_pub_ = nh_.advertise<asg_msgs::StackAck>("stack_ack", 4);
     error_pub_ = nh_.advertise<asg_msgs::StackError>("stack_error", 4);
     answer_pub_ = nh_.advertise<geometry_msgs::TwistStamped>("cmd_vel_stamped", 4);
@@ -89,6 +92,36 @@ class LockstepClient {
   LockstepClient& operator=(const LockstepClient&) = delete;
 
   bool lockstep() const { return lockstep_; }
+
+  /// A parameter's value as an error writes it: 'text', 1, 0.5 (else its XML-RPC form).
+  static std::string shown(XmlRpc::XmlRpcValue& value) {
+    std::ostringstream out;
+    switch (value.getType()) {
+      case XmlRpc::XmlRpcValue::TypeString: out << "'" << static_cast<std::string>(value) << "'"; break;
+      case XmlRpc::XmlRpcValue::TypeInt: out << static_cast<int>(value); break;
+      case XmlRpc::XmlRpcValue::TypeDouble: out << static_cast<double>(value); break;
+      default: out << value.toXml();
+    }
+    return out.str();
+  }
+
+  /// The node's `~lockstep` as client_settings.hpp decides it; std::invalid_argument names a bad value.
+  static bool readLockstep() {
+    ParameterRead read;
+    XmlRpc::XmlRpcValue value;
+    if (ros::NodeHandle("~").getParam(client_params::kLockstep.name, value)) {
+      if (value.getType() == XmlRpc::XmlRpcValue::TypeBoolean) {
+        read.kind = ParameterRead::kBool;
+        read.flag = static_cast<bool>(value);
+      } else {
+        read.kind = ParameterRead::kOther;
+        read.shown = shown(value);
+      }
+    }
+    std::string mode;
+    const bool registered = ros::NodeHandle().getParam("stack/mode", mode);
+    return clientLockstep(read, registered ? &mode : nullptr);
+  }
 
   /// ros::NodeHandle::subscribe's place for an input of the stack (a type with a header).
   template <class M>
