@@ -19,7 +19,12 @@ PREFIX = os.path.join(WS, "build", "install_check")
 def test_an_installed_workspace_runs_a_campaign_and_replays_its_top_scenario(tmp_path):
     if not os.path.isfile(os.path.join(PREFIX, "setup.bash")):
         subprocess.run(
-            ["/usr/bin/python3", os.path.join(REPO, "scripts", "check_install.py"), WS, str(tmp_path / "install.xml")],
+            [
+                "/usr/bin/python3",
+                os.path.join(REPO, "scripts", "ci", "check_install.py"),
+                WS,
+                str(tmp_path / "install.xml"),
+            ],
             check=True,
             timeout=1800,
         )

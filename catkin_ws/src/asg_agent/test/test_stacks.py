@@ -84,3 +84,15 @@ def test_an_experiment_names_its_stack_by_name_or_by_file(tmp_path):
     (tmp_path / "g.yaml").write_text(depth.replace("stack: depth", "stack: gone.launch"))
     with pytest.raises(ExperimentError, match="gone.launch: no such launch file"):
         load_experiment(str(tmp_path / "g.yaml"))
+
+
+def test_a_baseline_takes_a_users_stack_by_its_registration_file(tmp_path):
+    # `baseline run --stack` (docs/your-stack.md's recipe): a label, a registered name, or a
+    # registration file anywhere, whose rows are stored under the name it registers
+    from asg_agent.cli.baseline import out_path, stack_label
+
+    assert stack_label("flawed") == "flawed" and stack_label("gap_nav") == "gap_nav"
+    assert stack_label(registration(tmp_path, GOOD)) == "mine"
+    assert out_path("exp1", stack_label(registration(tmp_path, GOOD)), str(tmp_path)).endswith("exp1/mine.jsonl")
+    with pytest.raises(ValueError, match=r"--stack 'nobody': one of ground_truth, .*registration launch file"):
+        stack_label("nobody")

@@ -57,8 +57,16 @@ def layouts(exp, n: int) -> List[dict]:
     return [exp.request(m.propose(k, k // steps, k % steps, None), scenario_id=k + 1) for k in range(n)]
 
 
+def default_root() -> str:
+    """Where rows go without --root: the repository's results/baseline when this code runs from a
+    clone, else (an install space) ~/.ros/asg/baseline, beside train.launch's default store."""
+    if os.path.isdir(os.path.join(REPO, "catkin_ws")):
+        return os.path.join(REPO, "results", "baseline")
+    return os.path.join(os.path.expanduser("~"), ".ros", "asg", "baseline")
+
+
 def out_path(exp_name: str, stack: str, root: str = "") -> str:
-    return os.path.join(root or os.path.join(REPO, "results", "baseline"), exp_name, f"{stack}.jsonl")
+    return os.path.join(root or default_root(), exp_name, f"{stack}.jsonl")
 
 
 def read_rows(path: str) -> Dict[int, dict]:
@@ -361,7 +369,7 @@ def table(summary: dict) -> str:
 def summary_cmd(a) -> int:
     exp = load_experiment(a.experiment)
     s = summarize(exp.name, a.root, a.ground_truth_root)
-    path = os.path.join(a.root or os.path.join(REPO, "results", "baseline"), f"{exp.name}.json")
+    path = os.path.join(a.root or default_root(), f"{exp.name}.json")
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as f:
         json.dump(s, f, indent=1, sort_keys=True)
@@ -379,6 +387,23 @@ def registered_labels() -> tuple:
     return tuple(n for n in names if n not in STACKS and n != "paper")
 
 
+def stack_label(stack: str) -> str:
+    """The label rows are stored under: a label of STACKS, a registered stack's name, or, for the
+    path of a registration launch file (a user's stack, docs/your-stack.md), the name it
+    registers. ValueError naming what is allowed."""
+    if stack in STACKS:
+        return stack
+    from asg_agent.records import stacks
+
+    try:
+        return stacks.load(stack).name
+    except stacks.RegistrationError as e:
+        raise ValueError(
+            f"--stack {stack!r}: one of {', '.join(STACKS + registered_labels())}, or the path of a stack's "
+            f"registration launch file ({e})"
+        ) from None
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="baseline", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -387,12 +412,17 @@ def main(argv=None):
     r.add_argument(
         "--stack",
         required=True,
-        choices=STACKS + registered_labels(),
-        help="which stack the workers run (a label: a perception of the paper's stack, or a registered stack's name)",
+        help="which stack the workers run: a label (a perception of the paper's stack: "
+        + ", ".join(STACKS)
+        + "), a registered stack's name ("
+        + ", ".join(registered_labels())
+        + ") or the path of a stack's registration launch file (its rows are stored under its name)",
     )
     r.add_argument("--layouts", type=int, default=500, help="layouts 0..N-1")
     r.add_argument("--workers", default="2", help="count or comma-separated namespaces")
-    r.add_argument("--root", default="", help="results folder (default results/baseline)")
+    r.add_argument(
+        "--root", default="", help="results folder (default results/baseline of a clone, else ~/.ros/asg/baseline)"
+    )
     s = sub.add_parser("summary", help="results/baseline/<exp>.json and the Markdown table")
     s.add_argument("experiment")
     s.add_argument("--root", default="")
@@ -433,7 +463,13 @@ def main(argv=None):
         if bad:
             p.error(f"--set {bad[0]}: expected KEY=VALUE")
         return offline(a)
-    return run(a) if a.cmd == "run" else summary_cmd(a)
+    if a.cmd == "run":
+        try:
+            a.stack = stack_label(a.stack)
+        except ValueError as e:
+            p.error(str(e))
+        return run(a)
+    return summary_cmd(a)
 
 
 if __name__ == "__main__":
