@@ -13,7 +13,7 @@
 # (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite"; the pair trained
 # with terrain and weather, issue #27: "flawed_tw full_tw"; the depth stack of issue #39, on
 # workers launched with stack:=depth: "depth", N_UNET layouts; the hardened models of issue #40:
-# "flawed_hf1 flawed_hr1").
+# "flawed_hf1 flawed_hr1"; gap_nav, issue #55, on simulated time: "gap_nav", N_UNET layouts).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 EXP="${1:?usage: baseline.sh EXPERIMENT [N_GROUND_TRUTH] [N_UNET]}"
 [ -f "$EXP" ] || EXP="$REPO/experiments/$EXP.yaml"
@@ -30,7 +30,8 @@ ROOT=()
 GT_ROOT=(--ground-truth-root "$REPO/results/baseline")
 trap 'stop_workers; stop_master' EXIT
 for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET" flawed_lite:"$N_UNET" full_lite:"$N_UNET" \
-    flawed_tw:"$N_UNET" full_tw:"$N_UNET" depth:"$N_UNET" flawed_hf1:"$N_UNET" flawed_hr1:"$N_UNET"; do
+    flawed_tw:"$N_UNET" full_tw:"$N_UNET" depth:"$N_UNET" flawed_hf1:"$N_UNET" flawed_hr1:"$N_UNET" \
+    gap_nav:"$N_UNET"; do
   stack="${spec%%:*}"; n="${spec##*:}"
   [ "$n" -gt 0 ] || continue
   [[ " ${ASG_BASELINE_STACKS:-ground_truth flawed full} " == *" $stack "* ]] || continue
@@ -38,11 +39,23 @@ for spec in ground_truth:"$N_GT" flawed:"$N_UNET" full:"$N_UNET" flawed_lite:"$N
   root=("${ROOT[@]}")
   [ "$stack" = ground_truth ] && args=(perception:=ground_truth) && root=()
   [ "$stack" = depth ] && args=(stack:=depth) && root=()
+  sim_time=false
+  if [ "$stack" = gap_nav ]; then  # a registered stack on simulated time (issue #55)
+    args=(stack:="$stack") && root=() && sim_time=true
+  fi
   log "$(basename "$EXP" .yaml): $stack stack, $n layouts"
   start_master
+  # simulated time once for the master, before any worker's stack starts (its nodes read /use_sim_time)
+  CLOCK_PID=""
+  if [ "$sim_time" = true ]; then
+    roslaunch --wait "$REPO/launch/sim_time.launch" >/dev/null 2>&1 &
+    CLOCK_PID=$!
+    until [ "$(rosparam get /use_sim_time 2>/dev/null)" = true ]; do sleep 0.5; done
+  fi
   start_workers 2 "${args[@]}" planner_config:="$CFG"
   /usr/bin/python3 -m asg_agent.cli.baseline run "$EXP" --stack "$stack" --layouts "$n" --workers 2 "${root[@]}"
   stop_workers
+  [ -z "$CLOCK_PID" ] || { kill "$CLOCK_PID" 2>/dev/null; wait "$CLOCK_PID" 2>/dev/null || true; }
   stop_master
 done
 /usr/bin/python3 -m asg_agent.cli.baseline summary "$EXP" "${ROOT[@]}" "${GT_ROOT[@]}"
