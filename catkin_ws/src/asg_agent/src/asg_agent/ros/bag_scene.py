@@ -123,3 +123,45 @@ def plans_fading(plans, max_kept=8):
             arr.markers.append(Marker(ns="earlier_plans", id=j, action=Marker.DELETE))
         out.append((stamp, arr))
     return out
+
+
+#: Labels in colour for rviz's image panel: ground tan, obstacle red, sky blue, void grey.
+PALETTE = ((170, 150, 110), (220, 40, 40), (110, 160, 230), (128, 128, 128))
+
+
+def labels_rgb(msg, labels=None):
+    """An rgb8 sensor_msgs/Image of `labels` (H x W, 0..3; default the mono8 `msg`'s own), with
+    `msg`'s header and size."""
+    import numpy as np
+
+    lab = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width) if labels is None else labels
+    palette = np.array(PALETTE, np.uint8)
+    return type(msg)(
+        header=msg.header,
+        height=msg.height,
+        width=msg.width,
+        encoding="rgb8",
+        is_bigendian=0,
+        step=msg.width * 3,
+        data=palette[np.minimum(lab, 3)].tobytes(),
+    )
+
+
+def labels_beside(bag, worker: str, model: str):
+    """[(bag time, topic, message)]: every camera frame of the bag labelled again by another U-Net
+    `model` (a shipped name, e.g. 'full', or a path) on the default numerics, in colour on
+    `<worker>/replay/labels_beside_rgb`: what the unflawed model would have seen beside what the
+    stack under test saw (issue #54). `bag` is an open rosbag.Bag."""
+    import numpy as np
+
+    from asg_perception.inference import Segmenter
+    from asg_perception.segmenter_node import resolve_model
+
+    seg = None
+    out = []
+    for _, msg, t in bag.read_messages(topics=[f"{worker}/camera/image_raw"]):
+        if seg is None:
+            seg = Segmenter(resolve_model(model), height=msg.height, width=msg.width)
+        rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
+        out.append((t, f"{worker}/replay/labels_beside_rgb", labels_rgb(msg, seg(rgb))))
+    return out

@@ -67,14 +67,14 @@ def compare(stored: np.ndarray, replayed: np.ndarray) -> float:
     return float(np.max(np.hypot(stored[:, 1] - replayed[:, 1], stored[:, 2] - replayed[:, 2]))) if len(stored) else 0.0
 
 
-def add_scene_to_bag(path, worker, request, o: Outcome):
+def add_scene_to_bag(path, worker, request, o: Outcome, beside: str = ""):
     """Adds the scene, optimal path, driven trajectory, fading earlier plans and coloured labels
-    to the bag. The bag is written anew in time order (not appended to): rosbag takes a bag's end
+    to the bag (and, with `beside`, another U-Net's labels of the same frames). The bag is written anew in time order (not appended to): rosbag takes a bag's end
     time from its last chunk, so a chunk appended at the start time made `rosbag info` read 0 s
     and tools that use the duration misjudge the run."""
     import rosbag
     import rospy
-    from asg_agent.ros.bag_scene import plans_fading, scene_messages
+    from asg_agent.ros.bag_scene import labels_beside, labels_rgb, plans_fading, scene_messages
     from asg_agent.scoring.proxy import optimal_path, placed_mask
 
     removed = {(l, i) for l, i, _ in o.removed}
@@ -94,20 +94,11 @@ def add_scene_to_bag(path, worker, request, o: Outcome):
             request, removed, opt.points, o.trajectory[::6, 1:3].tolist(), first_stamp or rospy.Time()
         ):
             extra.append((when, f"{worker}/{suffix}", msg))
-        # Labels in colour (ground tan, obstacle red, sky blue, void grey) for the image panel.
-        palette = np.array([[170, 150, 110], [220, 40, 40], [110, 160, 230], [128, 128, 128]], np.uint8)
+        # Labels in colour (bag_scene.PALETTE) for the image panel, and another model's beside them.
         for _, msg, t in bag.read_messages(topics=[f"{worker}/labels", f"{worker}/camera/labels_gt"]):
-            lab = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width)
-            img = type(msg)(
-                header=msg.header,
-                height=msg.height,
-                width=msg.width,
-                encoding="rgb8",
-                is_bigendian=0,
-                step=msg.width * 3,
-                data=palette[np.minimum(lab, 3)].tobytes(),
-            )
-            extra.append((t, f"{worker}/replay/labels_rgb", img))
+            extra.append((t, f"{worker}/replay/labels_rgb", labels_rgb(msg)))
+        if beside:
+            extra += labels_beside(bag, worker, beside)
         # Earlier plans: written at the bag time of the plan they accompany.
         for stamp, arr in plans_fading(plans):
             extra.append((times.get(stamp, when), f"{worker}/replay/earlier_plans", arr))
@@ -190,6 +181,13 @@ def main(argv=None):
     p.add_argument("--model", default="", help="with --scenario: the U-Net model (default flawed)")
     p.add_argument("--port", type=int, default=11390, help="ROS master port of the worker replay brings up")
     p.add_argument("--bag", default="", help="record the run's topics into this bag")
+    p.add_argument(
+        "--labels-beside",
+        default="",
+        metavar="MODEL",
+        help="with --bag: label the bag's camera frames again with this U-Net (e.g. full, the unflawed "
+        "model) and add them beside the stack's labels (replay/labels_beside_rgb, shown by rviz/replay.rviz)",
+    )
     p.add_argument("--figure", default="", help="write a top-down PNG of the replayed run")
     p.add_argument("--force", action="store_true", help="replay even if the worker's stack differs")
     p.add_argument(
@@ -399,7 +397,7 @@ def run_replay(a, request, row, settings) -> int:
         return 1
     o: Outcome = result_to_outcome(0, worker, result, time.time() - t0)
     if a.bag:
-        add_scene_to_bag(a.bag, worker, request, o)
+        add_scene_to_bag(a.bag, worker, request, o, a.labels_beside)
     print(
         f"replayed {request.get('name', '')} on {worker}: {o.termination} after {o.sim_time:.2f} s "
         f"({o.wall_time:.1f} s wall){': ' + o.error if o.error else ''}"
