@@ -68,3 +68,28 @@ def test_every_row_counts_what_its_export_holds():
         got = [sum(1 for x in jobs if x.get("attribution") == k) for k in ("flaw", "model", "stack")]
         assert [int(cells[5]), int(cells[6]), int(cells[7])] == got, name
         assert abs(float(cells[4].split()[0]) - 1000.0 * got[0] / len(jobs)) < 0.051, name
+
+
+def test_the_replays_block_is_what_the_replay_records_say():
+    # scripts/repro/replay_findings.sh's records: each names every flaw finding of its campaign's
+    # export (read here apart from the project's code) and its verdict; the doc's block is generated
+    from asg_analysis import replays
+
+    records = replays.read(FOLDER)
+    assert records, "no replay record in results/flaw_study/replays/"
+    text = open(DOC, encoding="utf-8").read()
+    block = re.search(re.escape(replays.BEGIN) + r"\n(.*?)\n" + re.escape(replays.END), text, re.S)
+    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis.replays"
+    for r in records:
+        with gzip.open(os.path.join(FOLDER, f"{r['campaign']}.jsonl.gz"), "rt") as f:
+            rows = [json.loads(line) for line in f][1:]
+        flaw = sorted(str(row["job"]) for row in rows if row.get("attribution") == r["class"])
+        assert sorted(r["jobs"]) == flaw, f"{r['campaign']}: the replays are not every {r['class']} finding"
+    first = next(r for r in records if r["campaign"] == "flaw-default-s10")
+    assert first["reproduced"] == first["findings"]  # the docs say every one replayed exactly
+    # the walked-through finding, as the page tells it: job 3, a juniper, a collision after 11.2 s
+    with gzip.open(os.path.join(FOLDER, "flaw-default-s10.jsonl.gz"), "rt") as f:
+        job3 = next(row for row in map(json.loads, f) if row.get("job") == 3)
+    assert job3["attribution"] == "flaw" and job3["termination"] == "COLLISION"
+    assert job3["meshes"][job3["collision_with"]] == "juniper" and f"{job3['sim_time']:.1f}" == "11.2"
+    assert "job 3, in rviz" in text and "a collision after 11.2 s of simulated time" in " ".join(text.split())
