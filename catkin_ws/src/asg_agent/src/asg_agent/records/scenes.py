@@ -8,14 +8,28 @@ import numpy as np
 from asg_agent.paths import REPO
 
 
+#: experiments read by scenario_of, by (path, modification time): a campaign's rows share one
+#: (reading the YAML for each row took most of `protocol status`'s time)
+_EXPERIMENTS = {}
+
+
+def _experiment(name: str):
+    from asg_agent.records.experiment import load_experiment
+
+    path = os.path.join(REPO, "experiments", name + ".yaml")
+    key = (path, os.stat(path).st_mtime_ns)
+    if key not in _EXPERIMENTS:
+        _EXPERIMENTS[key] = load_experiment(path)
+    return _EXPERIMENTS[key]
+
+
 def scenario_of(campaign: dict, row: dict) -> dict:
     """The request of an exported row: the experiment's fixed attributes with its positions (and
     its textural attributes, where the export has them)."""
     from asg_scenario.layout import with_positions
-    from asg_agent.records.experiment import load_experiment
 
-    exp = load_experiment(os.path.join(REPO, "experiments", campaign["experiment"] + ".yaml"))
-    s = with_positions(exp.scenario, row["positions"])
+    exp = _experiment(campaign["experiment"])
+    s = with_positions(exp.scenario, row["positions"])  # a deep copy: the cached experiment stays
     s["textural"].update(row.get("textural") or {})
     return s
 
