@@ -38,6 +38,7 @@ from asg_analysis.protocol import interruptions
 from asg_agent.scoring.attribution import FINDING
 
 from asg_agent.paths import REPO
+from asg_analysis.files import write_json
 
 DOC = os.path.join(REPO, "docs", "design-loop.md")
 PROTOCOL = os.path.join(REPO, "experiments", "protocol-design-loop.yaml")
@@ -323,8 +324,7 @@ def main(argv=None) -> int:
         print(f"loop_study: {e}", file=sys.stderr)
         return 2
     if a.json:
-        with open(a.json, "w", encoding="utf-8") as f:
-            json.dump(s, f, indent=1, sort_keys=True)
+        write_json(a.json, s)
     if a.figure:
         figure(s, a.figure)
     from asg_analysis.seed_tables import rewrite_block

@@ -23,6 +23,7 @@ import numpy as np
 from asg_agent.records.export import read_export
 from asg_agent.scoring.attribution import RunOutcome
 from asg_analysis.stack_study import exact_interval
+from asg_analysis.files import write_json
 
 
 def read_reruns(paths: List[str]) -> List[Dict[int, dict]]:
@@ -123,9 +124,7 @@ def main(argv=None) -> int:
         print(f"run_spread: {e}", file=sys.stderr)
         return 2
     if a.json:
-        with open(a.json, "w", encoding="utf-8") as f:
-            json.dump(s, f, indent=1, sort_keys=True)
-            f.write("\n")
+        write_json(a.json, s)
     print(markdown(s) if a.markdown else json.dumps({k: v for k, v in s.items() if k != "per_scenario"}, indent=1))
     return 0
 

@@ -35,6 +35,7 @@ import numpy as np
 from asg_agent.records.export import read_export
 from asg_analysis.stats import LEVEL, mann_whitney
 from asg_agent.scoring.attribution import CANDIDATE, RunOutcome
+from asg_analysis.files import write_json
 
 
 def exact_interval(k: int, n: int, level: float = LEVEL) -> List[float]:
@@ -200,9 +201,7 @@ def main(argv=None) -> int:
         print(f"stack_study: {e}", file=sys.stderr)
         return 2
     if a.json:
-        with open(a.json, "w", encoding="utf-8") as f:
-            json.dump(s, f, indent=1, sort_keys=True)
-            f.write("\n")
+        write_json(a.json, s)
     print((markdown_seeds(s) if seeds else markdown(s)) if a.markdown else json.dumps(s, indent=1, sort_keys=True))
     return 0
 
