@@ -39,6 +39,37 @@ def removed_set(result):
     return {(int(r.layout_index), int(r.instance_index)) for r in result.removed_obstacles}
 
 
+def run_goal(client, goal, timeout_s=None, feedback_cb=None):
+    """Sends `goal` on `client` (actionlib.ActionClient of a worker's run_scenario) and waits for
+    its result: the result, or None after `timeout_s` [s, wall] (the goal is then cancelled) or
+    at shutdown. The plain ActionClient, one handle for the goal: SimpleActionClient logs "Got a
+    transition callback on a goal handle that we're not tracking" whenever the worker answers
+    before its send_goal has returned, which a worker that starts at once does on every run."""
+    import threading
+    import time
+
+    import rospy
+    from actionlib.action_client import CommState
+
+    done = threading.Event()
+
+    def transition(gh):
+        if gh.get_comm_state() == CommState.DONE:
+            done.set()
+
+    def feedback(gh, fb):
+        if feedback_cb is not None:
+            feedback_cb(fb)
+
+    gh = client.send_goal(goal, transition_cb=transition, feedback_cb=feedback)
+    end = None if timeout_s is None else time.monotonic() + timeout_s
+    while not done.wait(0.1):
+        if rospy.is_shutdown() or (end is not None and time.monotonic() > end):
+            gh.cancel()
+            return None
+    return gh.get_result()
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(
         prog="run_scenario",
@@ -75,7 +106,7 @@ def main(argv=None):
 
     rospy.init_node("run_scenario", anonymous=True, disable_signals=True)
     name = args.worker.rstrip("/") + "/run_scenario"
-    client = actionlib.SimpleActionClient(name, RunScenarioAction)
+    client = actionlib.ActionClient(name, RunScenarioAction)
     print(f"waiting for worker action server {name} ...", flush=True)
     if not client.wait_for_server(rospy.Duration(60.0)):
         print(f"error: no action server at {name} after 60 s (is the worker launched?)", file=sys.stderr)
@@ -104,12 +135,10 @@ def main(argv=None):
     import time
 
     wall0 = time.monotonic()
-    client.send_goal(goal, feedback_cb=feedback)
-    if not client.wait_for_result(rospy.Duration(args.timeout)):
-        client.cancel_goal()
+    result = run_goal(client, goal, args.timeout, feedback)
+    if result is None:
         print(f"error: no result within {args.timeout:g} s", file=sys.stderr)
         return 4
-    result = client.get_result()
     wall = time.monotonic() - wall0
     if args.votes:
         rospy.sleep(0.5)  # the last replan's markers

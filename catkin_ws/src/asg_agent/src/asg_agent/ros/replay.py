@@ -334,6 +334,7 @@ def run_replay(a, request, row, settings) -> int:
     import rospy
     from asg_msgs.msg import RunScenarioAction
     from asg_scenario.convert import to_goal_msg
+    from asg_scenario.run_scenario_node import run_goal
     from asg_agent.ros.pool import result_to_outcome
 
     from asg_agent.ros.node import init_node
@@ -350,7 +351,7 @@ def run_replay(a, request, row, settings) -> int:
                 file=sys.stderr,
             )
             return 2
-    client = actionlib.SimpleActionClient(worker + "/run_scenario", RunScenarioAction)
+    client = actionlib.ActionClient(worker + "/run_scenario", RunScenarioAction)
     if not client.wait_for_server(rospy.Duration(90)):
         print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
         return 2
@@ -377,9 +378,7 @@ def run_replay(a, request, row, settings) -> int:
             time.sleep(0.2)
         time.sleep(0.5)
     t0 = time.time()
-    client.send_goal(to_goal_msg(request))
-    client.wait_for_result()
-    result = client.get_result()
+    result = run_goal(client, to_goal_msg(request))
     if bag:
         time.sleep(1.0)
         os.killpg(os.getpgid(bag.pid), signal.SIGINT)
