@@ -165,7 +165,7 @@ def check_reference_run(a, request, ref: dict, o: Outcome) -> int:
     return 0 if ok else 1
 
 
-def main(argv=None):
+def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[0])
     p.add_argument("store", nargs="?")
     p.add_argument("campaign", nargs="?")
@@ -195,6 +195,11 @@ def main(argv=None):
         action="store_true",
         help="rerun a stored bf16 run on the default fp32 numerics (a new run, not a bit-for-bit replay)",
     )
+    return p
+
+
+def main(argv=None):
+    p = parser()
     a = p.parse_args([x for x in (sys.argv[1:] if argv is None else argv) if ":=" not in x])
     row, settings = None, {}
     if a.scenario:
