@@ -69,9 +69,10 @@ def compare(stored: np.ndarray, replayed: np.ndarray) -> float:
 
 def add_scene_to_bag(path, worker, request, o: Outcome, beside: str = ""):
     """Adds the scene, optimal path, driven trajectory, fading earlier plans and coloured labels
-    to the bag (and, with `beside`, another U-Net's labels of the same frames). The bag is written anew in time order (not appended to): rosbag takes a bag's end
-    time from its last chunk, so a chunk appended at the start time made `rosbag info` read 0 s
-    and tools that use the duration misjudge the run."""
+    to the bag (and, with `beside`, another U-Net's labels of the same frames). The bag is written
+    anew in time order (not appended to): rosbag takes a bag's end time from its last chunk, so a
+    chunk appended at the start time made `rosbag info` read 0 s and tools that use the duration
+    misjudge the run."""
     import rosbag
     import rospy
     from asg_agent.ros.bag_scene import labels_beside, labels_rgb, plans_fading, scene_messages
@@ -201,6 +202,8 @@ def parser() -> argparse.ArgumentParser:
 def main(argv=None):
     p = parser()
     a = p.parse_args([x for x in (sys.argv[1:] if argv is None else argv) if ":=" not in x])
+    if a.labels_beside and not a.bag:
+        p.error("--labels-beside adds to a bag: give --bag too")
     row, settings = None, {}
     if a.scenario:
         try:
