@@ -177,6 +177,31 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     assert set(d["cpu_hours"]) == {1, 2} and all(h > 0 for h in d["cpu_hours"].values())
     assert d["per_cpu_hour"][1] == pytest.approx(4 / d["cpu_hours"][1])
     assert {r["arm"] for r in res["comparison_per_cpu_hour"]} == {"default", "route-random"}
+    # the answer (issue #54): every campaign complete, the winner by flaw findings per CPU-hour
+    assert (res["complete"], res["campaigns"]) == (4, 4)
+    best = max(res["comparison_per_cpu_hour"], key=lambda r: r["mean"])["arm"]
+    assert res["winner"]["arm"] == best
+    assert res["arms"]["route-random"]["train_args"] == [
+        "method:=route-random",
+        "experiment:=experiments/exp1.yaml",
+        "reward:=proxy",
+        "route_band:=5",
+    ]
+    # every flaw finding of the default's seeds in one cell of the map
+    assert sum(d["mode_counts"].values()) == round(sum(d["per_seed"].values()) * 12 / 1000)
+    block = pr.result_markdown(p, res, "images/cov.png")
+    assert block.startswith(pr.RESULT_BEGIN) and block.endswith(pr.RESULT_END)
+    assert "| default | 2 | 333.3, 250.0 |" in block and "| route-random | 2 | 83.3, 83.3 |" in block
+    assert f"Winner (most flaw findings per CPU-hour, mean over the seeds): {best}" in block
+    assert "Target (3x route-random per 1,000 and per CPU-hour" in block
+    # 2 seeds against 2 cannot reach p < 0.01: the answer says so rather than claiming a winner
+    assert "Not decided at p < 0.01" in block
+    pr.coverage_figure(res, str(tmp_path / "cov.png"))
+    assert (tmp_path / "cov.png").stat().st_size > 5000
+    os.remove(tmp_path / "out" / "v-route-random-s2.jsonl.gz")
+    res = pr.analyse(p, str(tmp_path / "out"), ch)
+    assert res["complete"] == 3 and res["winner"] is None  # no per-CPU-hour comparison of an arm not in
+    assert "Not answered yet: 3 of the 4 confirmatory campaigns" in pr.result_markdown(p, res)
 
 
 def test_interruptions_and_cpu_hours_from_events_and_gaps(tmp_path):

@@ -344,7 +344,17 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
         for s_, r in sorted(seeds.items()):
             st = heads[names[s_]].get("settings") or "{}"
             hours[s_] = cpu_hours(json.loads(st) if isinstance(st, str) else st, r, budget)
+        done = sum(
+            len({r["job"] for r in rows if r["job"] < budget}) >= budget
+            and not any(r.get("attribution") == attr.PENDING for r in rows)
+            for rows in seeds.values()
+        )
         table[arm] = {
+            "campaigns": len([c for c in cs if c["arm"] == arm]),
+            "complete": done,
+            "train_args": train_args(next(c for c in cs if c["arm"] == arm)["args"]),
+            "mode_counts": {"|".join(map(str, m)): modes.count(m) for m in sorted(set(modes))},
+            "meshes": sorted(set(meshes)),
             "per_cpu_hour": {
                 s_: (
                     sum(x["job"] < budget and x.get("attribution") == cls for x in r) / hours[s_] if hours[s_] else None
@@ -377,7 +387,16 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
                 or (ref_hour is not None and ref_hour["ratio"] >= t["ratio"] and ref_hour["p"] < t["p"])
             )
         )
+    complete = sum(t["complete"] for t in table.values())
+    winner = None
+    if rows_hour and complete == len(cs):  # the protocol's rule: most flaw findings per CPU-hour, mean over the seeds
+        order = list(p["arms"])
+        best = max(rows_hour, key=lambda r: (r["mean"], -order.index(r["arm"])))
+        winner = {"arm": best["arm"], "per_cpu_hour": best["mean"], "train_args": table[best["arm"]]["train_args"]}
     return {
+        "campaigns": len(cs),
+        "complete": complete,
+        "winner": winner,
         "arms": table,
         "comparison": rows,
         "comparison_per_cpu_hour": rows_hour,
@@ -387,7 +406,159 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
     }
 
 
+def train_args(args: List[str]) -> List[str]:
+    """A campaign's launch arguments as `bash scripts/train.sh` takes them for the product's default:
+    the generator (method, experiment, reward, band), without the study's seed, workers and
+    attribution."""
+    return [a for a in args if a.split(":=", 1)[0] not in ("seed", "workers", "attribution")]
+
+
 BEGIN, END = "<!-- flaw study status: begin (generated) -->", "<!-- flaw study status: end -->"
+RESULT_BEGIN, RESULT_END = "<!-- flaw study result: begin (generated) -->", "<!-- flaw study result: end -->"
+
+
+def _f(x: Optional[float], nd: int = 1) -> str:
+    return "" if x is None else ("inf" if x == float("inf") else f"{x:.{nd}f}")
+
+
+def result_markdown(p: dict, res: dict, figure: str = "") -> str:
+    """The study's answer as a generated block: the comparison table (per arm: flaw findings per
+    1,000 and per CPU-hour with 95 % bootstrap intervals, distinct flaw modes, model and stack
+    findings, coverage; the default against each arm: ratio, two-sided Mann-Whitney p and Cliff's
+    delta on both endpoints), the target, the winner and a plain answer. Until every confirmatory
+    campaign is complete it says how many are, and compares nothing (the protocol's rule)."""
+    lines = [RESULT_BEGIN]
+    if res["complete"] < res["campaigns"]:
+        lines += [
+            f"**Not answered yet: {res['complete']} of the {res['campaigns']} confirmatory campaigns are "
+            "complete.** The protocol compares no arm before all of them are in; this block is "
+            "rewritten by `protocol analyse --doc` when they are.",
+            RESULT_END,
+        ]
+        return "\n".join(lines)
+    arms, t = res["arms"], p["target"]
+    hour = {r["arm"]: r for r in res["comparison_per_cpu_hour"]}
+    lines += [
+        "| arm | seeds | flaw per 1,000, per seed | mean (95 %) | flaw per CPU-hour, mean (95 %) | distinct flaw modes "
+        "| coverage | model per 1,000 | stack per 1,000 | default / arm per 1,000 (95 %) | p | Cliff's delta "
+        "| default / arm per CPU-hour (95 %) | p |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    import numpy as np
+
+    for r in res["comparison"]:
+        a, h = arms[r["arm"]], hour.get(r["arm"])
+        per = ", ".join(f"{v:.1f}" for v in r["counts"])
+        vs = (
+            "| - | - | - | - | - |"
+            if r["p"] is None
+            else f"| {_f(r['ratio'], 2)} ({_f(r['ratio_lo'], 2)}-{_f(r['ratio_hi'], 2)}) | {r['p']:.4f} | {r['effect']:+.2f} "
+            + (
+                f"| {_f(h['ratio'], 2)} ({_f(h['ratio_lo'], 2)}-{_f(h['ratio_hi'], 2)}) | {h['p']:.4f} |"
+                if h
+                else "| | |"
+            )
+        )
+        lines.append(
+            f"| {r['arm']} | {r['seeds']} | {per} | {r['mean']:.1f} ({r['lo']:.1f}-{r['hi']:.1f}) | "
+            + (f"{h['mean']:.1f} ({h['lo']:.1f}-{h['hi']:.1f})" if h else "")
+            + f" | {a['distinct_modes']} | {100 * a['coverage']:.0f} % | {np.mean(list(a['model'].values())):.1f} "
+            f"| {np.mean(list(a['stack'].values())):.1f} {vs}"
+        )
+    ref, ref_h = next(r for r in res["comparison"] if r["arm"] == t["ratio_over"]), hour.get(t["ratio_over"])
+    modes = arms["default"]["distinct_modes"]
+    lines += [
+        "",
+        f"Per seed: the first {p['budget']} scenarios of each campaign; intervals: bootstrap over the seeds "
+        "(10,000 resamples, seed 0); p: two-sided Mann-Whitney U of the default's seeds against the arm's "
+        "(exact without ties); Cliff's delta > 0: the default's seeds rank higher.",
+        "",
+        f"**Target ({t['ratio']:g}x {t['ratio_over']} per 1,000"
+        + (" and per CPU-hour" if t.get("per_cpu_hour") else "")
+        + f", p < {t['p']:g}, >= {t['distinct_modes']} distinct flaw modes): "
+        + ("met" if res["target_met"] else "missed")
+        + f".** The default against {t['ratio_over']}: {_f(ref['ratio'], 2)}x per 1,000 "
+        f"({_f(ref['ratio_lo'], 2)}-{_f(ref['ratio_hi'], 2)}, p = {ref['p']:.4f})"
+        + (
+            f", {_f(ref_h['ratio'], 2)}x per CPU-hour ({_f(ref_h['ratio_lo'], 2)}-{_f(ref_h['ratio_hi'], 2)}, "
+            f"p = {ref_h['p']:.4f})"
+            if ref_h
+            else ""
+        )
+        + f"; {modes} distinct flaw modes over its seeds.",
+    ]
+    better = ref["ratio"] > 1.0
+    if ref["p"] < t["p"]:
+        answer = (
+            f"yes: the search finds more flaw findings per 1,000 than {t['ratio_over']}, at p < {t['p']:g}"
+            if better
+            else f"no: {t['ratio_over']} finds more flaw findings per 1,000 than the search, at p < {t['p']:g}"
+        )
+    else:
+        answer = (
+            f"not decided at p < {t['p']:g}: the default's mean is {'above' if better else 'below'} "
+            f"{t['ratio_over']}'s, but the seeds do not separate the arms at that level"
+        )
+    lines += [
+        "",
+        f"**Does the search find the injected flaw better than a sampler that puts obstacles on the route? {answer[0].upper() + answer[1:]}.**",
+    ]
+    w = res.get("winner")
+    if w:
+        lines += [
+            "",
+            f"**Winner (most flaw findings per CPU-hour, mean over the seeds): {w['arm']}, "
+            f"{w['per_cpu_hour']:.1f} per CPU-hour.** `bash scripts/train.sh` runs it: `{' '.join(w['train_args'])}`.",
+        ]
+    if figure:
+        lines += ["", f"![flaw findings by failure mode, per arm (the coverage map)]({figure})"]
+    lines.append(RESULT_END)
+    return "\n".join(lines)
+
+
+def coverage_figure(res: dict, out: str) -> None:
+    """The coverage map: for each arm, its flaw findings over all its seeds in the cells of the
+    failure-mode feature map (rows: obstacle hit, with or without a shadow ahead; columns: quarter
+    of the route and side), darker for more; an empty cell is a mode the arm never found."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from asg_agent.records import failure_modes as fm
+
+    meshes = sorted({m for a in res["arms"].values() for m in a["meshes"]})
+    rows = [(o, s) for o in meshes + ["none"] for s in ("shadow", "lit")]
+    cols = [(q, side) for q in range(fm.ROUTE_BINS) for side in fm.SIDES + ("none",)]
+    arms = list(res["arms"])
+    fig, axes = plt.subplots(1, len(arms), figsize=(3.2 * len(arms), 0.32 * len(rows) + 1.6), squeeze=False)
+    top = max((n for a in res["arms"].values() for n in a["mode_counts"].values()), default=1)
+    for ax, arm in zip(axes[0], arms):
+        grid = np.zeros((len(rows), len(cols)))
+        for key, n in res["arms"][arm]["mode_counts"].items():
+            o, q, side, s = key.split("|")
+            if (o, s) in rows and (int(q), side) in cols:
+                grid[rows.index((o, s)), cols.index((int(q), side))] += n
+        ax.imshow(np.ma.masked_equal(grid, 0), cmap="viridis_r", vmin=0, vmax=top, aspect="auto")
+        ax.set_title(f"{arm}\n{int(grid.sum())} flaw, {int((grid > 0).sum())} modes", fontsize=9)
+        ax.set_xticks(range(len(cols)))
+        ax.set_xticklabels([f"Q{q + 1} {side[0]}" for q, side in cols], rotation=90, fontsize=6)
+        ax.set_yticks(range(len(rows)))
+        ax.set_yticklabels(
+            [f"{o} {'sh' if s == 'shadow' else 'lit'}" for o, s in rows] if ax is axes[0][0] else [], fontsize=6
+        )
+        ax.set_xticks(np.arange(-0.5, len(cols)), minor=True)
+        ax.set_yticks(np.arange(-0.5, len(rows)), minor=True)
+        ax.grid(which="minor", color="#dddddd", linewidth=0.4)
+    fig.suptitle(
+        "Flaw findings by failure mode over all seeds (rows: obstacle hit, shadow ahead or lit; columns: route "
+        "quarter, side l/o/r/n); darker: more, blank: none",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
 
 
 def status(p: dict, folder: str) -> dict:
@@ -484,6 +655,13 @@ def main(argv=None) -> int:
     n.add_argument("protocol")
     n.add_argument("folder")
     n.add_argument("--json", default="")
+    n.add_argument("--doc", default="", help="rewrite the page's result block (and, complete, the coverage map)")
+    n.add_argument(
+        "--figure",
+        default="",
+        help="the coverage map's PNG (default: docs/images/flaw_study_coverage.png beside --doc)",
+    )
+    n.add_argument("--check", action="store_true", help="with --doc: only say whether the block is stale (exit 1)")
     args = ap.parse_args(argv)
     try:
         p = load(args.protocol)
@@ -530,9 +708,24 @@ def main(argv=None) -> int:
         print(
             f"{r['arm']}: {r['mean']:.2f} per 1,000 ({r['lo']:.2f}-{r['hi']:.2f}) over {r['seeds']} seeds {r['counts']}{vs}"
         )
+    if res["winner"]:
+        w = res["winner"]
+        print(f"winner: {w['arm']} ({w['per_cpu_hour']:.1f} flaw findings per CPU-hour): {' '.join(w['train_args'])}")
     if args.json:
         with open(args.json, "w") as f:
             json.dump(res, f, indent=1, sort_keys=True, default=str)
+    if args.doc:
+        figure = args.figure or os.path.join(
+            os.path.dirname(os.path.abspath(args.doc)), "images", "flaw_study_coverage.png"
+        )
+        rel = os.path.relpath(figure, os.path.dirname(os.path.abspath(args.doc)))
+        complete = res["complete"] >= res["campaigns"]
+        if complete and not args.check:
+            coverage_figure(res, figure)
+        from asg_analysis.seed_tables import rewrite_block
+
+        block = result_markdown(p, res, rel if complete else "")
+        return rewrite_block(args.doc, RESULT_BEGIN, RESULT_END, block, args.check, "protocol analyse")
     return 0
 
 
