@@ -93,3 +93,84 @@ def test_the_replays_block_is_what_the_replay_records_say():
     assert job3["attribution"] == "flaw" and job3["termination"] == "COLLISION"
     assert job3["meshes"][job3["collision_with"]] == "juniper" and f"{job3['sim_time']:.1f}" == "11.2"
     assert "job 3, in rviz" in text and "a collision after 11.2 s of simulated time" in " ".join(text.split())
+
+
+def _export(name):
+    with gzip.open(os.path.join(FOLDER, name + ".jsonl.gz"), "rt") as f:
+        lines = [json.loads(x) for x in f]
+    head = lines[0].get("campaign", lines[0])
+    settings = head.get("settings") or {}
+    return (json.loads(settings) if isinstance(settings, str) else settings), [x for x in lines[1:] if "job" in x]
+
+
+def _exact_two_sided_p(a, b):
+    """Mann-Whitney's exact two-sided p by enumerating every split of the pooled values (no ties)."""
+    from itertools import combinations
+
+    pooled = sorted(a + b)
+    rank = {v: i + 1 for i, v in enumerate(pooled)}
+    n, total = len(a), len(pooled)
+    mean = n * (total + 1) / 2.0
+    observed = abs(sum(rank[v] for v in a) - mean)
+    splits = list(combinations(range(1, total + 1), n))
+    return sum(abs(sum(s) - mean) >= observed - 1e-9 for s in splits) / len(splits)
+
+
+def test_the_result_block_is_what_the_exports_say():
+    # issue #54: the study's answer, recomputed here from the exports apart from protocol.analyse
+    plan = budgets()
+    arms = {}
+    for name, budget in plan.items():
+        m = re.fullmatch(r"flaw-(.+)-s(\d+)", name)
+        if "-pilot-" in name or not m:
+            continue
+        arms.setdefault(m.group(1), {})[int(m.group(2))] = name
+    total = sum(len(s) for s in arms.values())
+    per_1000, per_hour, complete = {}, {}, 0
+    for arm, seeds in arms.items():
+        for seed, name in sorted(seeds.items()):
+            if not os.path.isfile(os.path.join(FOLDER, name + ".jsonl.gz")):
+                continue
+            settings, rows = _export(name)
+            jobs = [r for r in rows if r["job"] < plan[name]]
+            if len({r["job"] for r in jobs}) < plan[name]:
+                continue
+            complete += 1
+            flaw = sum(r.get("attribution") == "flaw" for r in jobs)
+            per_1000.setdefault(arm, []).append(1000.0 * flaw / len(jobs))
+            cpu = [e["cpu_s"] for e in settings.get("events", []) if e.get("kind") == "cpu"]
+            per_hour.setdefault(arm, []).append(flaw / (sum(cpu) / 3600.0) if cpu else None)
+    text = open(DOC, encoding="utf-8").read()
+    block = text[text.index("<!-- flaw study result: begin") : text.index("<!-- flaw study result: end")]
+    if complete < total:
+        assert f"Not answered yet: {complete} of the {total} confirmatory campaigns are complete" in block
+        assert "| default |" not in block  # nothing compared before every campaign is in
+        return
+    rows = {
+        ln.split("|")[1].strip(): [c.strip() for c in ln.strip("|").split("|")]
+        for ln in block.splitlines()
+        if ln.startswith("| ") and not ln.startswith("| arm")
+    }
+    for arm, v in per_1000.items():
+        cells = rows[arm]
+        assert cells[2] == ", ".join(f"{x:.1f}" for x in v), arm
+        assert cells[3].split()[0] == f"{sum(v) / len(v):.1f}", arm
+        if all(h is not None for h in per_hour[arm]):
+            assert cells[4].split()[0] == f"{sum(per_hour[arm]) / len(per_hour[arm]):.1f}", arm
+        if arm == "default":
+            continue
+        a = per_1000["default"]
+        delta = sum((x > y) - (x < y) for x in a for y in v) / (len(a) * len(v))
+        assert float(cells[11]) == round(delta, 2), arm
+        if len(set(a + v)) == len(a + v):  # exact without ties, as the table says
+            assert abs(float(cells[10]) - _exact_two_sided_p(a, v)) < 5e-5, arm
+    means = {arm: sum(h) / len(h) for arm, h in per_hour.items() if all(x is not None for x in h)}
+    winner = max(means, key=means.get)
+    assert f"the seeds): {winner}, " in block
+    # and `bash scripts/train.sh` runs it: train.launch's defaults are the winner's generator
+    launch = open(os.path.join(REPO, "launch", "train.launch"), encoding="utf-8").read()
+    default = dict(re.findall(r'<arg name="(\w+)" default="([^"]*)"', launch))
+    args = dict(a.split(":=", 1) for a in re.search(r"runs it: `([^`]*)`", block).group(1).split())
+    assert default["method"] == args["method"] and default["reward"] == args.get("reward", "proxy")
+    assert default["experiment"].endswith(os.path.basename(args["experiment"]))
+    assert default["route_band"] == args.get("route_band", "")
