@@ -74,6 +74,27 @@ def test_the_summary_names_the_numerics_and_bf16_findings_replay_only_on_their_i
     assert "replay bit for bit only where oneDNN runs AVX512_CORE_AMX" in stack_line({"settings": json.dumps(bf)})
 
 
+def test_the_summary_names_the_scene_generator():
+    from asg_agent.cli.campaign import generator_line
+
+    settings = {
+        "method_config": {"band": 10.0, "share": 1.0},
+        "reward": "proxy",
+        "experiment_repo_file": "experiments/exp1.yaml",
+    }
+    camp = {"method": "route-random", "seed": 3, "experiment": "exp1", "settings": json.dumps(settings)}
+    assert generator_line(camp) == (
+        "scene generator: route-random (band 10 m, share 1), reward proxy, experiment experiments/exp1.yaml, seed 3"
+    )
+    td3 = {
+        "method": "td3-per-asp",
+        "seed": 0,
+        "experiment": "exp1-route",
+        "settings": json.dumps({"reward": "collision"}),
+    }
+    assert generator_line(td3) == "scene generator: td3-per-asp, reward collision, experiment exp1-route, seed 0"
+
+
 def test_replay_refuses_a_bf16_run_on_another_isa(monkeypatch):
     from asg_agent.ros import replay
 

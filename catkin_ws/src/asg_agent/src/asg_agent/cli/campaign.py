@@ -180,6 +180,23 @@ def parse(argv):
     return a
 
 
+def generator_line(camp) -> str:
+    """The summary's line naming the scene generator that ran (issue #54: `bash scripts/train.sh`
+    runs the flaw study's winner; the others are one argument away): method, its settings, the
+    reward and the experiment file."""
+    settings = json.loads(camp["settings"]) if camp and camp["settings"] else {}
+    config = settings.get("method_config") or {}
+    what = ", ".join(
+        f"{k} {v:g}{' m' if k == 'band' else ''}" if isinstance(v, float) else f"{k} {v}"
+        for k, v in sorted(config.items())
+    )
+    exp = settings.get("experiment_repo_file") or settings.get("experiment_file") or camp["experiment"]
+    return (
+        f"scene generator: {camp['method']}{f' ({what})' if what else ''}, reward {settings.get('reward', 'proxy')}, "
+        f"experiment {exp}, seed {camp['seed']}"
+    )
+
+
 def stack_line(camp) -> str:
     """The summary's line naming the stack under test and its numerics (issue #53); for bf16, the
     fast mode, that its findings replay only where oneDNN runs the recorded ISA."""
@@ -220,6 +237,7 @@ def print_summary(store, name, out=sys.stdout):
             f"{s['stack_collisions']} the stack's (the reference collided too)",
             file=out,
         )
+    print(generator_line(store.campaign(name)), file=out)
     print(stack_line(store.campaign(name)), file=out)
     cl = s["classes"]
     if sum(cl.values()):
