@@ -7,6 +7,17 @@
 # default, experiments/exp1-gt.yaml, leaves the U-Net out (ground-truth labels), so the figures
 # are those of the worker, planner, run loop and agent, which the refactor changed.
 #   bash scripts/repro/bench_before_after.sh BEFORE [SCENARIOS=120] [REPEATS=3] [TAG=r4-arch] [EXPERIMENT]
+# Knobs (environment), for other benches of the same shape:
+#   BENCH_WORKERS (2), BENCH_ATTRIBUTION (false; three: the full and ground-truth references re-run
+#   the candidates), BENCH_ARGS_BEFORE / BENCH_ARGS_AFTER (more launch arguments of one side, e.g.
+#   unet_backend:=channels_last for a tree whose default was bf16), BENCH_FAST_ARGS (set: a third
+#   side, "fast", on this tree with these arguments, e.g. unet_backend:=bf16; its results differ),
+#   BENCH_FAST_EXPERIMENT (the fast side's experiment file; default EXPERIMENT).
+# Issue #53's bench (fp32 channels_last before and after it, three-stack attribution, bf16 beside;
+# before it the default was bf16, so that side is told channels_last):
+#   BENCH_WORKERS=3 BENCH_ATTRIBUTION=three BENCH_ARGS_BEFORE=unet_backend:=channels_last \
+#     BENCH_FAST_ARGS=unet_backend:=bf16 BENCH_FAST_EXPERIMENT=experiments/exp1-bf16.yaml \
+#     bash scripts/repro/bench_before_after.sh b51ff09^ 120 3 r5-numerics experiments/exp1-channels-last.yaml
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 BEFORE="${1:?usage: bench_before_after.sh BEFORE [SCENARIOS] [REPEATS] [TAG] [EXPERIMENT]}"
@@ -27,12 +38,20 @@ mkdir -p "$OUT" "$REPO/runs/bench_before/logs"
 files=()
 for k in $(seq "$REPEATS"); do
   order="before after"; [ $((k % 2)) -eq 0 ] && order="after before"
+  [ -n "${BENCH_FAST_ARGS:-}" ] && order="$order fast"
   for side in $order; do
     root="$REPO"; [ "$side" = before ] && root="$WT"
+    exp="$EXPF"; [ "$side" = fast ] && exp="$(realpath "${BENCH_FAST_EXPERIMENT:-$EXPF}")"
+    case "$side" in
+      before) read -ra more <<< "${BENCH_ARGS_BEFORE:-}" ;;
+      after) read -ra more <<< "${BENCH_ARGS_AFTER:-}" ;;
+      fast) read -ra more <<< "${BENCH_FAST_ARGS}" ;;
+    esac
     store="$(mktemp -u "$REPO/runs/bench_before/store-XXXXXX.sqlite")"
-    log "$TAG $side $k: $SCENARIOS scenarios of $(basename "$EXPF") on $root"
+    log "$TAG $side $k: $SCENARIOS scenarios of $(basename "$exp") on $root ${more[*]}"
     ASG_TRAIN_PORT="${ASG_BENCH_PORT:-11397}" ASG_STORE="$store" bash "$root/scripts/train.sh" "$SCENARIOS" \
-        workers:=2 name:=bench seed:=0 experiment:="$EXPF" perception:="$PERCEPTION" attribution:=false \
+        workers:="${BENCH_WORKERS:-2}" name:=bench seed:=0 experiment:="$exp" perception:="$PERCEPTION" \
+        attribution:="${BENCH_ATTRIBUTION:-false}" "${more[@]}" \
         extra:="--bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-$side-$k.json --label $TAG-$side-$k" \
         > "$REPO/runs/bench_before/logs/$TAG-$side-$k.log" 2>&1
     # what the campaign found, every scenario's request, outcome and trajectory: equal on both
@@ -46,6 +65,6 @@ print(len(rows), hashlib.sha256(repr(rows).encode()).hexdigest())" "$store") > "
 done
 source_ros
 /usr/bin/python3 -m asg_analysis.bench table "${files[@]}"
-/usr/bin/python3 -m asg_analysis.bench before-after "${files[@]}"
+/usr/bin/python3 -m asg_analysis.bench before-after $(printf '%s\n' "${files[@]}" | grep -v -- "-fast-")
 echo "scenarios and digest of each campaign's results:"
 for f in "${files[@]}"; do echo "  $(basename "${f%.json}"): $(cat "${f%.json}.digest")"; done
