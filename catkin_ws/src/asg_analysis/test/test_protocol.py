@@ -112,6 +112,14 @@ def test_the_protocol_plans_chooses_and_analyses(tmp_path, monkeypatch):
     assert "t-default-s2: no export" in pr.analyse(p, str(tmp_path / "out"), ch)["deviations"][0]
 
 
+def read_rows(folder, prefix):
+    from asg_agent.records.export import read_export
+
+    return [
+        r for f in sorted(os.listdir(folder)) if f.startswith(prefix) for r in read_export(os.path.join(folder, f))[1]
+    ]
+
+
 def test_a_bad_protocol_is_named(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\n")
@@ -198,6 +206,17 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     assert "Not decided at p < 0.01" in block
     pr.coverage_figure(res, str(tmp_path / "cov.png"))
     assert (tmp_path / "cov.png").stat().st_size > 5000
+    # how each arm spent its budget: every flaw finding of the default in its windows, every obstacle placed
+    from asg_analysis import flaw_budget as fb
+
+    spent = fb.read(str(tmp_path / "out"), 12, "v")
+    assert set(spent) == {"default", "route-random"} and spent["default"]["seeds"] == 2
+    # 12 scenarios, one window: its rate is the seeds' mean rate
+    assert spent["default"]["curve"] == [pytest.approx(sum(d["per_seed"].values()) / 2)]
+    assert spent["default"]["placed"].size == sum(len(r["positions"]) for r in read_rows(tmp_path / "out", "v-default"))
+    assert "| default | 2 |" in fb.markdown(spent, ["default", "route-random"])
+    fb.figure(spent, ["default", "route-random"], str(tmp_path / "budget.png"))
+    assert (tmp_path / "budget.png").stat().st_size > 5000
     os.remove(tmp_path / "out" / "v-route-random-s2.jsonl.gz")
     res = pr.analyse(p, str(tmp_path / "out"), ch)
     assert res["complete"] == 3 and res["winner"] is None  # no per-CPU-hour comparison of an arm not in

@@ -421,7 +421,7 @@ def _f(x: Optional[float], nd: int = 1) -> str:
     return "" if x is None else ("inf" if x == float("inf") else f"{x:.{nd}f}")
 
 
-def result_markdown(p: dict, res: dict, figure: str = "") -> str:
+def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budget_figure: str = "") -> str:
     """The study's answer as a generated block: the comparison table (per arm: flaw findings per
     1,000 and per CPU-hour with 95 % bootstrap intervals, distinct flaw modes, model and stack
     findings, coverage; the default against each arm: ratio, two-sided Mann-Whitney p and Cliff's
@@ -512,6 +512,13 @@ def result_markdown(p: dict, res: dict, figure: str = "") -> str:
         ]
     if figure:
         lines += ["", f"![flaw findings by failure mode, per arm (the coverage map)]({figure})"]
+    if budget:  # the why: how each arm spends its budget (asg_analysis.flaw_budget)
+        lines += ["", "How each arm spends its budget (`asg_analysis.flaw_budget`):", "", budget]
+    if budget_figure:
+        lines += [
+            "",
+            f"![flaw findings as each arm goes, and how close to the route it puts obstacles]({budget_figure})",
+        ]
     lines.append(RESULT_END)
     return "\n".join(lines)
 
@@ -720,11 +727,24 @@ def main(argv=None) -> int:
         )
         rel = os.path.relpath(figure, os.path.dirname(os.path.abspath(args.doc)))
         complete = res["complete"] >= res["campaigns"]
-        if complete and not args.check:
-            coverage_figure(res, figure)
+        budget, budget_png = "", os.path.join(os.path.dirname(figure), "flaw_study_budget.png")
+        if complete:
+            from asg_analysis import flaw_budget
+
+            spent = flaw_budget.read(args.folder, p["budget"], p["name"])
+            budget = flaw_budget.markdown(spent, list(p["arms"]))
+            if not args.check:
+                coverage_figure(res, figure)
+                flaw_budget.figure(spent, list(p["arms"]), budget_png)
         from asg_analysis.seed_tables import rewrite_block
 
-        block = result_markdown(p, res, rel if complete else "")
+        block = result_markdown(
+            p,
+            res,
+            rel if complete else "",
+            budget,
+            os.path.relpath(budget_png, os.path.dirname(os.path.abspath(args.doc))) if complete else "",
+        )
         return rewrite_block(args.doc, RESULT_BEGIN, RESULT_END, block, args.check, "protocol analyse")
     return 0
 
