@@ -29,3 +29,30 @@ def test_the_refactor_bench_in_the_docs_is_its_reports(tag):
     # every campaign, on either side, found the same 120 results (requests, outcomes, trajectories)
     digests = {open(p[: -len(".json")] + ".digest").read().strip() for p in before + after}
     assert len(digests) == 1 and next(iter(digests)).startswith("120 "), digests
+
+
+def test_the_avx2_prediction_is_the_arithmetic_and_the_model_holds_on_a_measured_bench():
+    # issue #53: the README's campaign on an AVX2-only CPU, predicted from committed benches
+    from asg_analysis.bench import predict, predict_sentence
+
+    bench = os.path.join(REPO, "results", "bench")
+    non_unet = [
+        json.load(open(os.path.join(bench, f"r4-arch-{side}-{k}.json")))
+        for side in ("before", "after")
+        for k in (1, 2, 3)
+    ]
+    shape = [json.load(open(os.path.join(bench, f"r4-three-{k}-w3.json"))) for k in (1, 2, 3)]
+    assert len(non_unet) == 6 and all(r["machine"]["cpu"] == "AMD EPYC" for r in non_unet)
+    doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
+    for ms in (62, 24):
+        assert predict_sentence(predict(ms, non_unet, shape, 150, 2)) in doc, ms
+    # the model against campaigns that ran: each three-stack bench from its own per-process CPU
+    said = []
+    for r in shape:
+        c = r["cpu_per_scenario_s"]
+        own = [{"stacks": {"under test": {"cpu_per_run_s": c["scene_worker"] + c["planner"]}}, "cpu_per_scenario_s": c}]
+        p = predict(1000 * c["segmenter"] / r["frames_per_scenario"], own, [r], r["scenarios"], 2)
+        assert abs(p["minutes"] / (r["wall_s"] / 60) - 1) < 0.05
+        said.append((f"{p['minutes']:.2f}", f"{r['wall_s'] / 60:.2f}"))
+    text = f"gives {', '.join(s[0] for s in said[:-1])} and {said[-1][0]} minutes for campaigns that took {', '.join(s[1] for s in said[:-1])} and {said[-1][1]}"
+    assert text in doc, text

@@ -124,6 +124,44 @@ def before_after_sentence(c: dict) -> str:
     )
 
 
+def predict(ms_per_frame: float, non_unet: List[dict], shape: List[dict], scenarios: int, cores: int) -> dict:
+    """[min] what a campaign of `scenarios` should take on a CPU where the U-Net costs
+    `ms_per_frame` [ms CPU a frame], from benches of that CPU without the U-Net (`non_unet`: the
+    worker and planner of a run, and the agent, CPU a scenario) and benches giving the campaign's
+    shape (`shape`: camera frames a scenario, share of scenarios re-run on the references), medians
+    of each. A scenario costs a run of the stack under test (U-Net + worker and planner), the
+    agent's share, and for the re-run share a `full` run (the same cost) and a ground-truth run
+    (worker and planner only); the cores are kept busy (the three-stack bench reached 98 % of its
+    CPU ceiling), so the minutes are that CPU over the cores."""
+    frames = statistics.median(r["frames_per_scenario"] for r in shape)
+    share = statistics.median(r["rerun_share"] for r in shape)
+    run = statistics.median(r["stacks"]["under test"]["cpu_per_run_s"] for r in non_unet)
+    agent = statistics.median(r["cpu_per_scenario_s"]["agent"] for r in non_unet)
+    unet = frames * ms_per_frame / 1000.0
+    cpu = unet + run + agent + share * ((unet + run) + run)
+    return {
+        "frames": frames,
+        "rerun_share": share,
+        "run_without_unet_s": run,
+        "agent_s": agent,
+        "unet_s": unet,
+        "cpu_per_scenario_s": cpu,
+        "minutes": scenarios * cpu / cores / 60.0,
+        "scenarios": scenarios,
+        "cores": cores,
+        "ms_per_frame": ms_per_frame,
+    }
+
+
+def predict_sentence(r: dict) -> str:
+    return (
+        f"at {r['ms_per_frame']:g} ms a frame: {r['frames']:.0f} frames x {r['ms_per_frame']:g} ms = {r['unet_s']:.2f} s "
+        f"of U-Net, + {r['run_without_unet_s']:.2f} s of worker and planner, + {r['agent_s']:.2f} s of agent, + "
+        f"{100 * r['rerun_share']:.0f} % re-run on the references; {r['cpu_per_scenario_s']:.2f} s of CPU a scenario, "
+        f"{r['scenarios']} scenarios on {r['cores']} cores: {r['minutes']:.1f} minutes"
+    )
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="bench", description="Markdown table of bench breakdowns (docs/benchmarks.md)")
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -131,7 +169,21 @@ def main(argv=None):
     t.add_argument("files", nargs="+")
     ba = sub.add_parser("before-after", help="medians of runs before and after a change (TAG-before-K, TAG-after-K)")
     ba.add_argument("files", nargs="+", help="breakdown JSONs; a name with -before- is a run of the code before")
+    pr = sub.add_parser("predict", help="minutes of a campaign on a CPU from its U-Net ms a frame (predict())")
+    pr.add_argument("--ms-per-frame", type=float, required=True, help="[ms] CPU of one U-Net frame on that CPU")
+    pr.add_argument("--non-unet", nargs="+", required=True, help="bench JSONs of that CPU with ground-truth labels")
+    pr.add_argument("--shape", nargs="+", required=True, help="bench JSONs with the U-Net and three-stack attribution")
+    pr.add_argument("--scenarios", type=int, default=150)
+    pr.add_argument("--cores", type=int, default=2)
     a = p.parse_args(argv)
+    if a.cmd == "predict":
+        try:
+            load = [[json.load(open(f)) for f in fs] for fs in (a.non_unet, a.shape)]
+        except (OSError, ValueError) as e:
+            print(f"bench: {e}", file=sys.stderr)
+            return 2
+        print(predict_sentence(predict(a.ms_per_frame, load[0], load[1], a.scenarios, a.cores)))
+        return 0
     runs, labels = [], []
     for path in a.files:
         try:
