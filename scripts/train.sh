@@ -3,7 +3,7 @@
 # Exp. 1 with the flawed U-Net in the loop, two scene workers on this machine. Installs what is
 # missing and builds first; prints a progress bar, then the summary and where the store is.
 #   bash scripts/train.sh [SCENARIOS] [extra launch args, e.g. method:=random seed:=1 resume:=true]
-# Default 150 scenarios (about 4 minutes on a 2-core machine). Idempotent: a finished campaign is
+# Default 150 scenarios (minutes on a 2-core machine: docs/benchmarks.md, CPU classes). Idempotent: a finished campaign is
 # reported, an unfinished one resumed (resume:=true). ASG_LAUNCH=differential runs
 # launch/differential.launch instead (2 workers under test, 2 reference workers).
 # The workers run from the launch file in the background (their roslaunch output in the log
