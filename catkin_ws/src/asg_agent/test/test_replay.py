@@ -128,3 +128,13 @@ def test_a_replay_brings_up_the_stack_the_campaign_ran(monkeypatch):
     assert "stack:=depth" in cmd and "markers:=true" in cmd and "odom_every_tick:=true" in cmd
     replay.bring_up_worker({**stack, "stack": "paper", "perception": "unet"}, 11499)
     assert "stack:=paper" in launched[-1] and "perception:=unet" in launched[-1]
+
+
+def test_a_free_running_stack_is_rerun_not_judged():
+    # issue #55: a stack registered `mode: free` has no client gating it; replay runs its scenario
+    # again and says so instead of NOT REPRODUCED
+    from asg_agent.ros.replay import free_running
+
+    assert free_running({"registration": {"mode": "free", "sim_time": True}})
+    assert not free_running({"registration": {"mode": "lockstep"}})
+    assert not free_running({}) and not free_running(None)

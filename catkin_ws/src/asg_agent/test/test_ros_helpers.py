@@ -100,7 +100,7 @@ def test_the_rviz_configs_name_topics_relative_and_the_launch_files_set_the_name
     import re
 
     repo = os.path.join(os.path.dirname(__file__), "..", "..", "..", "..")
-    for cfg in ("worker.rviz", "replay.rviz"):
+    for cfg in ("worker.rviz", "replay.rviz", "replay_depth.rviz"):
         text = open(os.path.join(repo, "rviz", cfg)).read()
         topics = re.findall(r"^\s*(?:\w+ )?Topic: (\S+)$", text, flags=re.M)
         assert topics and all(not t.startswith("/") for t in topics), (cfg, topics)

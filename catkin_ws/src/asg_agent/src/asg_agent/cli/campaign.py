@@ -185,7 +185,9 @@ def generator_line(camp) -> str:
     runs the flaw study's winner; the others are one argument away): method, its settings, the
     reward and the experiment file."""
     settings = json.loads(camp["settings"]) if camp and camp["settings"] else {}
-    config = settings.get("method_config") or {}
+    # the settings that say what a method samples (route-random's band); a learner's hyperparameters
+    # are in the store's settings and docs/agent.md, not in one line
+    config = {k: v for k, v in (settings.get("method_config") or {}).items() if k in ("band", "share")}
     what = ", ".join(
         f"{k} {v:g}{' m' if k == 'band' else ''}" if isinstance(v, float) else f"{k} {v}"
         for k, v in sorted(config.items())

@@ -49,8 +49,11 @@ def bag_namespace(topics) -> str:
     raise ValueError("no worker topics (NS/odom, NS/scenario, NS/camera/...) in the bag: not a replay bag")
 
 
-def screenshot(bag: str, out: str, ns: str = "", at: float = 1.0, display: str = ":71", size=(1280, 860)) -> dict:
-    """rviz on `bag` in the worker namespace `ns` (empty: the bag's own, bag_namespace)."""
+def screenshot(
+    bag: str, out: str, ns: str = "", at: float = 1.0, display: str = ":71", size=(1280, 860), config: str = ""
+) -> dict:
+    """rviz on `bag` in the worker namespace `ns` (empty: the bag's own, bag_namespace), with the
+    display configuration `config` (default rviz/replay.rviz)."""
     import rosbag
     from PIL import ImageGrab
 
@@ -73,7 +76,7 @@ def screenshot(bag: str, out: str, ns: str = "", at: float = 1.0, display: str =
                 "rviz",
                 "rviz",
                 "-d",
-                rviz_config(),
+                config or rviz_config(),
                 f"/tf:=/{ns}/tf",
                 f"/tf_static:=/{ns}/tf_static",
                 "__name:=replay_view_rviz",
@@ -120,12 +123,20 @@ def main(argv=None):
     p.add_argument("out")
     p.add_argument("--ns", default="", help="the worker namespace in the bag (default: found in it)")
     p.add_argument("--at", type=float, default=1.0, help="fraction of the bag played when the picture is taken")
+    p.add_argument(
+        "--config",
+        default="",
+        help="rviz display configuration (default rviz/replay.rviz; rviz/replay_depth.rviz for a depth stack)",
+    )
     a = p.parse_args(argv)
+    if a.config and not os.path.isfile(a.config):
+        print(f"replay_view: no rviz configuration {a.config}", file=sys.stderr)
+        return 2
     if shutil.which("Xvfb") is None:
         print("replay_view: Xvfb is not installed (Debian package xvfb)", file=sys.stderr)
         return 2
     try:
-        counts = screenshot(a.bag, a.out, a.ns, a.at)
+        counts = screenshot(a.bag, a.out, a.ns, a.at, config=a.config)
     except ValueError as e:
         print(f"replay_view: {a.bag}: {e}", file=sys.stderr)
         return 2
