@@ -174,3 +174,21 @@ def test_the_result_block_is_what_the_exports_say():
     assert default["method"] == args["method"] and default["reward"] == args.get("reward", "proxy")
     assert default["experiment"].endswith(os.path.basename(args["experiment"]))
     assert default["route_band"] == args.get("route_band", "")
+
+
+def test_the_soak_sentence_is_what_the_exports_say():
+    # route-random s13 ran beside issue #53's soak: its CPU-hours and re-runs against s10-s12's
+    def cost(seed):
+        settings, rows = _export(f"flaw-route-random-s{seed}")
+        rerun = sum(r.get("attribution") not in (None, "", "not_candidate") for r in rows if r["job"] < 300)
+        hours = sum(e["cpu_s"] for e in settings.get("events", []) if e.get("kind") == "cpu") / 3600.0
+        return rerun, hours
+
+    alone = [cost(s) for s in (10, 11, 12)]
+    beside = cost(13)
+    said = (
+        f"(s13: {beside[1]:.2f} CPU-hours with {beside[0]} scenarios re-run, against "
+        f"{min(h for _, h in alone):.2f}-{max(h for _, h in alone):.2f} with "
+        f"{min(n for n, _ in alone)}-{max(n for n, _ in alone)} for s10-s12)"
+    )
+    assert said in " ".join(open(DOC, encoding="utf-8").read().split()), said
