@@ -669,6 +669,7 @@ def main(argv=None) -> int:
         help="the coverage map's PNG (default: docs/images/flaw_study_coverage.png beside --doc)",
     )
     n.add_argument("--check", action="store_true", help="with --doc: only say whether the block is stale (exit 1)")
+    n.add_argument("--interim", action="store_true", help="print the comparison before every campaign is in")
     args = ap.parse_args(argv)
     try:
         p = load(args.protocol)
@@ -706,7 +707,13 @@ def main(argv=None) -> int:
         return 2
     for d in res["deviations"]:
         print(f"deviation: {d}")
-    for r in res["comparison"]:
+    withheld = res["complete"] < res["campaigns"] and not args.interim
+    if withheld:  # the protocol compares no arm before every confirmatory campaign is in
+        print(
+            f"comparison withheld: {res['complete']} of the {res['campaigns']} confirmatory campaigns are complete "
+            "(--interim prints it anyway, for the operator, not for the answer)"
+        )
+    for r in [] if withheld else res["comparison"]:
         vs = (
             ""
             if r["p"] is None
