@@ -705,6 +705,12 @@ def main(argv=None) -> int:
     except (ProtocolError, OSError, ValueError, KeyError) as e:
         print(f"protocol: {e}", file=sys.stderr)
         return 2
+    return report_analysis(p, args, res)
+
+
+def report_analysis(p: dict, args, res: dict) -> int:
+    """`protocol analyse`'s output: deviations, the comparison (withheld until every confirmatory
+    campaign is in, unless --interim), the winner, and with --json / --doc the files."""
     for d in res["deviations"]:
         print(f"deviation: {d}")
     withheld = res["complete"] < res["campaigns"] and not args.interim
