@@ -10,7 +10,9 @@
 # planner markers on, freed workers wait for the agent's update) - the "before" column.
 # BENCH_ATTRIBUTION=true: every scenario also runs on the ground-truth reference stack (2 more
 # workers). BENCH_EXPERIMENT=exp1-bf16: another experiment file (its unet_backend is passed on).
-# Run it on an otherwise idle machine: it measures the machine. docs/benchmarks.md.
+# The method is named (td3-per-asp), not train.launch's default, so the figures stay comparable
+# when the default generator changes (issue #54). Run it on an otherwise idle machine: it measures
+# the machine. docs/benchmarks.md.
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 SCENARIOS="${1:-160}"
 TAG="${2:-now}"
@@ -37,7 +39,7 @@ fi
 for w in $COUNTS; do
   log "campaign: $SCENARIOS Exp. 1 scenarios, TD3-PER-ASP, flawed U-Net, $w worker(s)"
   ASG_TRAIN_PORT="${ASG_BENCH_PORT:-11397}" ASG_STORE="$TMP/bench.sqlite" bash "$REPO/scripts/train.sh" \
-      "$SCENARIOS" workers:="$w" name:="bench-w$w" seed:=0 "${BASE_ARGS[@]}" \
+      "$SCENARIOS" workers:="$w" name:="bench-w$w" seed:=0 method:=td3-per-asp "${BASE_ARGS[@]}" \
       extra:="$BASE_EXTRA --bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-w$w.json --label $TAG-w$w" \
       > "$TMP/w$w.log" 2>&1 || { tail -30 "$TMP/w$w.log"; echo "bench: the campaign with $w worker(s) failed" >&2; exit 1; }
   grep -E "stage report|proxy >= 3" "$TMP/w$w.log" || true

@@ -12,7 +12,8 @@
 #   the candidates), BENCH_ARGS_BEFORE / BENCH_ARGS_AFTER (more launch arguments of one side, e.g.
 #   unet_backend:=channels_last for a tree whose default was bf16), BENCH_FAST_ARGS (set: a third
 #   side, "fast", on this tree with these arguments, e.g. unet_backend:=bf16; its results differ),
-#   BENCH_FAST_EXPERIMENT (the fast side's experiment file; default EXPERIMENT).
+#   BENCH_FAST_EXPERIMENT (the fast side's experiment file; default EXPERIMENT). Every side is told
+#   method:=td3-per-asp, whatever train.launch's default generator is (issue #54 changed it).
 # Issue #53's bench (fp32 channels_last before and after it, three-stack attribution, bf16 beside;
 # before it the default was bf16, so that side is told channels_last):
 #   BENCH_WORKERS=3 BENCH_ATTRIBUTION=three BENCH_ARGS_BEFORE=unet_backend:=channels_last \
@@ -50,7 +51,7 @@ for k in $(seq "$REPEATS"); do
     store="$(mktemp -u "$REPO/runs/bench_before/store-XXXXXX.sqlite")"
     log "$TAG $side $k: $SCENARIOS scenarios of $(basename "$exp") on $root ${more[*]}"
     ASG_TRAIN_PORT="${ASG_BENCH_PORT:-11397}" ASG_STORE="$store" bash "$root/scripts/train.sh" "$SCENARIOS" \
-        workers:="${BENCH_WORKERS:-2}" name:=bench seed:=0 experiment:="$exp" perception:="$PERCEPTION" \
+        workers:="${BENCH_WORKERS:-2}" name:=bench seed:=0 method:=td3-per-asp experiment:="$exp" perception:="$PERCEPTION" \
         attribution:="${BENCH_ATTRIBUTION:-false}" "${more[@]}" \
         extra:="--bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-$side-$k.json --label $TAG-$side-$k" \
         > "$REPO/runs/bench_before/logs/$TAG-$side-$k.log" 2>&1
