@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job: a short campaign of the adversarial scene generator (TD3-PER-ASP) on the paper's
-# Exp. 1 with the flawed U-Net in the loop, two scene workers on this machine. Installs what is
+# The main job: a short campaign of the adversarial scene generator (train.launch's default: the
+# flaw study's winner, MAP-Elites in Exp. 1's route-relative action space; issue #54) on the
+# paper's Exp. 1 with the flawed U-Net in the loop, two scene workers on this machine. Installs what is
 # missing and builds first; prints a progress bar, then the summary and where the store is.
 #   bash scripts/train.sh [SCENARIOS] [extra launch args, e.g. method:=random seed:=1 resume:=true]
 # Default 150 scenarios (minutes on a 2-core machine: docs/benchmarks.md, CPU classes). Idempotent: a finished campaign is

@@ -146,9 +146,10 @@ def test_the_result_block_is_what_the_exports_say():
         assert f"Not answered yet: {complete} of the {total} confirmatory campaigns are complete" in block
         assert "| default |" not in block  # nothing compared before every campaign is in
         return
+    table = block[block.index("| arm") :].split("\n\n")[0]  # the result table (the budget table follows)
     rows = {
         ln.split("|")[1].strip(): [c.strip() for c in ln.strip("|").split("|")]
-        for ln in block.splitlines()
+        for ln in table.splitlines()
         if ln.startswith("| ") and not ln.startswith("| arm")
     }
     for arm, v in per_1000.items():
@@ -174,6 +175,13 @@ def test_the_result_block_is_what_the_exports_say():
     assert default["method"] == args["method"] and default["reward"] == args.get("reward", "proxy")
     assert default["experiment"].endswith(os.path.basename(args["experiment"]))
     assert default["route_band"] == args.get("route_band", "")
+    # the README's sentence about it: the winner's and the default search's means, from the exports
+    mean = {arm: (sum(v) / len(v), means[arm]) for arm, v in per_1000.items()}
+    said = (
+        f"found {mean[winner][0]:.1f} flaw findings per 1,000 and {mean[winner][1]:.1f} per CPU-hour against "
+        f"TD3-PER-ASP's {mean['default'][0]:.1f} and {mean['default'][1]:.1f} in the same action space"
+    )
+    assert said in " ".join(open(os.path.join(REPO, "README.md"), encoding="utf-8").read().split()), said
 
 
 def test_the_soak_sentence_is_what_the_exports_say():

@@ -497,7 +497,13 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
     else:
         answer = (
             f"not decided at p < {t['p']:g}: the default's mean is {'above' if better else 'below'} "
-            f"{t['ratio_over']}'s, but the seeds do not separate the arms at that level"
+            f"{t['ratio_over']}'s (Cliff's delta {ref['effect']:+.2f}), but p = {ref['p']:.4f} does not "
+            "separate the arms at that level"
+        )
+    if ref_h:  # the second endpoint, what a user pays for
+        ahead = "the search" if ref_h["ratio"] > 1.0 else t["ratio_over"]
+        answer += f"; per CPU-hour, {ahead} finds more (p = {ref_h['p']:.4f}, " + (
+            f"< {t['p']:g})" if ref_h["p"] < t["p"] else f"not < {t['p']:g})"
         )
     lines += [
         "",
