@@ -1,6 +1,7 @@
-"""docs/benchmarks.md's before/after figures of issue #38's refactor (results/bench/r4-arch-*) and
-of issue #56's architecture step (results/bench/r5-arch-*, the same bench), recomputed from the
-committed stage reports and result digests."""
+"""docs/benchmarks.md's before/after figures of issue #38's refactor (results/bench/r4-arch-*), of
+issue #56's architecture step (results/bench/r5-arch-*, the same bench) and of issue #53's fp32
+default (results/bench/r5-numerics-*, with bf16 beside), recomputed from the committed stage
+reports and result digests."""
 
 import glob
 import json
@@ -13,7 +14,7 @@ from asg_analysis.bench import before_after, before_after_sentence
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 
 
-@pytest.mark.parametrize("tag", ["r4-arch", "r5-arch"])
+@pytest.mark.parametrize("tag", ["r4-arch", "r5-arch", "r5-numerics"])
 def test_the_refactor_bench_in_the_docs_is_its_reports(tag):
     TAG = os.path.join(REPO, "results", "bench", tag)
     before = sorted(glob.glob(TAG + "-before-*.json"))
@@ -56,3 +57,38 @@ def test_the_avx2_prediction_is_the_arithmetic_and_the_model_holds_on_a_measured
         said.append((f"{p['minutes']:.2f}", f"{r['wall_s'] / 60:.2f}"))
     text = f"gives {', '.join(s[0] for s in said[:-1])} and {said[-1][0]} minutes for campaigns that took {', '.join(s[1] for s in said[:-1])} and {said[-1][1]}"
     assert text in doc, text
+
+
+def test_the_numerics_bench_says_what_its_reports_say():
+    # issue #53: the default after the issue against before it (both fp32 channels_last), the
+    # 1.3x target, and bf16's fast mode beside them (its results differ: it is another stack)
+    import statistics
+
+    TAG = os.path.join(REPO, "results", "bench", "r5-numerics")
+
+    def load(side, runs):
+        paths = sorted(glob.glob(f"{TAG}-{side}-*.json"))
+        assert len(paths) == runs, side
+        return [json.load(open(p)) for p in paths], paths
+
+    # three a side; bf16 beside them twice (its third run was cut for the session's time)
+
+    (before, _), (after, _), (fast, fast_paths) = load("before", 3), load("after", 3), load("fast", 2)
+    c = before_after(before, after)
+    met = "met" if c["rate_ratio"] >= 1.3 else "missed"
+    rate = sorted(r["rate_per_hour"] for r in fast)
+    said = (
+        f"the 1.3x target is {met}: after / before {c['rate_ratio']:.3f}. bf16 fast mode beside them: "
+        f"{statistics.median(rate):,.0f} ({rate[0]:,.0f}-{rate[-1]:,.0f}) scenarios an hour, "
+        f"{statistics.median(rate) / c['after']['rate'][0]:.2f}x the default's"
+    )
+    doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
+    assert said in doc, said
+    # U-Net ms a frame in the campaigns: bf16 under its AVX512_CORE_BF16 cap against fp32
+    ms = sorted(r["inference_ms_per_frame"] for r in before + after)
+    bf = sorted(r["inference_ms_per_frame"] for r in fast)
+    frames = f"{bf[0]:.0f}-{bf[-1]:.0f} ms in the campaign against {ms[0]:.0f}-{ms[-1]:.0f} ms (median {statistics.median(ms):.0f})"
+    assert frames in doc, frames
+    # the fast side's campaigns agree with each other (bf16 is deterministic on one ISA)
+    fast_digests = {open(p[: -len(".json")] + ".digest").read().strip() for p in fast_paths}
+    assert len(fast_digests) == 1 and next(iter(fast_digests)).startswith("120 "), fast_digests
