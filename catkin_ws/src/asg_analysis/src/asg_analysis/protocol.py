@@ -421,6 +421,30 @@ def _f(x: Optional[float], nd: int = 1) -> str:
     return "" if x is None else ("inf" if x == float("inf") else f"{x:.{nd}f}")
 
 
+def _plain_answer(t: dict, ref: dict, ref_h: Optional[dict]) -> str:
+    """The study's question answered from the default's comparison with the target's arm: the
+    per-1,000 endpoint decides at the protocol's p; the per-CPU-hour one is said beside it."""
+    better = ref["ratio"] > 1.0
+    if ref["p"] < t["p"]:
+        answer = (
+            f"yes: the search finds more flaw findings per 1,000 than {t['ratio_over']}, at p < {t['p']:g}"
+            if better
+            else f"no: {t['ratio_over']} finds more flaw findings per 1,000 than the search, at p < {t['p']:g}"
+        )
+    else:
+        answer = (
+            f"not decided at p < {t['p']:g}: the default's mean is {'above' if better else 'below'} "
+            f"{t['ratio_over']}'s (Cliff's delta {ref['effect']:+.2f}), but p = {ref['p']:.4f} does not "
+            "separate the arms at that level"
+        )
+    if ref_h:  # the second endpoint, what a user pays for
+        ahead = "the search" if ref_h["ratio"] > 1.0 else t["ratio_over"]
+        answer += f"; per CPU-hour, {ahead} finds more (p = {ref_h['p']:.4f}, " + (
+            f"< {t['p']:g})" if ref_h["p"] < t["p"] else f"not < {t['p']:g})"
+        )
+    return answer
+
+
 def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budget_figure: str = "") -> str:
     """The study's answer as a generated block: the comparison table (per arm: flaw findings per
     1,000 and per CPU-hour with 95 % bootstrap intervals, distinct flaw modes, model and stack
@@ -487,24 +511,7 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         )
         + f"; {modes} distinct flaw modes over its seeds.",
     ]
-    better = ref["ratio"] > 1.0
-    if ref["p"] < t["p"]:
-        answer = (
-            f"yes: the search finds more flaw findings per 1,000 than {t['ratio_over']}, at p < {t['p']:g}"
-            if better
-            else f"no: {t['ratio_over']} finds more flaw findings per 1,000 than the search, at p < {t['p']:g}"
-        )
-    else:
-        answer = (
-            f"not decided at p < {t['p']:g}: the default's mean is {'above' if better else 'below'} "
-            f"{t['ratio_over']}'s (Cliff's delta {ref['effect']:+.2f}), but p = {ref['p']:.4f} does not "
-            "separate the arms at that level"
-        )
-    if ref_h:  # the second endpoint, what a user pays for
-        ahead = "the search" if ref_h["ratio"] > 1.0 else t["ratio_over"]
-        answer += f"; per CPU-hour, {ahead} finds more (p = {ref_h['p']:.4f}, " + (
-            f"< {t['p']:g})" if ref_h["p"] < t["p"] else f"not < {t['p']:g})"
-        )
+    answer = _plain_answer(t, ref, ref_h)
     lines += [
         "",
         f"**Does the search find the injected flaw better than a sampler that puts obstacles on the route? {answer[0].upper() + answer[1:]}.**",
