@@ -284,6 +284,20 @@ def kill9(name):
     return pid
 
 
+def wait_respawned(name, old_pid, ready_param, timeout=90.0):
+    """Waits until roslaunch has respawned node `name` (a pid other than old_pid answers) and the
+    new process has set its parameter `ready_param` (which the caller deleted before the kill):
+    a goal sent before then meets a stale registration and a half-started node. Returns the
+    seconds waited."""
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        pid = node_pid(name)
+        if pid and pid != old_pid and rospy.has_param(ready_param):
+            return time.time() - t0
+        time.sleep(0.2)
+    raise AssertionError(f"node {name} was not back within {timeout:.0f} s of its kill")
+
+
 def busy_cores(n=2):
     """n processes spinning on the CPU (the caller terminates them)."""
     return [subprocess.Popen(["/usr/bin/python3", "-c", "while True: pass"]) for _ in range(n)]
