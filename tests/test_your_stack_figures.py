@@ -56,6 +56,18 @@ def test_the_depth_stack_baseline_table_is_what_the_rows_say():
     assert f"against {med_truth:.1f} s for the paper's stack" in text.replace("\n", " ")
 
 
+def test_the_gap_nav_baseline_row_is_what_its_rows_say():
+    # Issue #55: the third stack's seeded baseline, on the same 300 layouts.
+    gap = rows("gap_nav")
+    assert sorted(gap) == list(range(300))
+    assert table_row("gap_nav") == figures(list(gap.values()))
+    truth = rows("ground_truth")
+    med = statistics.median(r["sim_time"] for r in gap.values())
+    med_truth = statistics.median(truth[k]["sim_time"] for k in gap)
+    text = open(os.path.join(REPO, "docs", "your-stack.md")).read().replace("\n", " ")
+    assert f"Its median run took {med:.1f} s of simulated time against {med_truth:.1f} s" in text
+
+
 def test_the_search_against_random_table_is_what_the_exports_say():
     # Issue #39: the depth stack's two 1,000-scenario campaigns (results/depth/plan.txt), the
     # figures of analysis.stack_study, as docs/your-stack.md and results/depth/comparison.json hold them.

@@ -1,5 +1,6 @@
 """records.stacks: stacks registered by a launch file (issue #55), read and checked without ROS."""
 
+import json
 import os
 
 import pytest
@@ -96,3 +97,28 @@ def test_a_baseline_takes_a_users_stack_by_its_registration_file(tmp_path):
     assert out_path("exp1", stack_label(registration(tmp_path, GOOD)), str(tmp_path)).endswith("exp1/mine.jsonl")
     with pytest.raises(ValueError, match=r"--stack 'nobody': one of ground_truth, .*registration launch file"):
         stack_label("nobody")
+
+
+def test_the_baseline_summary_takes_a_registered_stacks_rows(tmp_path):
+    # Issue #55: `baseline summary` (results/baseline/<exp>.json) lists a registered stack's rows
+    # beside the labels', read from the ground-truth root as the depth stack's are; a registered
+    # stack with no rows adds nothing.
+    from asg_agent.cli.baseline import STACKS, out_path, summarize
+
+    def write(stack, terms):
+        path = out_path("expx", stack, str(tmp_path))
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "w") as f:
+            for k, t in enumerate(terms):
+                row = dict(layout=k, termination=t, proxy=1.0, plr=1.0, yaw_term=0.0, sim_time=10.0, stack=stack)
+                row.update(collision_with="bush" if t == "COLLISION" else "", error="")
+                f.write(json.dumps(row) + "\n")
+
+    write("ground_truth", ["SUCCESS", "SUCCESS", "COLLISION"])
+    write("gap_nav", ["SUCCESS", "COLLISION"])
+    s = summarize("expx", str(tmp_path / "elsewhere"), str(tmp_path))
+    assert sorted(s["stacks"]) == ["gap_nav", "ground_truth"]
+    assert s["stacks"]["gap_nav"]["runs"] == 2 and s["stacks"]["gap_nav"]["collisions"] == 1
+    assert [r["gap_nav_termination"] for r in s["per_layout"][:2]] == ["SUCCESS", "COLLISION"]
+    assert s["per_layout"][2]["gap_nav"] is None and s["per_layout"][2]["depth"] is None
+    assert "gap_nav" not in STACKS

@@ -300,11 +300,15 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
     """results/baseline/<exp>.json: per stack its summary, per layout the proxies of every stack,
     and what each U-Net stack changes against ground truth on the layouts both ran. The
     ground-truth rows come from `ground_truth_root` where given (they do not depend on the
-    U-Net's backend, so a backend's folder shares the default one's); so do the depth stack's."""
-    shared = ("ground_truth", "depth")
+    U-Net's backend, so a backend's folder shares the default one's); so do the depth stack's and
+    those of every registered stack (stacks/*.launch) that has rows."""
+    # A registered stack (stacks/*.launch, issue #55) runs no U-Net either: its rows are shared too.
+    registered = tuple(s for s in registered_labels() if read_rows(out_path(exp_name, s, ground_truth_root or root)))
+    shared = ("ground_truth", "depth") + registered
+    names = STACKS + registered
     rows = {
         s: read_rows(out_path(exp_name, s, ground_truth_root if s in shared and ground_truth_root else root))
-        for s in STACKS
+        for s in names
     }
     out = {
         "experiment": exp_name,
@@ -314,7 +318,7 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
         "against_ground_truth": {},
         "per_layout": [],
     }
-    for s in STACKS:
+    for s in names:
         if rows[s]:
             out["stacks"][s] = stack_summary(list(rows[s].values()))
     gt = rows["ground_truth"]
@@ -337,8 +341,8 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
         out["per_layout"].append(
             {
                 "layout": k,
-                **{s: (rows[s][k]["proxy"] if k in rows[s] else None) for s in STACKS},
-                **{f"{s}_termination": rows[s][k]["termination"] for s in STACKS if k in rows[s]},
+                **{s: (rows[s][k]["proxy"] if k in rows[s] else None) for s in names},
+                **{f"{s}_termination": rows[s][k]["termination"] for s in names if k in rows[s]},
             }
         )
     return out
