@@ -125,3 +125,88 @@ def test_the_seeds_table_is_what_the_exports_say():
         assert {r["termination"] for r in failed} <= {"IDLING_TIMEOUT"}, n
         assert {r["attribution"] for r in failed} <= {"perception"}, n
     assert "every one an idling timeout that the paper's ground-truth stack drives through" in prose
+
+
+GAP = os.path.join(REPO, "results", "gap_nav")
+GAP_SEARCH = [f"exp1-gap-nav-route-map-elites-s{k}" for k in (0, 1, 2)]
+GAP_RANDOM = [f"exp1-gap-nav-random-s{k}" for k in (0, 1, 2)]
+
+
+def between(text, name):
+    return text.split(f"<!-- {name} -->\n")[1].split(f"\n<!-- end {name} -->")[0]
+
+
+def test_the_gap_nav_study_is_what_its_exports_say():
+    # Issue #55: gap_nav's plan (results/gap_nav/plan.txt), three seeds an arm of 350 scenarios.
+    import sys
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_analysis import stack_study
+
+    s = stack_study.study_seeds(GAP, GAP_SEARCH, GAP_RANDOM)
+    assert all(c["scenarios"] == 350 and c["errors"] == 0 for c in s["campaigns"].values())
+    text = open(os.path.join(REPO, "docs", "your-stack.md")).read()
+    assert between(text, "gap_nav seeds table").strip() == stack_study.markdown_seeds(s).strip()
+    with open(os.path.join(GAP, "seeds.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(s))
+    prose = " ".join(text.split())
+    (f_s, _), (f_b, _) = s["pooled"]
+    assert f"{f_s} failures in its 1,050 scenarios against {f_b} for uniform random" in prose
+    assert f"the plan's primary test, gives p = {s['pooled_fisher_p']:.2g}" in prose
+    rs, rb = s["compare"]
+    assert f"({rs['mean']:.1f} per 1,000, {rs['lo']:.1f}-{rs['hi']:.1f}, against {rb['mean']:.1f}, " in prose
+    assert f"{rb['lo']:.1f}-{rb['hi']:.1f})" in prose
+
+
+def test_the_gap_nav_spread_is_what_its_reruns_say():
+    # Issue #55: the 20 scenarios of largest proxy of the search's seed 0, run 5 times each.
+    import sys
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_analysis import run_spread
+
+    reruns = [os.path.join(GAP, "spread", f"r{k}.jsonl") for k in range(1, 6)]
+    s = run_spread.spread(os.path.join(GAP, f"{GAP_SEARCH[0]}.jsonl.gz"), reruns)
+    assert (s["scenarios"], s["repetitions"]) == (20, 5)
+    text = open(os.path.join(REPO, "docs", "your-stack.md")).read()
+    assert between(text, "gap_nav spread table").strip() == run_spread.markdown(s).strip()
+    with open(os.path.join(GAP, "spread.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(s))
+    prose = " ".join(text.split())
+    f = s["failures_fail_again"]
+    assert f"{s['repeat']} of the 20 scenarios gave the stored verdict in all 5 repetitions" in prose
+    assert f"of its {s['stored_failures']} stored failures, {f['always']} failed again every time" in prose
+
+
+def test_the_gap_nav_failures_are_where_the_prose_says():
+    import math
+    import sys
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_analysis import stack_study
+
+    def collisions(names):
+        out = []
+        for n in names:
+            rows = stack_study.read_export(os.path.join(GAP, f"{n}.jsonl.gz"))[1]
+            failed = [r for r in rows if r["termination"] != "SUCCESS"]
+            assert {r["termination"] for r in failed} == {"COLLISION"}, n
+            out += failed
+        return out
+
+    def along(r):  # from the start (20, 20) towards the goal (80, 80), and off that line [m]
+        x, y = r["positions"][r["collision_with"]]
+        return (x + y - 40) / math.sqrt(2), abs(x - y) / math.sqrt(2)
+
+    search, rand = collisions(GAP_SEARCH), collisions(GAP_RANDOM)
+    assert all(list(r["trajectory_xy"][0]) == [20.0, 20.0] for r in search)
+    prose = " ".join(open(os.path.join(REPO, "docs", "your-stack.md")).read().split())
+    med_along = statistics.median(along(r)[0] for r in search)
+    med_off = statistics.median(along(r)[1] for r in search)
+    med_t = statistics.median(r["sim_time"] for r in search)
+    assert (
+        f"lies a median {med_along:.0f} m along the route from the start and {med_off:.1f} m from the straight line"
+        in prose
+    )
+    assert f"after a median {med_t:.1f} s of simulated time" in prose
+    assert f"few lie a median {statistics.median(along(r)[0] for r in rand):.0f} m along the route" in prose
