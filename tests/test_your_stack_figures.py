@@ -176,6 +176,8 @@ def test_the_gap_nav_spread_is_what_its_reruns_say():
     f = s["failures_fail_again"]
     assert f"{s['repeat']} of the 20 scenarios gave the stored verdict in all 5 repetitions" in prose
     assert f"of its {s['stored_failures']} stored failures, {f['always']} failed again every time" in prose
+    again = sum(p["fails_again"] for p in s["per_scenario"] if p["stored"]["fails"])
+    assert f"({again} collisions in those {5 * s['stored_failures']} runs)" in prose
 
 
 def test_the_gap_nav_failures_are_where_the_prose_says():
