@@ -303,13 +303,13 @@ def summarize(exp_name: str, root: str = "", ground_truth_root: str = "") -> dic
     U-Net's backend, so a backend's folder shares the default one's); so do the depth stack's and
     those of every registered stack (stacks/*.launch) that has rows."""
     # A registered stack (stacks/*.launch, issue #55) runs no U-Net either: its rows are shared too.
-    registered = tuple(s for s in registered_labels() if read_rows(out_path(exp_name, s, ground_truth_root or root)))
+    registered = registered_labels()
     shared = ("ground_truth", "depth") + registered
-    names = STACKS + registered
     rows = {
         s: read_rows(out_path(exp_name, s, ground_truth_root if s in shared and ground_truth_root else root))
-        for s in names
+        for s in STACKS + registered
     }
+    names = STACKS + tuple(s for s in registered if rows[s])  # a registered stack with no rows adds nothing
     out = {
         "experiment": exp_name,
         "layouts": "uniform random search, seed 0: job k is layout k",
