@@ -268,12 +268,14 @@ def largest_difference(a, b):
 
 
 def node_pid(name):
-    """pid of a running ROS node, through its XML-RPC API."""
+    """pid of a running ROS node, through its XML-RPC API; None while it is not registered or its
+    registration is stale (a killed node's URI stays with the master until the respawned process
+    registers again, and connecting to it is refused)."""
     try:
         uri = rosgraph.Master("/asg_tests").lookupNode(name)
-    except rosgraph.MasterError:
+        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/asg_tests")
+    except (rosgraph.MasterError, OSError, xmlrpc.client.Error):
         return None
-    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/asg_tests")
     return pid if code == 1 else None
 
 
