@@ -12,7 +12,9 @@
 #   the candidates), BENCH_ARGS_BEFORE / BENCH_ARGS_AFTER (more launch arguments of one side, e.g.
 #   unet_backend:=channels_last for a tree whose default was bf16), BENCH_FAST_ARGS (set: a third
 #   side, "fast", on this tree with these arguments, e.g. unet_backend:=bf16; its results differ),
-#   BENCH_FAST_EXPERIMENT (the fast side's experiment file; default EXPERIMENT). Every side is told
+#   BENCH_FAST_EXPERIMENT (the fast side's experiment file; default EXPERIMENT), BENCH_AFTER_EXPERIMENT
+#   (the after side's; default EXPERIMENT), BENCH_BEFORE_TREE (a checkout of BEFORE to use; this
+#   tree itself, with BEFORE=HEAD, compares two experiments on one tree). Every side is told
 #   method:=td3-per-asp, whatever train.launch's default generator is (issue #54 changed it).
 # Issue #53's bench (fp32 channels_last before and after it, three-stack attribution, bf16 beside;
 # before it the default was bf16, so that side is told channels_last):
@@ -43,6 +45,7 @@ for k in $(seq "$REPEATS"); do
   for side in $order; do
     root="$REPO"; [ "$side" = before ] && root="$WT"
     exp="$EXPF"; [ "$side" = fast ] && exp="$(realpath "${BENCH_FAST_EXPERIMENT:-$EXPF}")"
+    [ "$side" = after ] && exp="$(realpath "${BENCH_AFTER_EXPERIMENT:-$EXPF}")"
     case "$side" in
       before) read -ra more <<< "${BENCH_ARGS_BEFORE:-}" ;;
       after) read -ra more <<< "${BENCH_ARGS_AFTER:-}" ;;

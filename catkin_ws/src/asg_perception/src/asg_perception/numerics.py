@@ -38,7 +38,7 @@ ENV = ("ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA")
 #: Since issue #53 the default is fp32 channels_last: its closed-loop runs are bit-identical on
 #: every CPU class the project has met (docs/benchmarks.md, "CPU classes"), so one stored reference
 #: set serves them all; bf16 is a fast mode a user asks for, on CPUs that run it natively.
-BACKENDS = ("eager", "channels_last", "frozen", "bf16")
+BACKENDS = ("eager", "channels_last", "frozen", "bf16", "polyphase")
 DEFAULT_BACKEND = "channels_last"
 #: backends whose convolutions run in bf16 (the others run fp32, whose kernels VNNI, BF16 and AMX
 #: do not change: their numerics are those of FP32_TOP on any CPU at or above it)
