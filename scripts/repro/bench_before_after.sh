@@ -59,9 +59,13 @@ for k in $(seq "$REPEATS"); do
         extra:="--bc-weight 1.0 --no-progress --stage-report $OUT/$TAG-$side-$k.json --label $TAG-$side-$k" \
         > "$REPO/runs/bench_before/logs/$TAG-$side-$k.log" 2>&1
     # what the campaign found, every scenario's request, outcome and trajectory: equal on both
-    # sides when the refactor changed no result (store.content_digest without the row numbers)
-    (source_ros; /usr/bin/python3 -c "import hashlib, sys; from asg_agent.records.store import Store
-rows = [r[:3] + r[4:] for r in Store(sys.argv[1], create=False).content_digest('bench')]
+    # sides when the refactor changed no result (store.content_digest without the row numbers, and
+    # without the request's name, which is the experiment's: two experiment files compared by
+    # BENCH_AFTER_EXPERIMENT differ in it and in nothing that runs)
+    (source_ros; /usr/bin/python3 -c "import hashlib, json, sys; from asg_agent.records.store import Store
+def unnamed(r):
+    q = json.loads(r[4]); q.pop('name', None); return r[:3] + (json.dumps(q, sort_keys=True),) + r[5:]
+rows = [unnamed(r) for r in Store(sys.argv[1], create=False).content_digest('bench')]
 print(len(rows), hashlib.sha256(repr(rows).encode()).hexdigest())" "$store") > "$OUT/$TAG-$side-$k.digest"
     rm -f "$store" "${store%.sqlite}".*.ckpt
     files+=("$OUT/$TAG-$side-$k.json")

@@ -142,12 +142,67 @@ def test_fast_backends_give_the_eager_labels(test_dataset):
     path = os.path.join(MODELS, "flawed.pt")
     ref = np.stack([Segmenter(path, "eager")(f) for f in frames.rgb])
     assert np.array_equal(ref, predict(load_model(path), frames.rgb))
-    for backend in ("channels_last", "frozen"):
+    for backend in ("channels_last", "frozen", "polyphase"):
         seg = Segmenter(path, backend)
         assert np.array_equal(np.stack([seg(f) for f in frames.rgb]), ref), backend
     with pytest.raises(ValueError, match="expected H x W x 3 uint8"):
         seg(np.zeros((256, 256), np.uint8))
-    assert set(BACKENDS) == {"eager", "channels_last", "frozen", "bf16"}
+    assert set(BACKENDS) == {"eager", "channels_last", "frozen", "bf16", "polyphase"}
+
+
+def test_polyphase_decoder_is_the_same_function():
+    """Issue #53: nearest x2 upsampling then a 3x3 convolution equals the polyphase form in exact
+    arithmetic (float64 here: agreement to rounding, where a wrong tap or phase gives O(1) errors),
+    for a whole U-Net of odd sizes too; in fp32 the logits move by about what oneDNN's AVX2 and
+    AVX-512 kernels move them (docs/benchmarks.md)."""
+    from asg_perception.polyphase import PolyphaseUNet, UpConv, phase_kernel
+
+    torch.manual_seed(0)
+    conv = torch.nn.Conv2d(5, 7, 3, padding=1).double()
+    x = torch.randn(2, 5, 6, 9, dtype=torch.float64)
+    with torch.no_grad():
+        want = conv(F.interpolate(x, scale_factor=2.0, mode="nearest"))
+        got = UpConv(conv)(x)
+        assert got.shape == want.shape == (2, 7, 12, 18)
+        assert (got - want).abs().max().item() < 1e-12
+        want_act = F.leaky_relu(want, 0.2)
+        assert (UpConv(conv, 0.2)(x) - want_act).abs().max().item() < 1e-12
+    model = UNet(encoder=(4, 6, 8, 8, 8), decoder=(8, 8, 6, 4)).double().eval()
+    x = torch.rand(1, 3, 64, 96, dtype=torch.float64)
+    with torch.no_grad():
+        assert (PolyphaseUNet(model)(x) - model(x)).abs().max().item() < 1e-12
+        fp32 = load_model(os.path.join(MODELS, "flawed.pt"))
+        x = torch.rand(1, 3, 256, 256)
+        assert (PolyphaseUNet(fp32)(x) - fp32(x)).abs().max().item() < 1e-3
+    with pytest.raises(ValueError, match="3 x 3 kernel"):
+        phase_kernel(torch.zeros(3, 3, 5, 5))
+    with pytest.raises(ValueError, match="polyphase form needs"):
+        UpConv(torch.nn.Conv2d(3, 3, 3, stride=2, padding=1))
+
+
+def test_agreement_compares_arms_in_their_own_processes(tiny_dataset, tmp_path):
+    """asg_perception.agreement (the label table of docs/benchmarks.md): every pair of arms, each
+    labelled in its own process with its ISA cap; equal numerics agree to the pixel."""
+    import json
+    import subprocess
+    import sys
+
+    out = tmp_path / "agree.json"
+    model = os.path.join(MODELS, "flawed_lite.pt")
+    cmd = [sys.executable, "-m", "asg_perception.agreement", model, "--data", tiny_dataset, "--frames", "4"]
+    arms = ["--arm", "channels_last", "--arm", "eager:native", "--arm", "polyphase:AVX2"]
+    r = subprocess.run(cmd + arms + ["--json", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    table = json.load(open(out))
+    assert [(p["a"], p["b"]) for p in table["pairs"]] == [
+        ("channels_last:native", "eager:native"),
+        ("channels_last:native", "polyphase:AVX2"),
+        ("eager:native", "polyphase:AVX2"),
+    ]
+    assert table["pairs"][0]["pixels_differ"] == 0 and table["pairs"][0]["pixels"] == 4 * 256 * 256
+    assert " isa=AVX2 " in table["numerics"]["polyphase:AVX2"]
+    bad = subprocess.run(cmd + ["--arm", "polyphase:AVX9"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "ISA 'AVX9'" in bad.stderr
 
 
 def test_bf16_is_deterministic_and_keeps_the_labels_and_the_flaw(test_dataset):

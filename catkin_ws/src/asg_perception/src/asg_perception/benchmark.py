@@ -1,7 +1,10 @@
 """Inference benchmark: ms per 256 x 256 frame for each backend on one core, and whether each
 backend's labels equal the plain eager model's on a dataset.
 
-    python3 -m asg_perception.benchmark MODEL.pt --data DIR [--frames 50] [--repeats 5]
+    python3 -m asg_perception.benchmark MODEL.pt --data DIR [--frames 50] [--repeats 5] [--layers]
+
+--layers adds each convolution of the channels_last model alone: ms, MFLOP and GFLOP/s (issue #53:
+the 3-class head at full resolution is a third of the convolution time for a tenth of the FLOP).
 """
 
 import argparse
@@ -21,6 +24,7 @@ def main(argv=None):
     p.add_argument("--frames", type=int, default=50)
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--layers", action="store_true", help="also time each convolution alone")
     a = p.parse_args(argv)
     try:
         frames = load_frames(a.data, a.frames)
@@ -59,7 +63,44 @@ def main(argv=None):
             f"(runs {', '.join(f'{t:.2f}' for t in times[backend])}); labels equal to eager on "
             f"{same}/{len(frames)} frames, {differ} pixels differ ({100 * share:.3f} % agree)"
         )
+    if a.layers:
+        layer_table(segs["channels_last"], frames.rgb[0], a.repeats)
     return 0
+
+
+def layer_table(seg: Segmenter, rgb, repeats: int) -> None:
+    """Each convolution of `seg`'s model run alone on its input of one frame: median ms of `repeats`
+    passes of 20 calls, multiply-adds x 2 [MFLOP], and the rate [GFLOP/s]."""
+    import torch
+
+    inputs = {}
+    hooks = [
+        m.register_forward_hook(lambda m, i, o, name=name: inputs.setdefault(name, (m, i[0])))
+        for name, m in seg.model.named_modules()
+        if isinstance(m, torch.nn.Conv2d)
+    ]
+    seg(rgb)
+    for h in hooks:
+        h.remove()
+    total = 0.0
+    print("  each convolution alone (channels_last):")
+    with torch.no_grad():
+        for name, (conv, x) in inputs.items():
+            ts = []
+            for _ in range(repeats):
+                t0 = time.perf_counter()
+                for _ in range(20):
+                    conv(x)
+                ts.append((time.perf_counter() - t0) / 20 * 1000)
+            ms = statistics.median(ts)
+            total += ms
+            out_px = x.shape[2] * x.shape[3] / (conv.stride[0] * conv.stride[1])
+            mflop = 2 * out_px * conv.in_channels * conv.out_channels * 9 / 1e6
+            print(
+                f"  {name:>8} {x.shape[1]:4d} -> {conv.out_channels:4d} ch at {x.shape[3]}x{x.shape[2]}: "
+                f"{ms:6.2f} ms, {mflop:6.0f} MFLOP, {mflop / ms:6.1f} GFLOP/s"
+            )
+    print(f"  all convolutions: {total:.2f} ms")
 
 
 if __name__ == "__main__":
