@@ -321,3 +321,31 @@ def test_several_dataset_folders_load_as_one_set(tiny_dataset, tmp_path):
         load_sets(",")
     with pytest.raises(DatasetError, match="no manifest.csv"):
         load_sets(f"{tiny_dataset},{tmp_path}")
+
+
+def test_inference_in_another_thread_runs_the_threads_it_records():
+    """Issue #53: the segmenter node infers in rospy's callback thread. OpenMP's thread count is
+    per thread, and a fresh thread starts at one a core: before the fix it forked 2-thread teams
+    there, whose spare thread spun (a third of a core per segmenter in a campaign) and `threads=1`
+    was recorded for what ran on two."""
+    import ctypes
+    import threading
+
+    try:
+        gomp = ctypes.CDLL("libgomp.so.1")
+    except OSError:
+        pytest.skip("torch here does not use libgomp")
+    seg = Segmenter(os.path.join(MODELS, "flawed_lite.pt"), "polyphase", threads=1)
+    seen = {}
+
+    def infer():
+        seen["before"] = gomp.omp_get_max_threads()
+        seg(np.zeros((256, 256, 3), np.uint8))
+        seen["after"] = gomp.omp_get_max_threads()
+
+    t = threading.Thread(target=infer)
+    t.start()
+    t.join()
+    assert seen["after"] == 1, seen
+    if os.cpu_count() > 1:
+        assert seen["before"] > 1  # what the fix is for: a fresh thread's own setting

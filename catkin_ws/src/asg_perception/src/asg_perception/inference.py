@@ -19,6 +19,8 @@ the tests):
   against 1,743 Exp. 1 scenarios an hour on an AVX512-BF16 EPYC.
 """
 
+import threading
+
 import numpy as np
 import torch
 
@@ -38,6 +40,7 @@ class Segmenter:
         if height % 32 or width % 32:
             raise ValueError(f"frame size {width}x{height}: both must be multiples of 32")
         torch.set_num_threads(threads)
+        self.threads, self._thread = threads, threading.get_ident()
         self.backend = backend
         self.shape = (height, width)
         model = load_model(model_path)
@@ -69,6 +72,13 @@ class Segmenter:
                 f"frame is {rgb.shape[1]}x{rgb.shape[0]}, the segmenter was made "
                 f"for {self.shape[1]}x{self.shape[0]}"
             )
+        if threading.get_ident() != self._thread:
+            # OpenMP's thread count is per thread: one that never set it (the segmenter node's
+            # callback thread) forks teams of every core, whose spare threads spin on a shared CPU
+            # (issue #53: a third of a core per segmenter in a campaign), and the recorded
+            # `threads` would not be what ran.
+            torch.set_num_threads(self.threads)
+            self._thread = threading.get_ident()
         with torch.no_grad(), torch.autocast("cpu", dtype=torch.bfloat16, enabled=self.bf16):
             logits = self.model(self._input(rgb))
         return logits[0].argmax(0).to(torch.uint8).numpy()
