@@ -349,3 +349,20 @@ def test_inference_in_another_thread_runs_the_threads_it_records():
     assert seen["after"] == 1, seen
     if os.cpu_count() > 1:
         assert seen["before"] > 1  # what the fix is for: a fresh thread's own setting
+
+
+def test_a_segmenter_caps_openblas_at_its_threads():
+    """Issue #53: OpenBLAS's server threads busy-wait after each product; the polyphase head's
+    convolution goes through it, so a segmenter caps it at its own thread count."""
+    import ctypes
+
+    from asg_perception.inference import cap_openblas
+
+    try:
+        blas = ctypes.CDLL("libopenblas.so.0")
+    except OSError:
+        assert not cap_openblas(1) or True  # another BLAS: nothing to cap
+        pytest.skip("no OpenBLAS here")
+    blas.openblas_set_num_threads(2)
+    Segmenter(os.path.join(MODELS, "flawed_lite.pt"), "polyphase", threads=1)
+    assert blas.openblas_get_num_threads() == 1

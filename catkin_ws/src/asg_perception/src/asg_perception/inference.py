@@ -19,6 +19,7 @@ the tests):
   against 1,743 Exp. 1 scenarios an hour on an AVX512-BF16 EPYC.
 """
 
+import ctypes
 import threading
 
 import numpy as np
@@ -27,6 +28,22 @@ import torch
 from .numerics import BACKENDS, DEFAULT_BACKEND  # noqa: F401 (the backends' one home; re-exported)
 from .polyphase import PolyphaseUNet
 from .train import load_model
+
+
+def cap_openblas(threads: int) -> bool:
+    """Caps OpenBLAS's own thread pool at `threads`; True if an OpenBLAS was found. torch runs
+    some convolutions as im2col + sgemm in the BLAS (the polyphase head's 2x2 one), and the pthread
+    OpenBLAS of Debian keeps one server thread a core that busy-waits on sched_yield after every
+    call: with frames arriving in gaps it burnt 21.5 ms of CPU a frame beside 11.5 ms of inference
+    (issue #53). OpenBLAS splits a product over its output blocks, so the sums do not change."""
+    found = False
+    for name in ("libopenblas.so.0", "libblas.so.3"):
+        try:
+            getattr(ctypes.CDLL(name), "openblas_set_num_threads")(int(threads))
+            found = True
+        except (OSError, AttributeError):  # not installed, or a BLAS that is not OpenBLAS
+            pass
+    return found
 
 
 class Segmenter:
@@ -40,6 +57,7 @@ class Segmenter:
         if height % 32 or width % 32:
             raise ValueError(f"frame size {width}x{height}: both must be multiples of 32")
         torch.set_num_threads(threads)
+        cap_openblas(threads)
         self.threads, self._thread = threads, threading.get_ident()
         self.backend = backend
         self.shape = (height, width)
