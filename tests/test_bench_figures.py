@@ -92,3 +92,22 @@ def test_the_numerics_bench_says_what_its_reports_say():
     # the fast side's campaigns agree with each other (bf16 is deterministic on one ISA)
     fast_digests = {open(p[: -len(".json")] + ".digest").read().strip() for p in fast_paths}
     assert len(fast_digests) == 1 and next(iter(fast_digests)).startswith("120 "), fast_digests
+
+
+def test_the_polyphase_bench_and_label_table_in_the_docs_are_their_exports():
+    # issue #53: channels_last against polyphase, one tree, one pair before and one after the
+    # thread-pool fixes; every campaign found the same 120 results
+    bench = os.path.join(REPO, "results", "bench")
+    pair = [json.load(open(os.path.join(bench, f"r5-polyphase-{side}-1.json"))) for side in ("before", "after")]
+    doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
+    c = before_after(pair[:1], pair[1:])
+    assert before_after_sentence(c) in doc
+    assert c["rate_ratio"] > 1.0 and c["cpu_ratio"] < 1.0  # what the section says: faster, less CPU
+    digests = {open(p).read().strip() for p in glob.glob(os.path.join(bench, "r5-polyphase-*.digest"))}
+    assert len(glob.glob(os.path.join(bench, "r5-polyphase-*.digest"))) == 4
+    assert len(digests) == 1 and next(iter(digests)).startswith("120 "), digests
+    table = json.load(open(os.path.join(REPO, "results", "numerics", "polyphase_agreement.json")))
+    assert len(table["pairs"]) == 6
+    for p in table["pairs"]:
+        row = f"| `{p['a']}` | `{p['b']}` | {p['frames_differ']} of {p['frames']:,} | {p['pixels_differ']} of {p['pixels']:,} |"
+        assert row in doc, row
