@@ -366,3 +366,27 @@ def test_a_segmenter_caps_openblas_at_its_threads():
     blas.openblas_set_num_threads(2)
     Segmenter(os.path.join(MODELS, "flawed_lite.pt"), "polyphase", threads=1)
     assert blas.openblas_get_num_threads() == 1
+
+
+def test_the_benchmark_times_every_backend_and_each_convolution(tiny_dataset, capsys):
+    from asg_perception.benchmark import main
+
+    assert (
+        main(
+            [
+                os.path.join(MODELS, "flawed_lite.pt"),
+                "--data",
+                tiny_dataset,
+                "--frames",
+                "2",
+                "--repeats",
+                "1",
+                "--layers",
+            ]
+        )
+        == 0
+    )
+    out = capsys.readouterr().out
+    for backend in BACKENDS:
+        assert f"{backend:>14}: " in out, backend
+    assert "     head   16 ->    3 ch at 256x256:" in out and "all convolutions:" in out

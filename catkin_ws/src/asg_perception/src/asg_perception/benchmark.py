@@ -74,10 +74,15 @@ def layer_table(seg: Segmenter, rgb, repeats: int) -> None:
     import torch
 
     inputs = {}
+
+    def keep(name):
+        def hook(module, args, output):  # returns None: the module's output stands
+            inputs.setdefault(name, (module, args[0]))
+
+        return hook
+
     hooks = [
-        m.register_forward_hook(lambda m, i, o, name=name: inputs.setdefault(name, (m, i[0])))
-        for name, m in seg.model.named_modules()
-        if isinstance(m, torch.nn.Conv2d)
+        m.register_forward_hook(keep(name)) for name, m in seg.model.named_modules() if isinstance(m, torch.nn.Conv2d)
     ]
     seg(rgb)
     for h in hooks:
