@@ -356,12 +356,9 @@ def test_a_segmenter_caps_openblas_at_its_threads():
     convolution goes through it, so a segmenter caps it at its own thread count."""
     import ctypes
 
-    from asg_perception.inference import cap_openblas
-
     try:
         blas = ctypes.CDLL("libopenblas.so.0")
     except OSError:
-        assert not cap_openblas(1) or True  # another BLAS: nothing to cap
         pytest.skip("no OpenBLAS here")
     blas.openblas_set_num_threads(2)
     Segmenter(os.path.join(MODELS, "flawed_lite.pt"), "polyphase", threads=1)
