@@ -98,6 +98,8 @@ class Segmenter:
             torch.set_num_threads(self.threads)
             self._thread = threading.get_ident()
         with torch.no_grad(), torch.autocast("cpu", dtype=torch.bfloat16, enabled=self.bf16):
+            if isinstance(self.model, PolyphaseUNet):  # labels from the head's phases, no logit image
+                return self.model.labels(self._input(rgb))[0].numpy()
             logits = self.model(self._input(rgb))
         return logits[0].argmax(0).to(torch.uint8).numpy()
 
