@@ -51,12 +51,21 @@ def test_identity_and_what_can_replay_what():
     why = n.can_reproduce(here.replace("threads=1", "threads=2"), here)
     assert "torch threads: recorded 2, here 1" in why
     assert "backend eager was recorded" in n.can_reproduce(here.replace("bf16", "eager", 1), here)
+    # issue #53: channels_last and polyphase replay each other's runs (one fp32 function, measured),
+    # across the portable ISAs too; not across threads, and not with eager or bf16
+    cl, pp = "channels_last isa=AVX2 threads=1 torch=1.13.0a0", "polyphase isa=AVX512_CORE threads=1 torch=1.13.0a0"
+    assert n.can_reproduce(cl, pp) is None and n.can_reproduce(pp, cl) is None
+    assert "torch threads: recorded 2, here 1" in n.can_reproduce(cl.replace("threads=1", "threads=2"), pp)
+    assert "backend eager was recorded" in n.can_reproduce(cl.replace("channels_last", "eager"), pp)
+    assert "backend bf16 was recorded" in n.can_reproduce(pp.replace("polyphase", "bf16"), pp)
+    assert "oneDNN kernels: recorded SSE41" in n.can_reproduce(cl.replace("AVX2", "SSE41"), pp)
 
 
 def test_the_default_is_fp32_and_bf16_is_refused_where_it_would_be_emulated():
-    # issue #53: one stack identity on every CPU: the default is fp32 channels_last, so the
-    # end-to-end tests run it on every CPU class
-    assert n.DEFAULT_BACKEND == "channels_last" and n.DEFAULT_BACKEND not in n.BF16_BACKENDS
+    # issue #53: one stack identity on every CPU: the default is fp32 (polyphase, the same function
+    # as channels_last), so the end-to-end tests run it on every CPU class
+    assert n.DEFAULT_BACKEND == "polyphase" and n.DEFAULT_BACKEND not in n.BF16_BACKENDS
+    assert n.DEFAULT_BACKEND in n.FP32_PORTABLE_BACKENDS
     avx2 = frozenset({"sse4_1", "avx", "avx2", "fma"})
     for flags in (EPYC, XEON_AMX, avx2):
         assert n.test_backend(flags) == n.DEFAULT_BACKEND

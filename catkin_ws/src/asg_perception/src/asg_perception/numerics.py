@@ -35,11 +35,17 @@ ENV = ("ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA")
 #: one home of the default, read by the segmenter node (an empty ~backend), the launch files (an
 #: empty unet_backend), asg_agent's experiments (a file without unet_backend) and the tests. Here,
 #: in a module without torch, so that asg_agent reads it without loading the U-Net's code.
-#: Since issue #53 the default is fp32 channels_last: its closed-loop runs are bit-identical on
-#: every CPU class the project has met (docs/benchmarks.md, "CPU classes"), so one stored reference
-#: set serves them all; bf16 is a fast mode a user asks for, on CPUs that run it natively.
+#: Since issue #53 the default is fp32: first channels_last, then polyphase (channels_last with the
+#: decoder in polyphase form, the same function, 2.2x faster a frame). Their closed-loop runs are
+#: bit-identical to each other and on every CPU class the project has met (docs/benchmarks.md,
+#: "CPU classes" and "The polyphase decoder"), so one stored reference set serves them all; bf16
+#: is a fast mode a user asks for, on CPUs that run it natively.
 BACKENDS = ("eager", "channels_last", "frozen", "bf16", "polyphase")
-DEFAULT_BACKEND = "channels_last"
+DEFAULT_BACKEND = "polyphase"
+#: fp32 backends whose closed-loop runs replay each other's bit for bit (measured: the stored
+#: reference runs and seeded 120-scenario campaigns, docs/benchmarks.md "The polyphase decoder"):
+#: a run recorded on one replays on the other, as across FP32_PORTABLE_ISAS
+FP32_PORTABLE_BACKENDS = ("channels_last", "polyphase")
 #: backends whose convolutions run in bf16 (the others run fp32, whose kernels VNNI, BF16 and AMX
 #: do not change: their numerics are those of FP32_TOP on any CPU at or above it)
 BF16_BACKENDS = ("bf16",)
@@ -124,9 +130,9 @@ def refuse_emulated(backend: str, flags: Optional[Iterable[str]] = None) -> Opti
         return None
     return (
         f"U-Net backend {backend}: this CPU has no native bf16 (none of the flags {', '.join(NATIVE_BF16)}), so "
-        f"oneDNN would emulate it: {EMULATED_BF16_FRAME_S:.2f} s a frame against {FP32_FRAME_S:.3f} s for the "
-        f"default {DEFAULT_BACKEND} (measured on an AVX2-only EPYC), about "
-        f"{EMULATED_BF16_FRAME_S / FP32_FRAME_S:.0f}x slower; run the default (leave unet_backend empty)"
+        f"oneDNN would emulate it: {EMULATED_BF16_FRAME_S:.2f} s a frame against {FP32_FRAME_S:.3f} s for fp32 "
+        f"channels_last (measured on an AVX2-only EPYC), about {EMULATED_BF16_FRAME_S / FP32_FRAME_S:.0f}x "
+        f"slower; run the default, fp32 {DEFAULT_BACKEND} (leave unet_backend empty)"
     )
 
 
@@ -168,14 +174,15 @@ FP32_PORTABLE_ISAS = ("AVX2", "AVX512_CORE")
 def can_reproduce(recorded: str, here: str) -> Optional[str]:
     """None when a run whose segmenter numerics were `recorded` replays bit for bit where they are
     `here`; otherwise the reason, in words. An empty `recorded` (runs from before issue #36) is
-    taken as reproducible. fp32 backends ignore the ISA between FP32_PORTABLE_ISAS (measured
-    portable); bf16 ones need the recorded ISA."""
+    taken as reproducible. fp32 backends ignore the ISA between FP32_PORTABLE_ISAS, and the
+    backend between FP32_PORTABLE_BACKENDS (measured portable); bf16 ones need the recorded ISA."""
     if not recorded or recorded == here:
         return None
     want = dict(kv.split("=", 1) for kv in recorded.split()[1:] if "=" in kv)
     got = dict(kv.split("=", 1) for kv in here.split()[1:] if "=" in kv)
     why = []
-    if recorded.split()[0] != here.split()[0]:
+    same_function = {recorded.split()[0], here.split()[0]} <= set(FP32_PORTABLE_BACKENDS)
+    if recorded.split()[0] != here.split()[0] and not same_function:
         why.append(f"backend {recorded.split()[0]} was recorded, this segmenter runs {here.split()[0]}")
     keys = (("isa", "oneDNN kernels"), ("threads", "torch threads"), ("torch", "torch"))
     if (
@@ -187,7 +194,7 @@ def can_reproduce(recorded: str, here: str) -> Optional[str]:
     for key, what in keys:
         if want.get(key) != got.get(key):
             why.append(f"{what}: recorded {want.get(key)}, here {got.get(key)}")
-    if not why and len(keys) == 2:  # fp32 across portable ISAs, all else equal
+    if not why and (len(keys) == 2 or same_function):  # fp32 across portable ISAs or backends, all else equal
         return None
     return "; ".join(why) or f"recorded {recorded!r}, here {here!r}"
 

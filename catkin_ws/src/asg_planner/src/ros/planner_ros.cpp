@@ -99,7 +99,7 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
       error_pub_.publish(last_error_);
       return;
     }
-    ack_pub_.publish(ack);
+    if (inputsConnected()) ack_pub_.publish(ack);
     return;
   }
   auto reset_time = clock_.time(kReset);
@@ -121,7 +121,25 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
     grid_pub_.publish(vehicleGridMarker(params_.astar.vehicle_spacing, task.landscape_size));
     publishViz(ros::Time());
   }
-  ack_pub_.publish(ack);
+  if (inputsConnected()) ack_pub_.publish(ack);  // else the worker announces again in 0.5 s
+}
+
+// A planner subscribes before the TCP links to its publishers exist, and a just (re)started
+// segmenter acks once *a* listener of its labels is connected, which may be the worker's: labels
+// sent before the planner's link is up are lost and the run ends on the command timeout (seen
+// once on a slow segmenter start, issue #53). So the planner acks only when every input it steers
+// by has a publisher, or, like the segmenter, after ~3 s of announcements (6 at 0.5 s), so that a
+// stack lacking one still runs; after that it never waits again.
+bool PlannerROS::inputsConnected() {
+  for (const ros::Subscriber* s : {&depth_sub_, &labels_sub_, &odom_sub_, &tick_sub_}) {
+    if (ack_anyway_ || s->getNumPublishers() > 0) continue;
+    if (++deferred_ <= 6) return false;
+    ROS_WARN("planner: no publisher on %s after %d announcements: acking anyway from now on",
+             s->getTopic().c_str(), deferred_ - 1);
+    ack_anyway_ = true;
+  }
+  deferred_ = 0;
+  return true;
 }
 
 // Normal after a run ends early (late frames of the last run): counted in PlannerState, not a warning.

@@ -43,6 +43,8 @@ class PlannerROS {
  private:
   void readParameters();
   void onScenario(const asg_msgs::ScenarioInfoConstPtr& msg);
+  /// Whether depth, labels, odometry and ticks each have a connected publisher (see onScenario).
+  bool inputsConnected();
   void onDepth(const sensor_msgs::ImageConstPtr& msg);
   void onLabels(const sensor_msgs::ImageConstPtr& msg);
   void onInfo(const sensor_msgs::CameraInfoConstPtr& msg);
@@ -71,6 +73,8 @@ class PlannerROS {
   Intrinsics K_;
   ros::Time base_;  // stamp of simulated time 0 in the current run
   asg_msgs::StackError last_error_;
+  int deferred_ = 0;         // announcements not acked because an input had no publisher yet
+  bool ack_anyway_ = false;  // an input stayed unconnected for ~3 s once: never defer again
   // Where the planner's time goes (docs/benchmarks.md).
   enum Stage { kReset, kVotes, kPlan, kPublish };
   asg_lockstep::StageClock clock_{{"reset", "votes", "plan", "publish"}};
