@@ -15,9 +15,9 @@ from sensor_msgs.msg import Image
 import stack_util as su
 
 SCENES = 6
-# Issue #13: runs that the optimised pipeline must repeat bit for bit, one file per U-Net backend
-# (stack_util.reference_path; this test checks the default backend's, reference_runs.test the
-# channels_last one). Rewrite it (only when a change is meant to alter behaviour, and say so in
+# Issue #13: runs that the optimised pipeline must repeat bit for bit, one file per U-Net numerics
+# (stack_util.reference_path: one for the fp32 backends, issue #53; this test replays it through the
+# default, polyphase, reference_runs.test through channels_last). Rewrite it (only when a change is meant to alter behaviour, and say so in
 # the commit) with
 #   ASG_WRITE_REFERENCE=1 rostest asg_tests sound_runs.test
 

@@ -98,16 +98,19 @@ REFERENCE_DIR = os.path.join(os.path.dirname(os.path.realpath(__file__)), "refer
 
 def reference_path(worker_ns, write=False):
     """The stored reference runs for the U-Net backend `worker_ns` runs: tests/reference/
-    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once). fp32 backends have
-    that one file on every CPU (issue #53: their runs are bit-identical across the CPU classes of
-    docs/benchmarks.md); for bf16, where the segmenter's kernels here are not the ones that file was
-    recorded with (another CPU: issue #36), exp1_flawed_BACKEND.ISA.json recorded on such a CPU,
-    when there is one (or when writing)."""
+    exp1_flawed_BACKEND.json (issue #24: one file per backend, recorded once). The fp32 backends
+    that replay each other bit for bit (numerics.FP32_PORTABLE_BACKENDS: channels_last and the
+    default, polyphase) share one, exp1_flawed_fp32.json, on every CPU (issue #53: their runs are
+    bit-identical across the CPU classes of docs/benchmarks.md); for bf16, where the segmenter's
+    kernels here are not the ones that file was recorded with (another CPU: issue #36),
+    exp1_flawed_BACKEND.ISA.json recorded on such a CPU, when there is one (or when writing)."""
     import json
 
-    from asg_perception.numerics import BF16_BACKENDS
+    from asg_perception.numerics import BF16_BACKENDS, FP32_PORTABLE_BACKENDS
 
     backend = rospy.get_param(f"/{worker_ns}/segmenter/backend")
+    if backend in FP32_PORTABLE_BACKENDS:
+        backend = "fp32"
     base = os.path.join(REFERENCE_DIR, f"exp1_flawed_{backend}.json")
     here = wait_for_numerics(f"/{worker_ns}")
     if backend not in BF16_BACKENDS:
@@ -212,9 +215,10 @@ CPU_CLASSES = os.path.join(REPO, "results", "numerics", "cpu_classes.json")
 
 
 def record_cpu_class(path, here, note=""):
-    """Adds (or renews) this CPU's line in results/numerics/cpu_classes.json (issue #53): the
-    CPU's model name, its best ISA, the segmenter's numerics here, and the stored reference's
-    digests that replayed on it (check_reference passed just before)."""
+    """Adds (or renews) this CPU's line for these numerics in results/numerics/cpu_classes.json
+    (issue #53): the CPU's model name, its best ISA, the segmenter's numerics here (backend and
+    effective ISA: one CPU may have a line for each), and the stored reference's digests that
+    replayed on it (check_reference passed just before)."""
     import datetime
     import json
 
@@ -239,7 +243,8 @@ def record_cpu_class(path, here, note=""):
     if os.path.isfile(CPU_CLASSES):
         with open(CPU_CLASSES) as f:
             table = json.load(f)["classes"]
-    table = [e for e in table if (e["cpu"], e["best_isa"]) != (entry["cpu"], entry["best_isa"])] + [entry]
+    key = ("cpu", "best_isa", "numerics")
+    table = [e for e in table if [e[k] for k in key] != [entry[k] for k in key]] + [entry]
     os.makedirs(os.path.dirname(CPU_CLASSES), exist_ok=True)
     with open(CPU_CLASSES, "w") as f:
         json.dump({"about": CPU_CLASSES_ABOUT, "classes": table}, f, indent=1)
@@ -247,9 +252,10 @@ def record_cpu_class(path, here, note=""):
 
 
 CPU_CLASSES_ABOUT = (
-    "CPU classes on which the default numerics' stored reference runs (tests/reference/exp1_flawed_channels_last.json)"
-    " replayed bit for bit (issue #53). Each line is written by `ASG_RECORD_CPU_CLASS=1 rostest asg_tests "
-    "reference_runs.test` after its check passed; tests/test_numerics_classes.py checks every line's digests "
+    "CPU classes on which the fp32 numerics' stored reference runs (tests/reference/exp1_flawed_fp32.json, of "
+    "channels_last and of the default, polyphase) replayed bit for bit (issue #53). Each line is written by "
+    "`ASG_RECORD_CPU_CLASS=1 rostest asg_tests reference_runs.test [unet_backend:=B]` after its check passed, "
+    "one a CPU and numerics; tests/test_numerics_classes.py checks every line's digests "
     "against the stored reference; docs/benchmarks.md lists them."
 )
 

@@ -19,19 +19,21 @@ def load(name):
 
 
 def test_every_cpu_class_replayed_the_one_stored_reference():
-    ref = load(f"tests/reference/exp1_flawed_{n.DEFAULT_BACKEND}.json")
+    ref = load("tests/reference/exp1_flawed_fp32.json")
     digests = [r["digest"] for r in ref["runs"]]
     classes = load("results/numerics/cpu_classes.json")["classes"]
     for c in classes:
-        assert c["reference"] == f"tests/reference/exp1_flawed_{n.DEFAULT_BACKEND}.json", c["cpu"]
+        assert c["reference"] == "tests/reference/exp1_flawed_fp32.json", c["cpu"]
         assert c["digests"] == digests, f"{c['cpu']}: digests differ from the stored reference"
-        assert c["numerics"].split()[0] == n.DEFAULT_BACKEND, c["cpu"]
+        assert c["numerics"].split()[0] in n.FP32_PORTABLE_BACKENDS, c["cpu"]
     assert len({c["best_isa"] for c in classes}) >= 2, "fewer than two CPU classes checked"
-    # one reference file for the default: no per-ISA copies
+    assert n.DEFAULT_BACKEND in n.FP32_PORTABLE_BACKENDS
+    assert [c for c in classes if c["numerics"].split()[0] == n.DEFAULT_BACKEND], "the default never replayed"
+    # one reference file for the fp32 backends: no per-backend or per-ISA copies
     assert not [
         f
         for f in os.listdir(os.path.join(REPO, "tests", "reference"))
-        if f.startswith(f"exp1_flawed_{n.DEFAULT_BACKEND}.") and f != f"exp1_flawed_{n.DEFAULT_BACKEND}.json"
+        if any(f.startswith(f"exp1_flawed_{b}") for b in n.FP32_PORTABLE_BACKENDS + ("fp32.",))
     ]
 
 

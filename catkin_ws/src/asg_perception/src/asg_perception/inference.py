@@ -5,12 +5,15 @@ the tests):
 - ``eager``: the model as trained, NCHW.
 - ``channels_last``: NHWC memory layout, which oneDNN convolutions run without reorders, 2.3x
   faster than eager on one core (docs/benchmarks.md); the default until 2026-11-24 (issue #24)
-  and again since issue #53: bit-identical closed-loop runs on every CPU class checked.
+  and again in issue #53 until ``polyphase`` replaced it: bit-identical closed-loop runs on every
+  CPU class checked.
 - ``frozen``: TorchScript, frozen and optimised for inference (conv/activation fusion), NHWC;
   measured no faster than eager with Debian's torch 1.13, kept for comparison.
 - ``polyphase``: ``channels_last`` with the decoder and head in polyphase form
-  (`asg_perception.polyphase`): the same function, 1.9x faster a frame; fp32, its logits within
-  ~1e-5 of ``channels_last`` (as far as oneDNN's AVX2 and AVX-512 kernels are from each other).
+  (`asg_perception.polyphase`), the labels taken on the head's phases: the same function, about
+  2x faster a frame; fp32, its logits within ~1e-5 of ``channels_last`` (as far as oneDNN's AVX2
+  and AVX-512 kernels are from each other), its closed-loop runs those of ``channels_last`` bit
+  for bit (the one fp32 reference set). The default since issue #53.
 - ``bf16``: ``channels_last`` under torch's CPU autocast to bfloat16 (convolutions in bf16 with
   fp32 accumulation, argmax on the bf16 logits). Not bit-equal to eager: its labels agree on a
   measured share of pixels (docs/benchmarks.md), and it is deterministic run to run. Fast where
