@@ -387,3 +387,10 @@ def test_the_benchmark_times_every_backend_and_each_convolution(tiny_dataset, ca
     for backend in BACKENDS:
         assert f"{backend:>14}: " in out, backend
     assert "     head   16 ->    3 ch at 256x256:" in out and "all convolutions:" in out
+    # --backends: only those, with eager (the labels' reference) and channels_last (the speed's)
+    common = [os.path.join(MODELS, "flawed_lite.pt"), "--data", tiny_dataset, "--frames", "1", "--repeats", "1"]
+    assert main(common + ["--backends", "polyphase"]) == 0
+    out = capsys.readouterr().out
+    assert [b for b in BACKENDS if f"{b:>14}: " in out] == ["eager", "channels_last", "polyphase"]
+    assert main(common + ["--backends", "polyphase,fp16"]) == 2
+    assert "--backends: unknown fp16" in capsys.readouterr().err

@@ -2,6 +2,10 @@
 backend's labels equal the plain eager model's on a dataset.
 
     python3 -m asg_perception.benchmark MODEL.pt --data DIR [--frames 50] [--repeats 5] [--layers]
+        [--backends eager,channels_last,polyphase]
+
+--backends: only these (eager, the labels' reference, and channels_last, the speed's, always run;
+under an ISA pin below AVX512-BF16, leave bf16 out: oneDNN would emulate it, 1.5 s a frame).
 
 --layers adds each convolution of the channels_last model alone: ms, MFLOP and GFLOP/s (issue #53:
 the 3-class head at full resolution is a third of the convolution time for a tenth of the FLOP).
@@ -25,7 +29,14 @@ def main(argv=None):
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--layers", action="store_true", help="also time each convolution alone")
+    p.add_argument("--backends", default=",".join(BACKENDS), help="comma-separated backends to run (default: all)")
     a = p.parse_args(argv)
+    wanted = [b for b in a.backends.split(",") if b]
+    unknown = [b for b in wanted if b not in BACKENDS]
+    if unknown:
+        print(f"error: --backends: unknown {', '.join(unknown)} (known: {', '.join(BACKENDS)})", file=sys.stderr)
+        return 2
+    backends = [b for b in BACKENDS if b in wanted or b in ("eager", "channels_last")]
     try:
         frames = load_frames(a.data, a.frames)
     except DatasetError as e:
@@ -37,7 +48,7 @@ def main(argv=None):
         "taking turns pass by pass (a load on the machine falls on all of them alike)"
     )
     segs, agree = {}, {}
-    for backend in BACKENDS:
+    for backend in backends:
         seg = segs[backend] = Segmenter(a.model, backend, a.threads)
         labels = seg.batch(frames.rgb)
         if reference is None:
@@ -47,7 +58,7 @@ def main(argv=None):
             int((labels != reference).sum()),
             float((labels == reference).mean()),
         )
-    times = {b: [] for b in BACKENDS}
+    times = {b: [] for b in backends}
     for _ in range(a.repeats):
         for backend, seg in segs.items():
             t0 = time.perf_counter()
@@ -55,7 +66,7 @@ def main(argv=None):
                 seg(f)
             times[backend].append((time.perf_counter() - t0) / len(frames) * 1000)
     base = statistics.median(times["channels_last"])
-    for backend in BACKENDS:
+    for backend in backends:
         same, differ, share = agree[backend]
         med = statistics.median(times[backend])
         print(
