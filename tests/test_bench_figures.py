@@ -45,7 +45,7 @@ def test_the_avx2_prediction_is_the_arithmetic_and_the_model_holds_on_a_measured
     shape = [json.load(open(os.path.join(bench, f"r4-three-{k}-w3.json"))) for k in (1, 2, 3)]
     assert len(non_unet) == 6 and all(r["machine"]["cpu"] == "AMD EPYC" for r in non_unet)
     doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
-    for ms in (62, 24):
+    for ms in (62, 24, 22):  # 22: the AVX2 EPYC's 62 ms x polyphase / channels_last pinned to AVX2 (10.00 / 27.99)
         assert predict_sentence(predict(ms, non_unet, shape, 150, 2)) in doc, ms
     # the model against campaigns that ran: each three-stack bench from its own per-process CPU
     said = []
