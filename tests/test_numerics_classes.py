@@ -64,3 +64,19 @@ def test_the_benchmarks_page_lists_every_class_checked():
         assert cells[0] == c["cpu"] and cells[1] == c["best_isa"]
         assert cells[2] == ("yes" if c["native_bf16"] else "no") and cells[3] == f"`{c['numerics']}`"
         assert cells[4].split() == [d[:8] for d in c["digests"]] and cells[5] == c["date"]
+
+
+def test_the_defaults_baselines_are_the_channels_last_rows():
+    """The 300-layout Exp. 1 baselines of the U-Net stacks, run again on the default (polyphase,
+    results/baseline/backend_polyphase/), equal the channels_last rows that docs/baseline.md
+    tabulates in every field: layout, ending, path length, proxy, simulated time."""
+
+    def rows(path):
+        with open(os.path.join(REPO, path)) as f:
+            return {r["layout"]: r for r in map(json.loads, f)}
+
+    for stack in ("flawed", "full"):
+        cl = rows(f"results/baseline/exp1/{stack}.jsonl")
+        pp = rows(f"results/baseline/backend_polyphase/exp1/{stack}.jsonl")
+        assert len(pp) == len(cl) == 300, stack
+        assert pp == cl, stack

@@ -7,9 +7,10 @@
 #   e.g. bash scripts/repro/baseline.sh exp1      (experiments/exp1.yaml)
 # ASG_PLANNER_CONFIG=FILE: another planner configuration. ASG_UNET_BACKEND: the U-Net stacks'
 # inference backend, default the shipped one (asg_perception.numerics.DEFAULT_BACKEND: fp32
-# channels_last, bf16 from issue #24 to #53); channels_last rows are in results/baseline/<exp>/, another
-# backend's in results/baseline/backend_<B>/<exp>/, which share the ground-truth rows of the first (compare
-# with python3 -m asg_agent.cli.baseline compare). ASG_BASELINE_STACKS="flawed": only those stacks
+# polyphase since issue #53; bf16 from issue #24 to #53, channels_last before); channels_last rows
+# are in results/baseline/<exp>/, another backend's in results/baseline/backend_<B>/<exp>/, which
+# share the ground-truth rows of the first (compare with python3 -m asg_agent.cli.baseline
+# compare; polyphase's equal channels_last's, docs/baseline.md "Numerics"). ASG_BASELINE_STACKS="flawed": only those stacks
 # (default "ground_truth flawed full"; the lite pair: "flawed_lite full_lite"; the pair trained
 # with terrain and weather, issue #27: "flawed_tw full_tw"; the depth stack of issue #39, on
 # workers launched with stack:=depth: "depth", N_UNET layouts; the hardened models of issue #40:
