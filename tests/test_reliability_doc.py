@@ -30,3 +30,15 @@ def test_the_last_soak_passed_with_three_stacks_and_every_kind_killed():
     assert all(res["kills"].get(k, 0) >= 1 for k in ("agent", "planner", "scene_worker", "segmenter")), res["kills"]
     # and the report counts what its store holds: every scenario 0..N-1 once
     assert res["scenarios_stored"] == res["scenarios_expected"]
+
+
+def test_the_run_before_is_quoted_from_its_archived_report():
+    """The previous soak (2026-11-28, `channels_last`) stays in the page as its report says."""
+    from asg_analysis.reliability import markdown
+
+    res = json.load(open(os.path.join(REPO, "results", "reliability", "soak_2026-11-28a.json")))
+    assert res["lost"] == 0 and res["duplicates"] == 0 and res["finished"]
+    table_row = [ln for ln in markdown(res).splitlines() if ln.startswith("| ") and ln[2].isdigit()][0]
+    doc = open(DOC).read()
+    section = doc[doc.index("**The run before (2026-11-28") :]
+    assert table_row in section, table_row
