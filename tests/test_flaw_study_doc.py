@@ -104,16 +104,25 @@ def _export(name):
 
 
 def _exact_two_sided_p(a, b):
-    """Mann-Whitney's exact two-sided p by enumerating every split of the pooled values (no ties)."""
+    """Mann-Whitney's exact two-sided p, ties kept: every split of the pooled values into arms of
+    a's and b's sizes, the share whose |U - n1 n2 / 2| reaches the observed (U with half-counted ties)."""
     from itertools import combinations
 
-    pooled = sorted(a + b)
-    rank = {v: i + 1 for i, v in enumerate(pooled)}
-    n, total = len(a), len(pooled)
-    mean = n * (total + 1) / 2.0
-    observed = abs(sum(rank[v] for v in a) - mean)
-    splits = list(combinations(range(1, total + 1), n))
-    return sum(abs(sum(s) - mean) >= observed - 1e-9 for s in splits) / len(splits)
+    pooled = list(a) + list(b)
+    n, half = len(a), len(a) * len(b) / 2.0
+
+    def spread(x, y):
+        return abs(sum((u > v) + 0.5 * (u == v) for u in x for v in y) - half)
+
+    observed = spread(a, b)
+    hits = total = 0
+    for idx in combinations(range(len(pooled)), n):
+        chosen = set(idx)
+        x = [pooled[i] for i in idx]
+        y = [pooled[i] for i in range(len(pooled)) if i not in chosen]
+        hits += spread(x, y) >= observed - 1e-9
+        total += 1
+    return hits / total
 
 
 def test_the_result_block_is_what_the_exports_say():
@@ -163,8 +172,8 @@ def test_the_result_block_is_what_the_exports_say():
         a = per_1000["default"]
         delta = sum((x > y) - (x < y) for x in a for y in v) / (len(a) * len(v))
         assert float(cells[11]) == round(delta, 2), arm
-        if len(set(a + v)) == len(a + v):  # exact without ties, as the table says
-            assert abs(float(cells[10]) - _exact_two_sided_p(a, v)) < 5e-5, arm
+        # issue #67: the exact test, ties included, for every arm
+        assert abs(float(cells[10]) - _exact_two_sided_p(a, v)) < 5e-5, arm
     means = {arm: sum(h) / len(h) for arm, h in per_hour.items() if all(x is not None for x in h)}
     winner = max(means, key=means.get)
     assert f"the seeds): {winner}, " in block

@@ -204,7 +204,7 @@ def test_experiment_action_space_keys_are_checked(tmp_path):
     for body, msg in (
         ("action_space: polar\n", "action_space: 'polar', must be one of absolute, route"),
         ("action_space: route\nroute_lateral_m: -2\n", "route_lateral_m: -2, must be a number in (0, 1000] m"),
-        ("route_lateral_m: 5\n", "route_lateral_m: only with action_space: route"),
+        ("route_lateral_m: 5\n", "route_lateral_m: only with action_space route or route-wide"),
     ):
         f = tmp_path / "e.yaml"
         f.write_text(f"name: e\nscenario: {scen}\n" + body)

@@ -198,10 +198,10 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     # every flaw finding of the default's seeds in one cell of the map
     assert sum(d["mode_counts"].values()) == round(sum(d["per_seed"].values()) * 12 / 1000)
     block = pr.result_markdown(p, res, "images/cov.png")
-    assert block.startswith(pr.RESULT_BEGIN) and block.endswith(pr.RESULT_END)
+    assert block.startswith(pr.markers(p)[2]) and block.endswith(pr.markers(p)[3])
     assert "| default | 2 | 333.3, 250.0 |" in block and "| route-random | 2 | 83.3, 83.3 |" in block
     assert f"Winner (most flaw findings per CPU-hour, mean over the seeds): {best}" in block
-    assert "Target (3x route-random per 1,000 and per CPU-hour" in block
+    assert "Target (3x route-random per 1,000 and 3x per CPU-hour" in block
     # 2 seeds against 2 cannot reach p < 0.01: the answer says so rather than claiming a winner
     assert "Not decided at p < 0.01" in block
     pr.coverage_figure(res, str(tmp_path / "cov.png"))

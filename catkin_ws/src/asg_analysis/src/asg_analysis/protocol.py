@@ -23,6 +23,7 @@ from typing import Dict, List, Optional
 
 import yaml
 
+from asg_agent.paths import REPO
 from asg_agent.scoring import attribution as attr
 
 REQUIRED = ("name", "version", "experiment", "budget", "workers", "attribution", "endpoint", "pilot", "arms", "target")
@@ -108,10 +109,13 @@ def campaigns(p: dict, stage: str, choice: Optional[dict] = None) -> List[dict]:
                     budget=budget,
                 )
                 out.append(dict(c, arm=arm))
-        for band in p["pilot"]["route_bands_m"]:
+        for band in p["pilot"].get("route_bands_m", []):
             for s in p["pilot"]["seeds"]:
                 c = _campaign(p, f"{n}-pilot-band-{band:g}-s{s}", "route-random", s, band=float(band), budget=budget)
                 out.append(dict(c, arm=f"band {band:g} m"))
+        if p["version"] >= 3:  # every arm's first seed before any arm's second: early seeds inform early
+            seeds = list(p["pilot"]["seeds"])
+            out.sort(key=lambda c: seeds.index(c["seed"]))
         return out
     if stage == "pilot":
         for reward in p["pilot"]["rewards"]:
@@ -295,10 +299,23 @@ def choose(p: dict, folder: str) -> dict:
             modes += fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)
         return (float(np.mean([per_seed(r, budget, cls) for r in seeds.values()])), fm.distinct(modes))
 
-    bands = [(score(f"band {b:g} m"), -k, b) for k, b in enumerate(p["pilot"]["route_bands_m"])]
-    best_b = max(bands)
+    def per_hour(arm):
+        """(mean endpoint findings per CPU-hour over the seeds, then score's figures)."""
+        seeds = arms.get(arm, {})
+        names = {c["seed"]: c["name"] for c in cs if c["arm"] == arm}
+        vals = []
+        for s_, rows in seeds.items():
+            st = heads[names[s_]].get("settings") or "{}"
+            h = cpu_hours(json.loads(st) if isinstance(st, str) else st, rows, budget)
+            keep = [r for r in rows if r["job"] < budget]
+            vals.append(sum(r.get("attribution") == cls for r in keep) / h if h else 0.0)
+        return (float(np.mean(vals)) if vals else -1.0,) + score(arm)
+
+    bands = [(score(f"band {b:g} m"), -k, b) for k, b in enumerate(p["pilot"].get("route_bands_m", []))]
+    best_b = max(bands) if bands else None
     if "search" in p["pilot"]:  # version 2: the search arm (method, reward, experiment) and the band
-        search = [(score(arm), -k, arm) for k, arm in enumerate(p["pilot"]["search"])]
+        rule = per_hour if p["pilot"].get("choose_by") == "per_cpu_hour" else score  # version 3: per CPU-hour
+        search = [(rule(arm), -k, arm) for k, arm in enumerate(p["pilot"]["search"])]
         best = max(search)[2]
         a = p["pilot"]["search"][best]
         return {
@@ -306,7 +323,7 @@ def choose(p: dict, folder: str) -> dict:
             "method": a["method"],
             "reward": a.get("reward", "proxy"),
             "experiment": a.get("experiment") or p["experiment"],
-            "band_m": float(best_b[2]),
+            "band_m": float(best_b[2]) if best_b else None,
             "searches": {arm: sc[0] for sc, _, arm in search},
             "bands_m": {f"{b:g}": sc[0] for sc, _, b in bands},
             "deviations": devs,
@@ -377,6 +394,7 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
     ref = next((r for r in rows if r["arm"] == t["ratio_over"]), None)
     ref_hour = next((r for r in rows_hour if r["arm"] == t["ratio_over"]), None)
     met = None
+    ratio_hour = t.get("ratio_per_cpu_hour", t["ratio"])  # version 3 sets its own per-CPU-hour ratio
     if ref is not None and "default" in table:
         met = bool(
             ref["ratio"] >= t["ratio"]
@@ -384,7 +402,7 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
             and table["default"]["distinct_modes"] >= t["distinct_modes"]
             and (
                 not t.get("per_cpu_hour")
-                or (ref_hour is not None and ref_hour["ratio"] >= t["ratio"] and ref_hour["p"] < t["p"])
+                or (ref_hour is not None and ref_hour["ratio"] >= ratio_hour and ref_hour["p"] < t["p"])
             )
         )
     complete = sum(t["complete"] for t in table.values())
@@ -413,8 +431,20 @@ def train_args(args: List[str]) -> List[str]:
     return [a for a in args if a.split(":=", 1)[0] not in ("seed", "workers", "attribution")]
 
 
-BEGIN, END = "<!-- flaw study status: begin (generated) -->", "<!-- flaw study status: end -->"
-RESULT_BEGIN, RESULT_END = "<!-- flaw study result: begin (generated) -->", "<!-- flaw study result: end -->"
+def markers(p: dict):
+    """(status begin, status end, result begin, result end) of a protocol's generated blocks in
+    its page: "<!-- NAME study status: begin (generated) -->" and so on, NAME the protocol's name."""
+    n = p["name"]
+    return (
+        f"<!-- {n} study status: begin (generated) -->",
+        f"<!-- {n} study status: end -->",
+        f"<!-- {n} study result: begin (generated) -->",
+        f"<!-- {n} study result: end -->",
+    )
+
+
+#: the markers of round 5's study (protocol name "flaw")
+BEGIN, END, RESULT_BEGIN, RESULT_END = markers({"name": "flaw"})
 
 
 def _f(x: Optional[float], nd: int = 1) -> str:
@@ -451,13 +481,15 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
     findings, coverage; the default against each arm: ratio, two-sided Mann-Whitney p and Cliff's
     delta on both endpoints), the target, the winner and a plain answer. Until every confirmatory
     campaign is complete it says how many are, and compares nothing (the protocol's rule)."""
-    lines = [RESULT_BEGIN]
+    lines = [markers(p)[2]]
+    if p.get("round"):
+        lines += [f"*Round {p['round']}'s study (protocol version {p['version']}, `{os.path.relpath(os.path.abspath(p['_path']), REPO)}`).*", ""]
     if res["complete"] < res["campaigns"]:
         lines += [
             f"**Not answered yet: {res['complete']} of the {res['campaigns']} confirmatory campaigns are "
             "complete.** The protocol compares no arm before all of them are in; this block is "
             "rewritten by `protocol analyse --doc` when they are.",
-            RESULT_END,
+            markers(p)[3],
         ]
         return "\n".join(lines)
     arms, t = res["arms"], p["target"]
@@ -494,11 +526,12 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
     lines += [
         "",
         f"Per seed: the first {p['budget']} scenarios of each campaign; intervals: bootstrap over the seeds "
-        "(10,000 resamples, seed 0); p: two-sided Mann-Whitney U of the default's seeds against the arm's "
-        "(exact without ties); Cliff's delta > 0: the default's seeds rank higher.",
+        "(10,000 resamples, seed 0); p: two-sided Mann-Whitney U of the default's seeds against the arm's, "
+        "exact with ties (a permutation test over every split of the seeds, asg_analysis.stats); "
+        "Cliff's delta > 0: the default's seeds rank higher.",
         "",
         f"**Target ({t['ratio']:g}x {t['ratio_over']} per 1,000"
-        + (" and per CPU-hour" if t.get("per_cpu_hour") else "")
+        + (f" and {t.get('ratio_per_cpu_hour', t['ratio']):g}x per CPU-hour" if t.get("per_cpu_hour") else "")
         + f", p < {t['p']:g}, >= {t['distinct_modes']} distinct flaw modes): "
         + ("met" if res["target_met"] else "missed")
         + f".** The default against {t['ratio_over']}: {_f(ref['ratio'], 2)}x per 1,000 "
@@ -532,7 +565,7 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
             "",
             f"![flaw findings as each arm goes, and how close to the route it puts obstacles]({budget_figure})",
         ]
-    lines.append(RESULT_END)
+    lines.append(markers(p)[3])
     return "\n".join(lines)
 
 
@@ -624,9 +657,9 @@ def status(p: dict, folder: str) -> dict:
     return out
 
 
-def status_markdown(st: dict) -> str:
+def status_markdown(st: dict, name: str = "flaw") -> str:
     lines = [
-        BEGIN,
+        markers({"name": name})[0],
         "| campaign | arm | seed | scenarios | flaw per 1,000 (95 % exact) | flaw | model | stack | distinct flaw modes "
         "| CPU-hours | flaw per CPU-hour | CPU | deviations |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -652,7 +685,7 @@ def status_markdown(st: dict) -> str:
             "the protocol's amendment 1, or with a run the plan did not measure; the others count the "
             "CPU time measured (protocol.measured_cpu_hours).",
         ]
-    lines.append(END)
+    lines.append(markers({"name": name})[1])
     return "\n".join(lines)
 
 
@@ -694,13 +727,13 @@ def main(argv=None) -> int:
             sys.stdout.write(plan_lines(campaigns(p, args.stage, choice)))
             return 0
         if args.cmd == "status":
-            block = status_markdown(status(p, args.folder))
+            block = status_markdown(status(p, args.folder), p["name"])
             if not args.doc:
                 print(block)
                 return 0
             from asg_analysis.seed_tables import rewrite_block
 
-            return rewrite_block(args.doc, BEGIN, END, block, args.check, "protocol status")
+            return rewrite_block(args.doc, *markers(p)[:2], block, args.check, "protocol status")
         if args.cmd == "choose":
             ch = choose(p, args.folder)
             out = os.path.join(args.folder, "pilot_choice.json")
@@ -710,7 +743,8 @@ def main(argv=None) -> int:
             for d in ch["deviations"]:
                 print(f"deviation: {d}")
             what = f"search {ch['search']}, " if "search" in ch else ""
-            print(f"pilot choice: {what}reward {ch['reward']}, route band {ch['band_m']:g} m ({out})")
+            band = f", route band {ch['band_m']:g} m" if ch.get("band_m") is not None else ""
+            print(f"pilot choice: {what}reward {ch['reward']}{band} ({out})")
             return 0
         with open(os.path.join(args.folder, "pilot_choice.json")) as f:
             choice = json.load(f)
@@ -771,7 +805,7 @@ def report_analysis(p: dict, args, res: dict) -> int:
             budget,
             os.path.relpath(budget_png, os.path.dirname(os.path.abspath(args.doc))) if complete else "",
         )
-        return rewrite_block(args.doc, RESULT_BEGIN, RESULT_END, block, args.check, "protocol analyse")
+        return rewrite_block(args.doc, *markers(p)[2:], block, args.check, "protocol analyse")
     return 0
 
 

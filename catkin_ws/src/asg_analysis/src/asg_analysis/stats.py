@@ -4,10 +4,13 @@ effect size, computed here and nowhere by hand.
 
 - `bootstrap_ci`: percentile interval of a statistic over resamples of the seeds (seeded, so a
   table is reproducible);
-- `mann_whitney`: SciPy's two-sided Mann-Whitney U test (exact for up to 20 seeds an arm without
-  ties, else the normal approximation with the tie correction)
-  and the rank-biserial correlation as its effect size (Cliff's delta: +1 when every seed of the
-  first arm beats every seed of the second);
+- `mann_whitney`: the two-sided Mann-Whitney U test, exact with ties (issue #67): a permutation
+  test of U (mid-ranks for ties) over every split of the pooled seeds into arms of the same sizes
+  (252 splits at 5 against 5), the p-value the share of splits whose
+  |U - n1 n2 / 2| is at least the observed one; and the rank-biserial correlation as its effect
+  size (Cliff's delta: +1 when every seed of the first arm beats every seed of the second).
+  `mann_whitney_scipy` keeps SciPy's `mannwhitneyu` (exact only without ties, else the normal
+  approximation), what round 5's table used;
 - `ratio_ci`: the ratio of two arms' means with a bootstrap interval (each arm resampled apart);
 - `compare`: all of it for a default arm against each other arm, as rows for a table.
 """
@@ -33,8 +36,44 @@ def bootstrap_ci(
     return float(lo), float(hi)
 
 
+#: the most splits the exact test enumerates (10 against 10 has 184,756)
+EXACT_LIMIT = 200_000
+
+
+def u_statistic(a: Sequence[float], b: Sequence[float]) -> float:
+    """Mann-Whitney U of a against b with mid-ranks: pairs a > b, plus half the ties."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return float((a[:, None] > b[None, :]).sum() + 0.5 * (a[:, None] == b[None, :]).sum())
+
+
 def mann_whitney(a: Sequence[float], b: Sequence[float]) -> Dict[str, float]:
-    """Two-sided Mann-Whitney U of a against b: {u, p, effect} (effect: rank-biserial, in [-1, 1])."""
+    """Two-sided Mann-Whitney U of a against b, exact with ties (a permutation test over every
+    split; see the module's text): {u, p, effect, method} (effect: rank-biserial, in [-1, 1])."""
+    from itertools import combinations
+
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.size == 0 or b.size == 0:
+        raise ValueError("mann_whitney needs values in both arms")
+    splits = math.comb(a.size + b.size, a.size)
+    if splits > EXACT_LIMIT:
+        raise ValueError(f"mann_whitney: {a.size} against {b.size} seeds is past the exact test's {EXACT_LIMIT:,} splits")
+    pooled = np.concatenate([a, b])
+    # every split of the pooled values into an arm of a's size and the rest (SciPy's
+    # permutation_test does the same but needs two values an arm)
+    first = np.zeros((splits, pooled.size), bool)
+    for k, idx in enumerate(combinations(range(pooled.size), a.size)):
+        first[k, list(idx)] = True
+    gt = (pooled[:, None] > pooled[None, :]).astype(float) + 0.5 * (pooled[:, None] == pooled[None, :])
+    u_all = np.einsum("ki,ij,kj->k", first.astype(float), gt, (~first).astype(float))
+    half = a.size * b.size / 2.0
+    u = u_statistic(a, b)
+    p = float(np.mean(np.abs(u_all - half) >= abs(u - half) - 1e-9))
+    return {"u": u, "p": p, "effect": 2.0 * u / (a.size * b.size) - 1.0, "method": "exact"}
+
+
+def mann_whitney_scipy(a: Sequence[float], b: Sequence[float]) -> Dict[str, float]:
+    """Round 5's test: SciPy's two-sided `mannwhitneyu`, exact without ties, else the normal
+    approximation with the tie correction: {u, p, effect, method}."""
     from scipy.stats import mannwhitneyu
 
     a, b = np.asarray(a, float), np.asarray(b, float)
@@ -46,7 +85,7 @@ def mann_whitney(a: Sequence[float], b: Sequence[float]) -> Dict[str, float]:
     method = "asymptotic" if ties or max(a.size, b.size) > 20 else "exact"
     res = mannwhitneyu(a, b, alternative="two-sided", method=method)
     u = float(res.statistic)
-    return {"u": u, "p": float(res.pvalue), "effect": 2.0 * u / (a.size * b.size) - 1.0}
+    return {"u": u, "p": float(res.pvalue), "effect": 2.0 * u / (a.size * b.size) - 1.0, "method": method}
 
 
 def seeds_per_arm(a: Sequence[float], b: Sequence[float], alpha: float = 0.05, power: float = 0.8) -> Dict:

@@ -70,6 +70,13 @@ class RouteFrame:
         self.t_range = (margin, 1.0 - margin)
         self.normal = np.array([-self.along[1], self.along[0]]) / max(self.length, 1e-9)
 
+    @property
+    def edge_m(self) -> float:
+        """[m] the largest distance from the route's line to a corner of the landscape's square:
+        a lateral offset this large reaches the square's edge from any point of the route."""
+        corners = np.array([[0.0, 0.0], [0.0, self.size], [self.size, 0.0], [self.size, self.size]])
+        return float(np.max(np.abs((corners - self.start) @ self.normal)))
+
     def point(self, t, d) -> np.ndarray:
         """x, y [m] of route coordinates (t [-], d [m]) (arrays broadcast), clipped to the
         landscape's nominal square."""

@@ -34,12 +34,12 @@ from asg_agent.search.td3 import load_checked, save_atomic
 
 
 #: what a search can maximise (Campaign's `reward`, the campaign's --reward)
-REWARDS = ("proxy", "differential", "collision", "clearance", "ttc", "regret")
+REWARDS = ("proxy", "differential", "collision", "clearance", "ttc", "regret", "flaw")
 #: which scenarios run on the reference stacks: "failures" (the candidates of
 #: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
 CANDIDATE_RULES = ("failures", "all")
 #: rewards that read a reference run (the search waits for it)
-REFERENCE_REWARDS = ("differential", "collision", "regret")
+REFERENCE_REWARDS = ("differential", "collision", "regret", "flaw")
 
 
 def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
@@ -178,8 +178,8 @@ def reference_setup(reward, references, reference, candidates, collision_bonus):
         raise ValueError("the differential reward needs a reference stack")
     if reward in ("differential", "regret") and candidates != "all":
         raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
-    if reward == "regret" and attr.FULL not in references:
-        raise ValueError(f"the regret reward needs the {attr.FULL!r} reference stack")
+    if reward in ("regret", "flaw") and attr.FULL not in references:
+        raise ValueError(f"the {reward} reward needs the {attr.FULL!r} reference stack")
     if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
         raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
     return references, candidates
@@ -500,6 +500,20 @@ class Campaign:
                     full["proxy"],
                     rewards.min_clearance(rj.request, np.asarray(full["trajectory_xy"]), removed),
                 )
+        elif self.reward == "flaw":
+            full = rj.got[attr.FULL]
+            reward = None
+            if proxy is not None:
+                removed = json.loads(row["removed"])
+                xy = unpack_trajectory(row["trajectory"])[:: rewards.SAMPLE_EVERY, 1:3]
+                reward = rewards.flaw_reward(
+                    cls,
+                    proxy,
+                    rewards.min_clearance(rj.request, xy, removed),
+                    full["termination"],
+                    full["proxy"],
+                    rewards.min_clearance(rj.request, np.asarray(full["trajectory_xy"]), removed),
+                )
         t0 = time.perf_counter()
         self.store.set_references(
             self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy if truth else None, reward
@@ -542,6 +556,8 @@ class Campaign:
             label = attr.PENDING if candidate else attr.NOT_CANDIDATE
             if candidate and self.reward in REFERENCE_REWARDS:
                 reward = None  # known once the references are in
+            elif self.reward == "flaw" and terms:
+                reward = rewards.NON_CANDIDATE_FLAW
         row = {
             "campaign": self.name,
             "job": o.job,

@@ -127,7 +127,9 @@ def parse(argv):
         "--collision-bonus when the stack under test collided and the reference reached the goal (collision), "
         "the proxy plus a dense term for how close the vehicle came to an obstacle (clearance) or how soon it "
         "would have hit one (ttc), or the proxy and clearance lost against the unflawed stack (regret; needs "
-        "--reference full=... and --candidates all); scoring/rewards.py",
+        "--reference full=... and --candidates all), or the injected flaw itself: 1 for a flaw finding, a "
+        "graded part below 0.5 for a candidate the unflawed stack drove clear, 0 otherwise (flaw; needs "
+        "--reference full=... ground_truth=...); scoring/rewards.py",
     )
     p.add_argument(
         "--collision-bonus",
@@ -162,6 +164,8 @@ def parse(argv):
         p.error("--scenarios must be >= 1")
     if a.reward == "regret" and not (any(r.startswith("full=") for r in a.reference) and a.candidates == "all"):
         p.error("--reward regret needs --reference full=WORKERS (and ground_truth) with --candidates all")
+    if a.reward == "flaw" and not any(r.startswith("full=") for r in a.reference):
+        p.error("--reward flaw needs --reference full=WORKERS and ground_truth=WORKERS (attribution:=three)")
     if a.reward == "differential" and not (a.reference_workers or a.reference):
         p.error("--reward differential needs --reference-workers (the reference stack to subtract)")
     if a.reference and a.reference_workers:

@@ -24,14 +24,23 @@ from [-1, 1] to its range. Keys (docs/agent.md):
       hill_height_m: [-3.0, 3.0]       #   [m] one per hill of the scenario; |h| <= its radius_m / 2
       hill_positions: true             #   every hill's x, y over the landscape, as the obstacles'
     action_space: absolute             # how the action places an obstacle: absolute (the paper's:
-                                       #   x, y over the landscape) or route (along the straight
+                                       #   x, y over the landscape), route (along the straight
                                        #   start-goal route and a signed lateral offset; issue #54)
-    route_lateral_m: 10.0              # route only: [m] the largest lateral offset from the route
+                                       #   or route-wide (the same, the offset reaching the
+                                       #   landscape's edge; issue #67)
+    route_lateral_m: 10.0              # route, route-wide: [m] the offset's dense part (below)
 
 With `action_space: route` each obstacle's two values are (u, v) in [-1, 1]: u sets the fraction
 of the way from start to goal over the part outside the safety radii, v the lateral offset
 v * route_lateral_m (asg_scenario.layout.RouteFrame). The scene space is the route band; what the
 search may vary is otherwise the same (the obstacles' classes and counts stay the scenario's).
+
+With `action_space: route-wide` (issue #67) u is the same and v maps piecewise linearly: |v| <= 1/2
+covers the route band |d| <= route_lateral_m (at half the route space's resolution), and 1/2 < |v|
+<= 1 covers the rest, out to the farthest corner of the landscape's square from the route line
+(`RouteFrame.edge_m`; a point beyond the square is clipped onto its border). Every layout of the
+scene's square is reachable (every obstacle may be near the route or out of its way), and half of
+each obstacle's range still lies in the band. Nothing in the map depends on an obstacle's class.
 
 The action then goes on with the terrain values, in this order: the amplitude, one height per
 hill, one x, y per hill.
@@ -74,7 +83,9 @@ KEYS = {
     "route_lateral_m",
 }
 #: how an action places obstacles (docs/agent.md): over the landscape, or relative to the route
-ACTION_SPACES = ("absolute", "route")
+ACTION_SPACES = ("absolute", "route", "route-wide")
+#: the action spaces relative to the route (route_lateral_m applies)
+ROUTE_SPACES = ("route", "route-wide")
 TERRAIN_FREE_KEYS = ("amplitude_m", "hill_height_m", "hill_positions")
 #: textural attributes a search may set (a number with a range; not the ground texture's seed)
 FREE_TEXTURAL = {f.key: f for f in TEXTURAL_FIELDS if f.kind is float}
@@ -137,13 +148,28 @@ class Experiment:
         """The action's first 2n values, [-1, 1] -> (n, 2) positions [m], rounded to 1 mm: over
         the landscape, or (action_space route) along and across the route."""
         a = np.asarray(action, dtype=np.float64).reshape(-1)[: self.position_dim]
-        a = np.clip(a.reshape(-1, 2), -1.0, 1.0)
-        if self.action_space == "route":
+        return self.positions_of(a[None])[0]
+
+    def positions_of(self, actions) -> np.ndarray:
+        """`to_positions` of m actions at once: (m, action_dim or more) -> (m, n, 2) [m]."""
+        a = np.asarray(actions, dtype=np.float64)
+        a = np.clip(a.reshape(a.shape[0], -1)[:, : self.position_dim].reshape(a.shape[0], -1, 2), -1.0, 1.0)
+        if self.action_space in ROUTE_SPACES:
             route = RouteFrame(self.scenario)
             lo, hi = route.t_range
-            t = lo + (a[:, 0] + 1.0) * 0.5 * (hi - lo)
-            return np.round(route.point(t, a[:, 1] * self.route_lateral_m), 3)
+            t = lo + (a[..., 0] + 1.0) * 0.5 * (hi - lo)
+            return np.round(route.point(t, self.lateral_m(a[..., 1], route)), 3)
         return np.round((a + 1.0) * 0.5 * self.size, 3)
+
+    def lateral_m(self, v, route: Optional[RouteFrame] = None) -> np.ndarray:
+        """[m] the signed lateral offset of action values v in [-1, 1] (route action spaces)."""
+        v = np.clip(np.asarray(v, dtype=np.float64), -1.0, 1.0)
+        if self.action_space != "route-wide":
+            return v * self.route_lateral_m
+        edge = max((route or RouteFrame(self.scenario)).edge_m, self.route_lateral_m)
+        a = np.abs(v)
+        d = np.where(a <= 0.5, 2.0 * a * self.route_lateral_m, self.route_lateral_m + (2.0 * a - 1.0) * (edge - self.route_lateral_m))
+        return np.sign(v) * d
 
     def to_textural(self, action) -> dict:
         """The action's values after the positions, [-1, 1] -> each free attribute's [lo, hi]
@@ -289,8 +315,8 @@ def load_experiment(path: str) -> Experiment:
     lateral = data.get("route_lateral_m", 10.0)
     if isinstance(lateral, bool) or not isinstance(lateral, (int, float)) or not 0.0 < lateral <= 1000.0:
         problems.append(f"route_lateral_m: {lateral!r}, must be a number in (0, 1000] m")
-    elif "route_lateral_m" in data and space != "route":
-        problems.append("route_lateral_m: only with action_space: route")
+    elif "route_lateral_m" in data and space not in ROUTE_SPACES:
+        problems.append(f"route_lateral_m: only with action_space {' or '.join(ROUTE_SPACES)}")
     if problems:
         raise ExperimentError(f"{path}: " + "; ".join(problems))
     spath = data["scenario"]

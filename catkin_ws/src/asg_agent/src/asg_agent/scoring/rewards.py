@@ -10,6 +10,14 @@ proxy, which scores a collision like any short run.
 - `regret`: against the unflawed `full` stack on the same scene (every scenario re-run on it):
   proxy - full's proxy + DENSE_WEIGHT x (c_full - c) / CLEARANCE_RANGE, the clearances capped as
   above: what the flaw costs, in the paper's score and in how close the vehicle came.
+- `flaw` (issue #67): what the search for the injected flaw is scored on, from the candidates'
+  re-runs that three-stack attribution makes anyway (no extra run): 1 for a `flaw` finding (only
+  the stack under test fails); for another candidate on which the unflawed `full` stack reached
+  the goal, a graded part below GRADED_CAP, half from how much higher the stack under test's proxy
+  was (capped at PROXY_RANGE) and half from how much closer it came to an obstacle than `full`
+  did (capped at CLEARANCE_RANGE); 0 for a candidate on which `full` failed too (the layout
+  exposes what both share, not the flaw). A non-candidate (the stack under test reached the goal
+  with proxy below attribution.CANDIDATE) is NON_CANDIDATE_FLAW: it showed nothing of a failure.
 
 All distances are read at 10 Hz (every 6th sample of the 60 Hz trajectory, as attribution keeps a
 reference run's positions), so the stack under test and a reference are measured alike.
@@ -22,6 +30,9 @@ import numpy as np
 DENSE_WEIGHT = 2.0  # [-] contact adds this: a collision on a route of PLR about 1 scores about 3
 CLEARANCE_RANGE = 5.0  # [m] clearances at or beyond this add nothing
 TTC_RANGE = 3.0  # [s] times to collision at or beyond this add nothing
+GRADED_CAP = 0.5  # [-] the `flaw` reward's graded part stays below a finding's 1
+PROXY_RANGE = 2.0  # [-] proxy differences beyond this add nothing to the graded part
+NON_CANDIDATE_FLAW = 0.0  # [-] the `flaw` reward of a scenario not re-run on the references
 SAMPLE_EVERY = 6  # [samples] 60 Hz -> 10 Hz
 SAMPLE_DT = SAMPLE_EVERY / 60.0  # [s]
 
@@ -84,3 +95,18 @@ def ttc_reward(proxy: float, ttc: float) -> float:
 def regret_reward(proxy: float, clearance: float, full_proxy: float, full_clearance: float) -> float:
     c, cf = min(clearance, CLEARANCE_RANGE), min(full_clearance, CLEARANCE_RANGE)
     return proxy - full_proxy + DENSE_WEIGHT * (cf - c) / CLEARANCE_RANGE
+
+
+def flaw_reward(
+    cls: str, proxy: float, clearance: float, full_termination: str, full_proxy: Optional[float], full_clearance: float
+) -> float:
+    """The `flaw` reward of a candidate (see the module's text): `cls` its attribution class,
+    proxy and clearance [m] of the stack under test's run, and the `full` reference run's."""
+    if cls == "flaw":
+        return 1.0
+    if full_termination != "SUCCESS" or full_proxy is None:
+        return 0.0
+    dp = min(max(proxy - full_proxy, 0.0), PROXY_RANGE) / PROXY_RANGE
+    c, cf = min(clearance, CLEARANCE_RANGE), min(full_clearance, CLEARANCE_RANGE)
+    dc = max(cf - c, 0.0) / CLEARANCE_RANGE
+    return GRADED_CAP * 0.5 * (dp + dc) * (1.0 - 1e-9)

@@ -17,7 +17,8 @@ baselines `random` (uniform layouts), `route-random` (random layouts with the ob
 straight start-goal route), `annealing` (simulated annealing, a prior method the
 paper names), `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an engineer
 reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `ribs` package's
-grid archive and iso+line emitter, over two behaviour descriptors).
+grid archive and iso+line emitter, over two behaviour descriptors), and `surrogate-ts` (an online
+surrogate of the reward with credit per obstacle, sampled by Thompson sampling: surrogate.py).
 """
 
 import math
@@ -30,7 +31,18 @@ from asg_scenario.layout import RouteFrame
 from asg_agent.scoring.proxy import resample_path
 from asg_agent.search.td3 import TD3Agent, TD3Config
 
-METHODS = ("td3-per-asp", "td3-per", "td3-asp", "td3", "random", "route-random", "annealing", "cmaes", "map-elites")
+METHODS = (
+    "td3-per-asp",
+    "td3-per",
+    "td3-asp",
+    "td3",
+    "random",
+    "route-random",
+    "annealing",
+    "cmaes",
+    "map-elites",
+    "surrogate-ts",
+)
 
 
 def _rng(seed: int, *keys: int) -> np.random.Generator:
@@ -418,6 +430,10 @@ def make_method(
         return CMAES(experiment, seed)
     if name == "map-elites":
         return MapElites(experiment, seed, init_random=max(1, min(100, budget // 10)))
+    if name == "surrogate-ts":
+        from asg_agent.search.surrogate import SurrogateTS
+
+        return SurrogateTS(experiment, seed, init_random=max(1, min(100, budget // 10)))
     if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
         return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
     raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")
