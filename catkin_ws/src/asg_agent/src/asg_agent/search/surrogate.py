@@ -13,8 +13,8 @@ evidence maximisation) of the reward on the features, refitted after every resul
 draws one weight vector from the posterior, scores `candidates` layouts with it and proposes the
 best (Thompson sampling): layouts the model is unsure of get their turn, those it is sure are poor
 do not. The candidates are half uniform over the action space and half mutations of the layouts
-of largest reward so far (each obstacle, with probability `mutate_share`, moved by a Gaussian
-step of `mutate_sigma`), so the search both explores and refines. The first `init_random`
+of largest reward so far (each obstacle, with probability `mutate_share` and at least one of them,
+moved by a Gaussian step of `mutate_sigma`), so the search both explores and refines. The first `init_random`
 proposals are uniform.
 
 Learns, does not know: nothing here names a class, a size or a place, or holds a prior about
@@ -157,6 +157,7 @@ class SurrogateTS(SearchMethod):
             parents = np.asarray(self.actions)[rng.choice(order, n_elite)]
             n = self.exp.position_dim // 2
             move = rng.uniform(size=(n_elite, n)) < self.mutate_share
+            move[np.arange(n_elite), rng.integers(0, n, n_elite)] = True  # every child moves an obstacle
             step_ = rng.normal(0.0, self.mutate_sigma, (n_elite, n, 2)) * move[..., None]
             child = parents.copy()
             child[:, : 2 * n] += step_.reshape(n_elite, 2 * n)
