@@ -657,9 +657,9 @@ def status(p: dict, folder: str) -> dict:
     return out
 
 
-def status_markdown(st: dict, name: str = "flaw") -> str:
+def status_markdown(st: dict, study: str = "flaw") -> str:
     lines = [
-        markers({"name": name})[0],
+        markers({"name": study})[0],
         "| campaign | arm | seed | scenarios | flaw per 1,000 (95 % exact) | flaw | model | stack | distinct flaw modes "
         "| CPU-hours | flaw per CPU-hour | CPU | deviations |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -685,7 +685,7 @@ def status_markdown(st: dict, name: str = "flaw") -> str:
             "the protocol's amendment 1, or with a run the plan did not measure; the others count the "
             "CPU time measured (protocol.measured_cpu_hours).",
         ]
-    lines.append(markers({"name": name})[1])
+    lines.append(markers({"name": study})[1])
     return "\n".join(lines)
 
 
