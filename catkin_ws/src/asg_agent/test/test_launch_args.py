@@ -95,7 +95,7 @@ def test_the_summary_names_the_scene_generator():
     assert generator_line(td3) == "scene generator: td3-per-asp, reward collision, experiment exp1-route, seed 0"
 
 
-def test_replay_refuses_a_bf16_run_on_another_isa(monkeypatch):
+def test_replay_refuses_a_bf16_run_on_another_isa(monkeypatch, capsys):
     from asg_agent.ros import replay
 
     bf = {"numerics": "bf16 isa=AVX512_CORE_AMX threads=1 torch=1.13.0a0"}
@@ -113,5 +113,11 @@ def test_replay_refuses_a_bf16_run_on_another_isa(monkeypatch):
     s = Store(db)
     s.create_campaign("c", "random", "exp1", "", 0, bf)
     rc = replay.main([db, "c", "0"])
-    assert rc == 2
+    err = capsys.readouterr().err
     os.remove(db)
+    # issue #68: the exit code alone also passes without the refusal ("campaign 'c' has no job 0"):
+    # the reason and the rerun command are what is asserted
+    assert rc == 2
+    assert "the campaign ran the bf16 fast mode on oneDNN AVX512_CORE_AMX" in err, err
+    assert f"rosrun asg_agent replay {db} c 0 --default-numerics" in err, err
+    assert "has no job" not in err

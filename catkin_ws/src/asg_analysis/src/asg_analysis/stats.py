@@ -85,7 +85,7 @@ def mann_whitney_scipy(a: Sequence[float], b: Sequence[float]) -> Dict[str, floa
     method = "asymptotic" if ties or max(a.size, b.size) > 20 else "exact"
     res = mannwhitneyu(a, b, alternative="two-sided", method=method)
     u = float(res.statistic)
-    return {"u": u, "p": float(res.pvalue), "effect": 2.0 * u / (a.size * b.size) - 1.0, "method": method}
+    return {"u": u, "p": float(res.pvalue), "effect": 2.0 * u / (a.size * b.size) - 1.0}
 
 
 def seeds_per_arm(a: Sequence[float], b: Sequence[float], alpha: float = 0.05, power: float = 0.8) -> Dict:

@@ -1,6 +1,6 @@
 """run_scenario: send one scenario file to a scene worker and write what came back.
 
-The ROS adapter of the scenario tools (this module is the only one here that imports rospy).
+The ROS adapter of the scenario tools (this module and ros_node.py are the only ones here that import rospy).
 """
 
 import argparse
@@ -104,7 +104,13 @@ def main(argv=None):
     import rospy
     from asg_msgs.msg import RunScenarioAction
 
-    rospy.init_node("run_scenario", anonymous=True, disable_signals=True)
+    from .ros_node import init_node
+
+    try:  # under /use_sim_time: waits for /clock, or the deadline below is past before it starts
+        init_node("run_scenario", anonymous=True, disable_signals=True)
+    except RuntimeError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     name = args.worker.rstrip("/") + "/run_scenario"
     client = actionlib.ActionClient(name, RunScenarioAction)
     print(f"waiting for worker action server {name} ...", flush=True)
