@@ -3,9 +3,13 @@ which train.launch arguments the experiment implies, so that `experiment:=FILE` 
 workers' stack, perception, model, U-Net numerics and planner configuration.
 
     python3 -m asg_agent.cli.launch_args [key:=value ...]   # the arguments train.sh was given
+    python3 -m asg_agent.cli.launch_args --check [key:=value ...]   # train.launch's own check
 
 Prints, one a line, each `key:=value` of STACK_KEYS that the experiment sets and the arguments
-leave out. An argument that contradicts the experiment (model:=full for an experiment of
+leave out. With --check (train.launch runs it through `rosrun asg_agent launch_check`, with every
+stack argument as the launch will use it, its defaults included, when roslaunch reads the file,
+before any node starts; issue #68) every such value must be the experiment's: a default the
+experiment does not share is refused too, naming the argument to add; it prints `ok`. An argument that contradicts the experiment (model:=full for an experiment of
 `flawed`, unet_backend:=bf16 for one of channels_last) is refused, exit 2, naming both; so is a
 bf16 experiment on a CPU that would emulate bf16 (asg_perception.numerics.refuse_emulated).
 """
@@ -61,9 +65,10 @@ def _same(key: str, given: str, want: str) -> bool:
     return given == want
 
 
-def launch_args(args: List[str]) -> List[str]:
+def launch_args(args: List[str], check: bool = False) -> List[str]:
     """What to add to `args` (train.launch's key:=value words); ExperimentError when they
-    contradict the experiment or the experiment cannot run on this CPU."""
+    contradict the experiment or the experiment cannot run on this CPU. `check`: `args` are every
+    value the launch will use (its defaults included), and each must be the experiment's."""
     given = dict(a.split(":=", 1) for a in args if ":=" in a)
     path = given.get("experiment") or DEFAULT_EXPERIMENT
     exp = load_experiment(path)
@@ -71,7 +76,17 @@ def launch_args(args: List[str]) -> List[str]:
     problems = []
     for key, value in want.items():
         if key in given and not _same(key, given[key], value):
-            problems.append(f"{key}:={given[key]} contradicts the experiment's {key} {value}")
+            shown = given[key] or (f"(empty: {resolve_backend('')})" if key == "unet_backend" else "")
+            problems.append(
+                f"{key}:={value} is the experiment's, the launch has {key}:={shown}"
+                if check
+                else f"{key}:={given[key]} contradicts the experiment's {key} {value}"
+            )
+    if problems and check:
+        raise ExperimentError(
+            f"{path}: " + "; ".join(problems) + " (give these arguments to train.launch; scripts/train.sh adds them"
+            " from the experiment by itself)"
+        )
     if problems:
         raise ExperimentError(
             f"{path}: " + "; ".join(problems) + " (leave these arguments out: the experiment sets the workers' stack)"
@@ -84,11 +99,16 @@ def launch_args(args: List[str]) -> List[str]:
 
 
 def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    check = "--check" in argv
     try:
-        out = launch_args(sys.argv[1:] if argv is None else argv)
+        out = launch_args([a for a in argv if a != "--check"], check=check)
     except (ExperimentError, ValueError) as e:
         print(f"train: {e}", file=sys.stderr)
         return 2
+    if check:
+        print("ok")
+        return 0
     for a in out:
         print(a)
     return 0
