@@ -5,13 +5,13 @@ import math
 import os
 import unittest
 
-import actionlib
 import rospy
 import rostest
 from asg_msgs.msg import PlannerState, RunScenarioAction, RunScenarioResult
 
 from asg_scenario import load_scenario
 from asg_scenario.convert import to_goal_msg
+from asg_scenario.ros_node import GoalClient
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 
@@ -49,7 +49,7 @@ class ClosedLoop(unittest.TestCase):
         rospy.init_node("closed_loop_test")
         cls.clients = {}
         for ns in ("worker_0", "worker_1"):
-            cls.clients[ns] = actionlib.SimpleActionClient(f"/{ns}/run_scenario", RunScenarioAction)
+            cls.clients[ns] = GoalClient(f"/{ns}/run_scenario", RunScenarioAction)
             assert cls.clients[ns].wait_for_server(rospy.Duration(60.0)), ns
         cls.states = []
         rospy.Subscriber("/worker_1/planner/state", PlannerState, cls.states.append, queue_size=2000)

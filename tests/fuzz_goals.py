@@ -7,7 +7,6 @@ import random
 import time
 from collections import Counter
 
-import actionlib
 import rospy
 from actionlib_msgs.msg import GoalStatus
 from asg_msgs.msg import ObstacleInstance, RunScenarioAction, RunScenarioActionResult
@@ -132,7 +131,9 @@ def rss_kb(pid):
 def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
     """Sends `count` goals (plus, every 25th, a new goal and a cancel mid-run)."""
     rng = random.Random(seed)
-    c = actionlib.SimpleActionClient(f"{worker.rstrip('/')}/run_scenario", RunScenarioAction)
+    from asg_scenario.ros_node import GoalClient
+
+    c = GoalClient(f"{worker.rstrip('/')}/run_scenario", RunScenarioAction)
     if not c.wait_for_server(rospy.Duration(60)):
         raise RuntimeError(f"no worker at {worker}/run_scenario")
     classes, states, failures = Counter(), Counter(), []

@@ -8,7 +8,6 @@ import subprocess
 import time
 import xmlrpc.client
 
-import actionlib
 import rosgraph
 import rospy
 from actionlib_msgs.msg import GoalStatus
@@ -17,6 +16,7 @@ from asg_msgs.msg import RunScenarioAction
 from asg_scenario import load_scenario
 from asg_scenario.convert import to_goal_msg
 from asg_scenario.layout import random_scene
+from asg_scenario.ros_node import GoalClient
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 
@@ -37,7 +37,7 @@ def client(ns, timeout=90.0):
     from asg_agent.ros.node import wait_for_time
 
     wait_for_time()  # under /use_sim_time, ROS-time timeouts mean nothing before the first /clock
-    c = actionlib.SimpleActionClient(f"/{ns}/run_scenario", RunScenarioAction)
+    c = GoalClient(f"/{ns}/run_scenario", RunScenarioAction)  # no lost answers (SimpleActionClient's race)
     assert c.wait_for_server(rospy.Duration(timeout)), f"no action server in /{ns}"
     return c
 
@@ -126,7 +126,7 @@ def reference_path(worker_ns, write=False):
 
 
 def cancel_acknowledged(client, timeout=5.0):
-    """Cancels the SimpleActionClient's goal once the server has acknowledged it (issue #53's race).
+    """Cancels the client's (GoalClient's) goal once the server has acknowledged it (issue #53's race).
     actionlib's client leaves WAITING_FOR_GOAL_ACK when it cancels; a status array the server
     published before it received the goal then lacks the goal, and the client marks it LOST
     (actionlib's CommStateMachine.update_status) although the server goes on to recall or preempt

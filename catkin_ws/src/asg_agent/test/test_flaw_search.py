@@ -104,7 +104,15 @@ def test_a_campaign_learns_from_the_flaw_reward_of_its_candidates():
             assert 0.0 <= r["reward"] < rw.GRADED_CAP and json.loads(r["reference_runs"])["full"]
     with pytest.raises(ValueError, match="the flaw reward needs the 'full' reference"):
         Campaign(
-            "g", exp, make_method("random", exp, 1), store, FakePool(1), 4, 1, "/x", reward="flaw",
+            "g",
+            exp,
+            make_method("random", exp, 1),
+            store,
+            FakePool(1),
+            4,
+            1,
+            "/x",
+            reward="flaw",
             references={attr.TRUTH: FakePool(1)},
         )
 
@@ -157,7 +165,9 @@ def test_surrogate_ts_is_a_function_of_its_seed_and_resumes_exactly():
 
     a, b, c = run(40), run(40), run(40, resume_at=25)
     assert np.array_equal(a, b) and np.array_equal(a, c)
-    assert not np.array_equal(a, np.stack([make_method("surrogate-ts", exp, 8).propose(j, 0, 0, None) for j in range(40)]))
+    assert not np.array_equal(
+        a, np.stack([make_method("surrogate-ts", exp, 8).propose(j, 0, 0, None) for j in range(40)])
+    )
 
 
 def test_surrogate_ts_names_no_class_size_or_place():

@@ -483,7 +483,10 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
     campaign is complete it says how many are, and compares nothing (the protocol's rule)."""
     lines = [markers(p)[2]]
     if p.get("round"):
-        lines += [f"*Round {p['round']}'s study (protocol version {p['version']}, `{os.path.relpath(os.path.abspath(p['_path']), REPO)}`).*", ""]
+        lines += [
+            f"*Round {p['round']}'s study (protocol version {p['version']}, `{os.path.relpath(os.path.abspath(p['_path']), REPO)}`).*",
+            "",
+        ]
     if res["complete"] < res["campaigns"]:
         lines += [
             f"**Not answered yet: {res['complete']} of the {res['campaigns']} confirmatory campaigns are "

@@ -56,7 +56,9 @@ def mann_whitney(a: Sequence[float], b: Sequence[float]) -> Dict[str, float]:
         raise ValueError("mann_whitney needs values in both arms")
     splits = math.comb(a.size + b.size, a.size)
     if splits > EXACT_LIMIT:
-        raise ValueError(f"mann_whitney: {a.size} against {b.size} seeds is past the exact test's {EXACT_LIMIT:,} splits")
+        raise ValueError(
+            f"mann_whitney: {a.size} against {b.size} seeds is past the exact test's {EXACT_LIMIT:,} splits"
+        )
     pooled = np.concatenate([a, b])
     # every split of the pooled values into an arm of a's size and the rest (SciPy's
     # permutation_test does the same but needs two values an arm)

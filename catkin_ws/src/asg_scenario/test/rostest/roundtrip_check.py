@@ -5,13 +5,13 @@ import math
 import os
 import unittest
 
-import actionlib
 import rospy
 import rostest
 from asg_msgs.msg import RunScenarioAction, RunScenarioResult
 
 from asg_scenario import load_scenario
 from asg_scenario.convert import from_scene_msg, to_goal_msg
+from asg_scenario.ros_node import GoalClient
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", ".."))
 
@@ -20,7 +20,7 @@ class RoundTrip(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node("roundtrip_test")
-        cls.client = actionlib.SimpleActionClient("run_scenario", RunScenarioAction)
+        cls.client = GoalClient("run_scenario", RunScenarioAction)
         assert cls.client.wait_for_server(rospy.Duration(30.0)), "no action server"
 
     def run_goal(self, goal):

@@ -6,7 +6,6 @@ import math
 import os
 import unittest
 
-import actionlib
 import rospy
 import rostest
 from actionlib_msgs.msg import GoalStatus
@@ -15,6 +14,7 @@ from sensor_msgs.msg import Image
 
 from asg_scenario import load_scenario
 from asg_scenario.convert import to_goal_msg
+from asg_scenario.ros_node import GoalClient
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", ".."))
 
@@ -32,7 +32,7 @@ class SceneWorkerTest(unittest.TestCase):
         rospy.init_node("scene_worker_test")
         cls.clients = {}
         for ns in ("worker_0", "worker_1", "worker_2"):
-            c = actionlib.SimpleActionClient(f"/{ns}/run_scenario", RunScenarioAction)
+            c = GoalClient(f"/{ns}/run_scenario", RunScenarioAction)
             assert c.wait_for_server(rospy.Duration(60.0)), f"no action server in {ns}"
             cls.clients[ns] = c
         cls.images, cls.ticks, cls.infos = [], [], []

@@ -168,7 +168,11 @@ class Experiment:
             return v * self.route_lateral_m
         edge = max((route or RouteFrame(self.scenario)).edge_m, self.route_lateral_m)
         a = np.abs(v)
-        d = np.where(a <= 0.5, 2.0 * a * self.route_lateral_m, self.route_lateral_m + (2.0 * a - 1.0) * (edge - self.route_lateral_m))
+        d = np.where(
+            a <= 0.5,
+            2.0 * a * self.route_lateral_m,
+            self.route_lateral_m + (2.0 * a - 1.0) * (edge - self.route_lateral_m),
+        )
         return np.sign(v) * d
 
     def to_textural(self, action) -> dict:
