@@ -94,7 +94,7 @@ def test_frame_sets_are_exact_and_reproducible(tmp_path, suite_sources):
 
 
 @pytest.mark.skipif(not os.path.isfile(hd.DATASET_TOOL), reason="asg_sim_dataset not built")
-def test_cli_renders_ground_truth_frames_of_the_scenes(tmp_path):
+def test_cli_renders_ground_truth_frames_of_the_scenes(tmp_path, capsys):
     out = str(tmp_path / "set")
     rc = harden_cli(
         ["frames", "--suite", SUITE, "--exports", EXPORTS, "--out", out, "--frames", "24", "--variants", "2"]
@@ -122,4 +122,9 @@ def test_cli_renders_ground_truth_frames_of_the_scenes(tmp_path):
             [hd.DATASET_TOOL, "--out", str(tmp_path / "o"), "--poses", str(bad)], capture_output=True, text=True
         )
         assert r.returncode == 1 and why in r.stderr, r.stderr
+    capsys.readouterr()
     assert harden_cli(["frames", "--suite", SUITE, "--out", out, "--frames", "24"]) == 2  # no --exports
+    # issue #68: exit 2 alone also held without this check (the suite then found no export of its
+    # campaign, also exit 2): the reason is what is asserted
+    err = capsys.readouterr().err
+    assert "--suite needs --exports" in err and "no export of campaign" not in err, err

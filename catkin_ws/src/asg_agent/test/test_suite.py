@@ -133,7 +133,7 @@ def test_trajectories_are_compared_only_where_the_numerics_repeat(tmp_path, camp
     assert other[0]["note"] == "trajectory not compared: oneDNN kernels: recorded AVX512_CORE, here SSE41"
 
 
-def test_bad_suites_are_refused_by_name(tmp_path, campaign_export):
+def test_bad_suites_are_refused_by_name(tmp_path, campaign_export, capsys):
     out = str(tmp_path / "suite")
     st.export_suite([campaign_export], out, limit=2)
     meta = yaml.safe_load(open(os.path.join(out, "suite.yaml")))
@@ -150,7 +150,12 @@ def test_bad_suites_are_refused_by_name(tmp_path, campaign_export):
         yaml.safe_dump(meta, f)
     with pytest.raises(st.SuiteError, match="format_version 99, this tool reads 1"):
         st.load_suite(out)
+    capsys.readouterr()
     assert suite_cli(["run", out, "--fake-workers", "1"]) == 2
+    # issue #68: exit 2 alone also held without the version check (scenario 0's speed is refused
+    # too, with the same code): the CLI must name the version
+    err = capsys.readouterr().err
+    assert "format_version 99, this tool reads 1" in err and "rejected by the validator" not in err, err
 
 
 def test_run_each_retries_an_error_and_answers_every_request_once():

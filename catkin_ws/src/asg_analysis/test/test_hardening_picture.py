@@ -13,7 +13,7 @@ from test_suite import campaign_export, export_run_record_and_regress  # noqa: E
 from asg_analysis import hardening  # noqa: E402
 
 
-def test_the_picture_draws_a_failure_before_and_after(tmp_path, campaign_export):  # noqa: F811
+def test_the_picture_draws_a_failure_before_and_after(tmp_path, campaign_export, capsys):  # noqa: F811
     out, res2 = export_run_record_and_regress(tmp_path, campaign_export)
     # The JSON keeps each path driven (10 Hz): a failure before and after drawn from two results.
     with open(tmp_path / "r.json") as f:
@@ -25,5 +25,10 @@ def test_the_picture_draws_a_failure_before_and_after(tmp_path, campaign_export)
     with open(tmp_path / "after.json", "w") as f:
         json.dump(passed, f)
     assert hardening.main(args + [f"after={tmp_path / 'after.json'}"]) == 0 and os.path.getsize(png) > 10_000
+    # issue #68: exit 2 alone also held for another error (a spec without "=" then opened the file "",
+    # exit 2 too): each refusal's reason is asserted
+    capsys.readouterr()
     assert hardening.main(["picture", out, "no-such.yaml", png, f"before={tmp_path / 'r.json'}"]) == 2
+    assert "'no-such.yaml': not a scenario of" in capsys.readouterr().err
     assert hardening.main(args + ["after"]) == 2  # LABEL=RESULTS.json, named as wrong
+    assert "'after': expected LABEL=RESULTS.json" in capsys.readouterr().err

@@ -44,7 +44,7 @@ def test_a_missing_export_is_named(tmp_path, capsys):
     assert "s.jsonl.gz: no export" in capsys.readouterr().err
 
 
-def test_several_seeds_an_arm_compare_the_per_seed_rates(tmp_path):
+def test_several_seeds_an_arm_compare_the_per_seed_rates(tmp_path, capsys):
     for seed, k in enumerate((5, 8, 3)):  # the search: k failures in 100
         export(
             tmp_path / f"x-search-s{seed}.jsonl.gz", "s", [("SUCCESS", 1.1)] * (100 - k) + [("IDLING_TIMEOUT", 1.0)] * k
@@ -67,6 +67,11 @@ def test_several_seeds_an_arm_compare_the_per_seed_rates(tmp_path):
     assert s["pooled"] == [[16, 284], [1, 299]] and s["pooled_fisher_p"] < 1e-3
     md = stack_study.markdown_seeds(s)
     assert "| x-search-s1 | 100 | 8 | 80.0 (" in md and "Pooled over the seeds: 16 failures in 300" in md
-    # a name given twice, or both arms with one stem, is refused by name
+    # a name given twice, or both arms with one stem, is refused by name (issue #68: the second case
+    # named x-search-s2 twice, so the duplicate check refused it and the stem check never ran)
+    capsys.readouterr()
     assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s0", randoms]) == 2
-    assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s1", "x-search-s2,x-search-s2"]) == 2
+    assert "a campaign is named twice" in capsys.readouterr().err
+    assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s1", "x-search-s2"]) == 2
+    err = capsys.readouterr().err
+    assert "the search's and the baseline's campaigns share a name: ['x-search']" in err, err
