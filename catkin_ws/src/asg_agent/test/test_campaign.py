@@ -216,5 +216,7 @@ def test_the_stack_under_test_is_named_by_the_experiment(tmp_path):
     assert load_experiment(os.path.join(REPO, "experiments", "exp1.yaml")).stack == "paper"
     bad = tmp_path / "bad.yaml"
     bad.write_text(f"name: x\nstack: lidar\nscenario: {os.path.join(REPO, 'scenarios', 'exp1.yaml')}\n")
-    with pytest.raises(ExperimentError, match=r"stack: 'lidar' is not a registered stack \(depth, gap_nav, paper\)"):
+    with pytest.raises(
+        ExperimentError, match=r"stack: 'lidar' is not a registered stack \(depth, depth_rc, gap_nav, paper\)"
+    ):
         load_experiment(str(bad))

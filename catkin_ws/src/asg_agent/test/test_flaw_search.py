@@ -59,7 +59,7 @@ def test_route_wide_reaches_every_point_of_the_square_and_keeps_half_in_the_band
 def test_flaw_reward_is_one_for_a_flaw_finding_graded_below_half_for_a_near_one_zero_when_full_fails():
     assert rw.flaw_reward("flaw", 1.2, 0.0, "SUCCESS", 1.1, 3.0) == 1.0
     assert rw.flaw_reward("model", 1.2, 0.0, "COLLISION", 0.9, 0.0) == 0.0
-    assert rw.flaw_reward("stack", 4.0, 0.0, "TIMEOUT", 4.0, 0.0) == 0.0
+    assert rw.flaw_reward("stack", 4.0, 0.0, "STUCK_TIMEOUT", 4.0, 0.0) == 0.0
     g = rw.flaw_reward("unclear", 3.5, 0.2, "SUCCESS", 2.5, 2.0)
     assert 0.0 < g < rw.GRADED_CAP
     # larger as the stack under test does worse than `full` did on the same layout
@@ -186,3 +186,98 @@ def test_surrogate_ts_names_no_class_size_or_place():
         assert {s.split(" ", 1)[1] for s in m.features.names()[:per]} == {
             s.split(" ", 1)[1] for s in m.features.names()[per : 2 * per]
         } or len(m.features.classes) == 1
+
+
+# -- any stack pair (issue #67): a registration names its reference; regressions ----------------
+
+
+def test_a_registration_names_its_reference_and_a_pair_is_classed_regression_or_shared():
+    from asg_agent.records import stacks
+
+    rc = stacks.load("depth_rc")
+    assert rc.reference == "depth" and rc.reference_file == stacks.resolve("depth")
+    assert stacks.load("depth").reference_file == ""
+    o = attr.RunOutcome
+    release = attr.RELEASE
+    assert attr.classify(o("COLLISION", 1.1), {release: o("SUCCESS", 1.2)}) == "regression"
+    assert attr.classify(o("COLLISION", 1.1), {release: o("COLLISION", 1.0)}) == "shared"
+    assert attr.classify(o("SUCCESS", 3.5), {release: o("SUCCESS", 2.5)}) == "unclear"
+    assert attr.classify(o("SUCCESS", 1.5), {release: o("STUCK_TIMEOUT", 1.0)}) == "reverse"
+    assert attr.classify(o("SUCCESS", 2.1), {release: o("SUCCESS", 2.1)}) == "pass"
+    assert attr.classify(o("ERROR", None), {release: o("SUCCESS", 1.0)}) == "error"
+    with pytest.raises(ValueError, match="'ground_truth' or the 'release' reference"):
+        attr.classify(o("COLLISION", 1.1), {attr.FULL: o("SUCCESS", 1.0)})
+
+
+def test_the_registration_refuses_a_reference_that_is_not_a_stack(tmp_path):
+    from asg_agent.records import stacks
+
+    body = open(os.path.join(REPO, "stacks", "depth_rc.launch")).read()
+    for ref, msg in (("nowhere", "'nowhere' is not a registered stack"), ("[1, 2]", "reference: \\[1, 2\\], must be")):
+        f = tmp_path / "r.launch"
+        f.write_text(body.replace("reference: depth", f"reference: {ref}"))
+        with pytest.raises(stacks.RegistrationError, match=msg):
+            stacks.read(str(f)).reference_file
+
+
+def test_train_sh_adds_the_release_and_the_launch_check_refuses_a_pair_without_one():
+    from asg_agent.cli.launch_args import launch_args
+    from asg_agent.records import stacks
+    from asg_agent.records.experiment import ExperimentError
+
+    rc = os.path.join(REPO, "experiments", "exp1-depth-rc.yaml")
+    assert launch_args([f"experiment:={rc}"]) == ["stack:=depth_rc", f"release_stack:={stacks.resolve('depth')}"]
+    assert (
+        launch_args([f"experiment:={rc}", "attribution:=release", "stack:=depth_rc", "release_stack:=depth"], True)
+        == []
+    )
+    with pytest.raises(
+        ExperimentError,
+        match="release_stack:=.*depth.launch is the experiment's, the launch has release_stack:=gap_nav",
+    ):
+        launch_args([f"experiment:={rc}", "attribution:=release", "stack:=depth_rc", "release_stack:=gap_nav"], True)
+    with pytest.raises(ExperimentError, match="depth names none"):
+        launch_args([f"experiment:={os.path.join(REPO, 'experiments', 'exp1-depth.yaml')}", "attribution:=release"])
+
+
+def test_a_pair_campaign_learns_from_its_regressions():
+    exp = load_experiment(os.path.join(REPO, "experiments", "exp1-depth-rc-wide.yaml"))
+    store = Store(":memory:")
+    collide = {1, 4}
+    c = Campaign(
+        "p",
+        exp,
+        make_method("surrogate-ts", exp, 2, budget=12),
+        store,
+        FakePool(2, collide_jobs=collide),
+        12,
+        2,
+        "/x",
+        slots=4,
+        reward="regression",
+        references={attr.RELEASE: FakePool(1, gain=0.0, prefix="r")},
+    )
+    c._checkpoint = lambda: None
+    c.start()
+    c.run(poll_timeout=0.0)
+    rows = list(store.rows("p"))
+    assert len(rows) == 12 and all(
+        r["attribution"] == "regression" and r["reward"] == 1.0 for r in rows if r["job"] in collide
+    )
+    assert all(r["reward"] == rw.NON_CANDIDATE_FLAW for r in rows if r["attribution"] == attr.NOT_CANDIDATE)
+    assert all(
+        r["reference"] is None and "release" in json.loads(r["reference_runs"]) for r in rows if r["reference_runs"]
+    )
+    with pytest.raises(ValueError, match="the regression reward needs the 'release' reference"):
+        Campaign(
+            "q",
+            exp,
+            make_method("random", exp, 1),
+            store,
+            FakePool(1),
+            4,
+            1,
+            "/x",
+            reward="regression",
+            references={attr.TRUTH: FakePool(1)},
+        )

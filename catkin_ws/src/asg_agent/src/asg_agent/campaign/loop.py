@@ -34,12 +34,15 @@ from asg_agent.search.td3 import load_checked, save_atomic
 
 
 #: what a search can maximise (Campaign's `reward`, the campaign's --reward)
-REWARDS = ("proxy", "differential", "collision", "clearance", "ttc", "regret", "flaw")
+REWARDS = ("proxy", "differential", "collision", "clearance", "ttc", "regret", "flaw", "regression")
 #: which scenarios run on the reference stacks: "failures" (the candidates of
 #: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
 CANDIDATE_RULES = ("failures", "all")
 #: rewards that read a reference run (the search waits for it)
-REFERENCE_REWARDS = ("differential", "collision", "regret", "flaw")
+REFERENCE_REWARDS = ("differential", "collision", "regret", "flaw", "regression")
+#: the rewards of a class of attribution (scoring/rewards.py flaw_reward): the class that scores 1,
+#: and the reference role whose run the graded part compares with
+CLASS_REWARDS = {"flaw": ("flaw", attr.FULL), "regression": ("regression", attr.RELEASE)}
 
 
 def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
@@ -169,8 +172,10 @@ def reference_setup(reward, references, reference, candidates, collision_bonus):
     unknown = sorted(set(references) - set(attr.ROLES))
     if unknown:
         raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")
-    if references and attr.TRUTH not in references:
-        raise ValueError(f"attribution needs a {attr.TRUTH!r} reference stack")
+    if references and attr.TRUTH not in references and attr.RELEASE not in references:
+        raise ValueError(
+            f"attribution needs a {attr.TRUTH!r} (or, for a stack pair, a {attr.RELEASE!r}) reference stack"
+        )
     candidates = candidates or "failures"
     if candidates not in CANDIDATE_RULES:
         raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
@@ -180,6 +185,8 @@ def reference_setup(reward, references, reference, candidates, collision_bonus):
         raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
     if reward in ("regret", "flaw") and attr.FULL not in references:
         raise ValueError(f"the {reward} reward needs the {attr.FULL!r} reference stack")
+    if reward == "regression" and attr.RELEASE not in references:
+        raise ValueError(f"the regression reward needs the {attr.RELEASE!r} reference stack")
     if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
         raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
     return references, candidates
@@ -480,14 +487,19 @@ class Campaign:
         row = rj.row
         cls = attr.classify_rows(row, rj.got)
         truth = rj.got.get(attr.TRUTH)
-        legacy = json.dumps({k: v for k, v in truth.items() if k not in ("stack", "collision_with")}, sort_keys=True)
-        proxy, tproxy = row["proxy"], truth["proxy"]
+        legacy = (
+            json.dumps({k: v for k, v in truth.items() if k not in ("stack", "collision_with")}, sort_keys=True)
+            if truth
+            else None
+        )
+        proxy, tproxy = row["proxy"], (truth or {}).get("proxy")
         diff = proxy - tproxy if proxy is not None and tproxy is not None else None
         reward = row["reward"]
         if self.reward == "differential":
             reward = diff
         elif self.reward == "collision" and proxy is not None:
-            reward = collision_reward(proxy, row["termination"], truth["termination"], self.collision_bonus)
+            ref = truth or rj.got.get(attr.RELEASE)
+            reward = collision_reward(proxy, row["termination"], ref["termination"], self.collision_bonus)
         elif self.reward == "regret":
             full = rj.got[attr.FULL]
             reward = None
@@ -500,8 +512,9 @@ class Campaign:
                     full["proxy"],
                     rewards.min_clearance(rj.request, np.asarray(full["trajectory_xy"]), removed),
                 )
-        elif self.reward == "flaw":
-            full = rj.got[attr.FULL]
+        elif self.reward in CLASS_REWARDS:
+            target, role = CLASS_REWARDS[self.reward]
+            clean = rj.got[role]
             reward = None
             if proxy is not None:
                 removed = json.loads(row["removed"])
@@ -510,14 +523,13 @@ class Campaign:
                     cls,
                     proxy,
                     rewards.min_clearance(rj.request, xy, removed),
-                    full["termination"],
-                    full["proxy"],
-                    rewards.min_clearance(rj.request, np.asarray(full["trajectory_xy"]), removed),
+                    clean["termination"],
+                    clean["proxy"],
+                    rewards.min_clearance(rj.request, np.asarray(clean["trajectory_xy"]), removed),
+                    target=target,
                 )
         t0 = time.perf_counter()
-        self.store.set_references(
-            self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy if truth else None, reward
-        )
+        self.store.set_references(self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy, reward)
         self.stages.add("store", t0)
         classes = self.stats["classes"]
         classes[attr.PENDING] = max(0, classes.get(attr.PENDING, 0) - 1)
@@ -556,7 +568,7 @@ class Campaign:
             label = attr.PENDING if candidate else attr.NOT_CANDIDATE
             if candidate and self.reward in REFERENCE_REWARDS:
                 reward = None  # known once the references are in
-            elif self.reward == "flaw" and terms:
+            elif self.reward in CLASS_REWARDS and terms:
                 reward = rewards.NON_CANDIDATE_FLAW
         row = {
             "campaign": self.name,

@@ -59,6 +59,8 @@ def reference_settings(a, exp, roles, candidates) -> dict:
                     "counterpart: name it with --full-model"
                 )
             out[role] = {"workers": ws, "perception": "unet", "model": model, "unet_backend": exp.unet_backend}
+        elif role == attr.RELEASE:
+            out[role] = dict(release_settings(exp), workers=ws)
         else:
             out[role] = {"workers": ws, "perception": "ground_truth"}
     return {
@@ -89,6 +91,32 @@ def campaign_settings(a, exp, workers, roles, candidates) -> dict:
         "unet_backend": exp.unet_backend,
         "planner_config": exp.planner_config,
         "fake": bool(a.fake_workers),
+    }
+
+
+def release_settings(exp) -> dict:
+    """What a campaign records of the `release` reference (issue #67): the registration the stack
+    under test names as its `reference`, recorded as a registered stack is (registered_settings);
+    SystemExit naming the file when the stack names none."""
+    from asg_agent.records import stacks
+
+    reg = stacks.read(exp.stack_file) if exp.stack_file else None
+    try:
+        path = reg.reference_file if reg else ""
+    except stacks.RegistrationError as e:
+        raise SystemExit(f"campaign: --reference release: {e}") from None
+    if not path:
+        raise SystemExit(
+            f"campaign: --reference release: the stack under test ({exp.stack}) names no reference "
+            "registration (its registration's `reference:` key, docs/your-stack.md)"
+        )
+    rel = stacks.read(path)
+    return {
+        "stack": rel.name,
+        "perception": rel.name,
+        "command_interface": rel.command,
+        "stack_file": repo_relative(rel.path) or rel.path,
+        "registration": {"mode": rel.mode, "command": rel.command, "sim_time": rel.sim_time, "identity": rel.identity},
     }
 
 

@@ -102,7 +102,10 @@ def parse(argv):
         help="three-stack attribution (issue #36): a reference stack by role, full (the unflawed U-Net "
         "on the same backend) or ground_truth, and its workers (count, numbered after the workers "
         "before it, or namespaces); give both. Candidates (--candidates) are re-run on each, and "
-        "every candidate is classed flaw, model, stack, unclear, reverse, pass or error (docs/agent.md)",
+        "every candidate is classed flaw, model, stack, unclear, reverse, pass or error (docs/agent.md). "
+        "Any stack pair (issue #67): release (the registration the stack under test names as its reference, "
+        "e.g. its last release) alone, and each candidate is classed regression, shared, unclear, reverse, "
+        "pass or error",
     )
     p.add_argument(
         "--candidates",
@@ -177,8 +180,13 @@ def parse(argv):
             p.error(f"--reference {r!r}: must be ROLE=WORKERS with ROLE one of {', '.join(attr.ROLES)}")
     if len(set(roles)) != len(roles):
         p.error(f"--reference: each role once (got {', '.join(roles)})")
-    if a.reference and attr.TRUTH not in roles:
-        p.error(f"--reference: attribution needs a {attr.TRUTH} reference (the simulator's labels)")
+    if a.reference and attr.TRUTH not in roles and attr.RELEASE not in roles:
+        p.error(
+            f"--reference: attribution needs a {attr.TRUTH} reference (the simulator's labels), or a "
+            f"{attr.RELEASE} reference for a stack pair"
+        )
+    if a.reward == "regression" and attr.RELEASE not in roles:
+        p.error("--reward regression needs --reference release=WORKERS (attribution:=release)")
     if not (math.isfinite(a.collision_bonus) and a.collision_bonus >= 0.0):
         p.error(f"--collision-bonus {a.collision_bonus}: must be a finite number >= 0")
     return a
@@ -246,7 +254,19 @@ def print_summary(store, name, out=sys.stdout):
     print(generator_line(store.campaign(name)), file=out)
     print(stack_line(store.campaign(name)), file=out)
     cl = s["classes"]
-    if sum(cl.values()):
+    refs = (
+        (json.loads(store.campaign(name)["settings"] or "{}").get("references") or {}) if store.campaign(name) else {}
+    )
+    if sum(cl.values()) and attr.RELEASE in refs and attr.TRUTH not in refs:
+        rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+        print(
+            f"stack-pair attribution against {refs[attr.RELEASE].get('stack', 'the release')} ({rerun} of "
+            f"{s['scenarios']} scenarios re-run on it, {cl[attr.NOT_CANDIDATE]} not candidates): regression "
+            f"{cl['regression']}, shared {cl['shared']}; unclear {cl['unclear']}, reverse {cl['reverse']}, "
+            f"pass {cl['pass']}, error {cl['error']}" + (f", pending {cl[attr.PENDING]}" if cl[attr.PENDING] else ""),
+            file=out,
+        )
+    elif sum(cl.values()):
         rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
         print(
             f"three-stack attribution ({rerun} of {s['scenarios']} scenarios re-run on the references, "
@@ -353,6 +373,9 @@ def progress_bar(a):
         if cl and attr.FULL in st.get("roles", ()):
             rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
             diff = f" flaw {cl['flaw']} model {cl['model']} stack {cl['stack']} rerun {rerun}"
+        elif cl and attr.RELEASE in st.get("roles", ()):
+            rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+            diff = f" regression {cl['regression']} shared {cl['shared']} rerun {rerun}"
         elif st.get("perception") is not None:
             diff = f" perception {st['perception']} stack {st['stack']}"
         if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):

@@ -27,7 +27,7 @@ from asg_agent.paths import REPO
 #: train.launch's default experiment (asg_bringup/experiments is the repository's experiments/)
 DEFAULT_EXPERIMENT = os.path.join(REPO, "experiments", "exp1.yaml")
 #: the train.launch arguments an experiment decides, in the order they are printed
-STACK_KEYS = ("stack", "sim_time", "perception", "model", "unet_backend", "planner_config")
+STACK_KEYS = ("stack", "sim_time", "perception", "model", "unet_backend", "planner_config", "release_stack")
 
 
 def planner_path(name: str) -> str:
@@ -42,6 +42,9 @@ def implied(exp: Experiment) -> Dict[str, str]:
     # a registered stack of this project by its name, any other by its registration file
     builtin = os.path.dirname(exp.stack_file) == os.path.realpath(stacks.builtin_dir())
     out = {"stack": exp.stack if builtin else exp.stack_file}
+    release = stacks.read(exp.stack_file).reference_file if exp.stack_file else ""
+    if release:  # the registration it is compared against (attribution:=release; issue #67)
+        out["release_stack"] = release
     if exp.sim_time:
         out["sim_time"] = "true"
     if exp.stack == "paper":
@@ -55,7 +58,7 @@ def implied(exp: Experiment) -> Dict[str, str]:
 def _same(key: str, given: str, want: str) -> bool:
     if key == "unet_backend":
         return resolve_backend(given) == resolve_backend(want)
-    if key == "stack":
+    if key in ("stack", "release_stack"):
         try:
             return stacks.resolve(given) == stacks.resolve(want)
         except stacks.RegistrationError:
@@ -73,8 +76,15 @@ def launch_args(args: List[str], check: bool = False) -> List[str]:
     path = given.get("experiment") or DEFAULT_EXPERIMENT
     exp = load_experiment(path)
     want = implied(exp)
+    if given.get("attribution", "").lower() == "release" and "release_stack" not in want:
+        raise ExperimentError(
+            f"{path}: attribution:=release needs a stack that names its reference registration; {exp.stack} "
+            "names none (its registration's `reference:` key, docs/your-stack.md)"
+        )
     problems = []
     for key, value in want.items():
+        if key == "release_stack" and check and given.get("attribution", "").lower() != "release":
+            continue  # a reference no worker runs
         if key in given and not _same(key, given[key], value):
             shown = given[key] or (f"(empty: {resolve_backend('')})" if key == "unet_backend" else "")
             problems.append(

@@ -13,6 +13,11 @@ worker's namespace (with all of its own arguments), so the block lands at `<work
     sim_time: true              # its nodes run on /clock, the worker's simulated time
     identity: [planner/speed]   # parameters that must be set on its workers; campaigns record them
     worker: {publish_points: true}   # scene worker parameters it needs (WORKER_KEYS)
+    reference: depth            # optional (issue #67): the registration this stack is compared
+                                # against, e.g. its last release (a name of stacks/ or a launch
+                                # file's path, relative to this file's folder): attribution:=release
+                                # re-runs every candidate on it and classes each failure a
+                                # regression (only this stack fails) or shared
 
 A file may hold several blocks under `if`/`unless` (the paper stack's nodes follow its
 perception); they must agree on everything but `nodes` and `worker`. The two stacks of this
@@ -43,7 +48,7 @@ def builtin_dir() -> str:
     return os.path.join(rospkg.RosPack().get_path("asg_bringup"), "stacks")
 
 
-KEYS = ("name", "nodes", "mode", "acks", "command", "sim_time", "identity", "worker")
+KEYS = ("name", "nodes", "mode", "acks", "command", "sim_time", "identity", "worker", "reference")
 MODES = ("lockstep", "free")
 COMMANDS = ("vehicle_command", "twist")
 #: the scene worker parameters a registration may set (docs/simulator.md)
@@ -57,7 +62,7 @@ WORKER_KEYS = (
     "realtime_factor",
 )
 #: what every block of one file must agree on
-SHARED = ("name", "mode", "acks", "command", "sim_time", "identity")
+SHARED = ("name", "mode", "acks", "command", "sim_time", "identity", "reference")
 
 
 class RegistrationError(ValueError):
@@ -74,6 +79,18 @@ class Registration:
     sim_time: bool = False
     identity: List[str] = field(default_factory=list)
     nodes: List[Tuple[str, ...]] = field(default_factory=list)  #: each block's node list
+    reference: str = ""  #: the registration it is compared against, as written ("" for none)
+
+    @property
+    def reference_file(self) -> str:
+        """The reference registration's launch file (absolute), "" for none; RegistrationError if
+        it names no registration."""
+        if not self.reference:
+            return ""
+        path = resolve(self.reference, os.path.dirname(self.path))
+        if path == self.path:
+            raise RegistrationError(f"{self.path}: reference: {self.reference!r} is this registration itself")
+        return path
 
     @property
     def builtin(self) -> bool:
@@ -127,6 +144,7 @@ def read(path: str) -> Registration:
         sim_time=first["sim_time"],
         identity=list(first["identity"]),
         nodes=[tuple(p["nodes"]) for p in parsed],
+        reference=first["reference"],
     )
 
 
@@ -167,6 +185,9 @@ def _block(path: str, i: int, el) -> dict:
     d.setdefault("identity", [])
     if not isinstance(d["identity"], list) or not all(isinstance(n, str) and n for n in d["identity"]):
         problems.append("identity: a list of parameter names (relative to the worker's namespace)")
+    d.setdefault("reference", "")
+    if not isinstance(d["reference"], str):
+        problems.append(f"reference: {d['reference']!r}, must be a stack's name or the path of its launch file")
     worker = d.setdefault("worker", {})
     if not isinstance(worker, dict):
         problems.append("worker: a mapping of scene worker parameters")

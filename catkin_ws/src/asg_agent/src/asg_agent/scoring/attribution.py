@@ -24,6 +24,12 @@ With ``ground_truth`` alone (the single-reference mode, every scenario re-run), 
 takes the place of ``flaw`` and ``model`` together: the stack under test fails where ground truth
 stays clear.
 
+Any pair of stacks (issue #67): with the ``release`` role (the registration the stack under test
+names as its `reference`, e.g. its last release) and no ``ground_truth``, a candidate is a
+``regression`` when the stack under test fails and the release reaches the goal with proxy <
+REFERENCE_CLEAR, ``shared`` when the release fails too, and otherwise as above (``unclear``,
+``reverse``, ``pass``, ``error``): the flaw's question asked of any change to a stack.
+
 A run *fails* when it ends in a collision, a timeout, a flip or out of bounds, or reaches the goal
 with proxy >= FINDING (the paper's count). Non-candidates get ``not_candidate``; candidates whose
 reference runs are still out, ``pending``.
@@ -53,15 +59,16 @@ FAILED_TERMINATIONS = schema.FAILED_TERMINATIONS
 
 FULL = "full"  # role of the unflawed-model reference
 TRUTH = "ground_truth"  # role of the ground-truth reference
-ROLES = (FULL, TRUTH)
+RELEASE = "release"  # role of the registration the stack under test is compared against
+ROLES = (FULL, TRUTH, RELEASE)
 
 #: the classes of a candidate, in the order tables show them
-CLASSES = ("flaw", "model", "stack", "perception", "unclear", "reverse", "pass", "error")
+CLASSES = ("flaw", "model", "stack", "perception", "regression", "shared", "unclear", "reverse", "pass", "error")
 #: what a scenario's attribution column holds besides a class
 NOT_CANDIDATE = "not_candidate"
 PENDING = "pending"
 #: the classes that are findings of the stack under test
-FINDINGS = ("flaw", "model", "stack", "perception")
+FINDINGS = ("flaw", "model", "stack", "perception", "regression", "shared")
 
 
 @dataclass(frozen=True)
@@ -120,8 +127,10 @@ def classify(test: RunOutcome, refs: Mapping[str, RunOutcome]) -> str:
     """The class of one candidate from its run on the stack under test and its reference runs
     (keyed by role: `FULL` and/or `TRUTH`; other keys are ignored). See the module's text."""
     known = {k: v for k, v in refs.items() if k in ROLES}
+    if TRUTH not in known and RELEASE in known:
+        return classify_pair(test, known[RELEASE])
     if TRUTH not in known:
-        raise ValueError(f"attribution needs the {TRUTH!r} reference (got {sorted(refs)})")
+        raise ValueError(f"attribution needs the {TRUTH!r} or the {RELEASE!r} reference (got {sorted(refs)})")
     if test.error or any(r.error for r in known.values()):
         return "error"
     truth, full = known[TRUTH], known.get(FULL)
@@ -134,6 +143,18 @@ def classify(test: RunOutcome, refs: Mapping[str, RunOutcome]) -> str:
     if full.fails:
         return "model"
     return "flaw" if full.clear and truth.clear else "unclear"
+
+
+def classify_pair(test: RunOutcome, release: RunOutcome) -> str:
+    """The class of a candidate of a stack pair (see the module's text): regression, shared,
+    unclear, reverse, pass or error."""
+    if test.error or release.error:
+        return "error"
+    if not test.fails:
+        return "reverse" if release.fails else "pass"
+    if release.fails:
+        return "shared"
+    return "regression" if release.clear else "unclear"
 
 
 def classify_rows(test: Mapping, refs: Mapping[str, Mapping]) -> str:

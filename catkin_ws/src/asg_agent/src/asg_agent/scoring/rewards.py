@@ -18,6 +18,8 @@ proxy, which scores a collision like any short run.
   did (capped at CLEARANCE_RANGE); 0 for a candidate on which `full` failed too (the layout
   exposes what both share, not the flaw). A non-candidate (the stack under test reached the goal
   with proxy below attribution.CANDIDATE) is NON_CANDIDATE_FLAW: it showed nothing of a failure.
+- `regression` (issue #67): the same for a stack pair (attribution's `release` role): 1 for a
+  `regression` (only the stack under test fails), graded against the release's run, 0 otherwise.
 
 All distances are read at 10 Hz (every 6th sample of the 60 Hz trajectory, as attribution keeps a
 reference run's positions), so the stack under test and a reference are measured alike.
@@ -98,11 +100,19 @@ def regret_reward(proxy: float, clearance: float, full_proxy: float, full_cleara
 
 
 def flaw_reward(
-    cls: str, proxy: float, clearance: float, full_termination: str, full_proxy: Optional[float], full_clearance: float
+    cls: str,
+    proxy: float,
+    clearance: float,
+    full_termination: str,
+    full_proxy: Optional[float],
+    full_clearance: float,
+    target: str = "flaw",
 ) -> float:
     """The `flaw` reward of a candidate (see the module's text): `cls` its attribution class,
-    proxy and clearance [m] of the stack under test's run, and the `full` reference run's."""
-    if cls == "flaw":
+    proxy and clearance [m] of the stack under test's run, and the `full` reference run's. The
+    `regression` reward of a stack pair is the same with target "regression" and the `release`
+    reference's run in place of `full`'s."""
+    if cls == target:
         return 1.0
     if full_termination != "SUCCESS" or full_proxy is None:
         return 0.0
