@@ -25,9 +25,10 @@ import stack_util as su
 
 SCENARIOS = 20  # gap_nav's campaign (the issue's size)
 SHORT = 4  # the paper and depth stacks': that their files bring them up and they run
+PAIR = 6  # the depth pair's campaign, run twice (issue #67)
 
 
-def campaign(store, experiment, worker, name, scenarios, timeout):
+def campaign(store, experiment, worker, name, scenarios, timeout, extra=()):
     cmd = [
         "/usr/bin/python3",
         "-m",
@@ -46,6 +47,7 @@ def campaign(store, experiment, worker, name, scenarios, timeout):
         "--name",
         name,
         "--no-progress",
+        *extra,
     ]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=su.REPO)
 
@@ -54,7 +56,7 @@ class RegisteredStacks(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node("registered_stacks_test")
-        for ns in ("worker_0", "worker_1", "worker_2", "worker_3"):
+        for ns in ("worker_0", "worker_1", "worker_2", "worker_3", "worker_4"):
             su.client(ns, timeout=180.0)
         cls.dir = tempfile.mkdtemp()
         cls.store = os.path.join(cls.dir, "store.sqlite")
@@ -109,6 +111,30 @@ class RegisteredStacks(unittest.TestCase):
             rows = list(Store(self.store).rows(name))
             self.assertEqual(len(rows), SHORT)
             self.assertTrue(all(r["termination"] != "ERROR" for r in rows), [r["error"] for r in rows])
+
+    def test_2_a_stack_pair_in_lockstep_gives_the_same_verdicts_twice(self):
+        # issue #67: depth_rc (worker_4) under test, its registration's reference `depth` (worker_2)
+        # re-running every scenario; two campaigns of the same seed give the same runs and verdicts
+        extra = ("--reference", "release=worker_2", "--candidates", "all")
+        for name in ("pair-a", "pair-b"):
+            p = campaign(self.store, "exp1-depth-rc.yaml", "worker_4", name, PAIR, 600, extra)
+            self.assertEqual(p.returncode, 0, p.stdout[-2000:] + p.stderr[-2000:])
+            self.assertIn("stack-pair attribution against depth", p.stdout)
+        store = Store(self.store)
+        settings = json.loads(store.campaign("pair-a")["settings"])
+        self.assertEqual((settings["stack"], settings["references"]["release"]["stack"]), ("depth_rc", "depth"))
+        a, b = list(store.rows("pair-a")), list(store.rows("pair-b"))
+        self.assertEqual(len(a), PAIR)
+        classes = ("regression", "shared", "unclear", "reverse", "pass")
+        self.assertTrue(all(r["attribution"] in classes for r in a), [r["attribution"] for r in a])
+        for x, y in zip(a, b):
+            self.assertEqual(x["attribution"], y["attribution"])
+            self.assertEqual(x["trajectory"], y["trajectory"])  # the stack under test's runs, bit for bit
+            rx, ry = json.loads(x["reference_runs"])["release"], json.loads(y["reference_runs"])["release"]
+            self.assertEqual(
+                (rx["termination"], rx["proxy"], rx["trajectory_xy"]),
+                (ry["termination"], ry["proxy"], ry["trajectory_xy"]),
+            )
 
 
 if __name__ == "__main__":
