@@ -29,6 +29,11 @@ from asg_agent.scoring import attribution as attr
 REQUIRED = ("name", "version", "experiment", "budget", "workers", "attribution", "endpoint", "pilot", "arms", "target")
 
 
+#: from this protocol version on, the pilot's plan runs every arm's first seed before any arm's
+#: second (early seeds inform early)
+SEED_MAJOR_PILOT_VERSION = 3
+
+
 class ProtocolError(ValueError):
     pass
 
@@ -113,7 +118,7 @@ def campaigns(p: dict, stage: str, choice: Optional[dict] = None) -> List[dict]:
             for s in p["pilot"]["seeds"]:
                 c = _campaign(p, f"{n}-pilot-band-{band:g}-s{s}", "route-random", s, band=float(band), budget=budget)
                 out.append(dict(c, arm=f"band {band:g} m"))
-        if p["version"] >= 3:  # every arm's first seed before any arm's second: early seeds inform early
+        if p["version"] >= SEED_MAJOR_PILOT_VERSION:  # every arm's first seed before any arm's second
             seeds = list(p["pilot"]["seeds"])
             out.sort(key=lambda c: seeds.index(c["seed"]))
         return out

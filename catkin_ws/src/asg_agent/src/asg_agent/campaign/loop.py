@@ -26,7 +26,7 @@ import numpy as np
 
 from asg_agent.records.experiment import Experiment
 from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
-from asg_agent.search.methods import SearchMethod
+from asg_agent.search.base import SearchMethod
 from asg_agent.records.store import Store, pack_trajectory, provenance, unpack_trajectory
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring import rewards

@@ -17,15 +17,19 @@ import os
 import sys
 import time
 
-from asg_agent.campaign.loop import CANDIDATE_RULES, REWARDS, Campaign
-from asg_agent.campaign.policy import CampaignError, campaign_settings, reference_roles, worker_names
-from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collector
-from asg_agent.cli.signals import stop_on_signals
-from asg_agent.scoring import attribution as attr
-from asg_agent.records.experiment import ExperimentError, load_experiment
-from asg_agent.search.methods import METHODS, make_method
-from asg_agent.records.store import Store, StoreError, checkpoint_path
-from asg_agent.search.td3 import TD3Config
+from asg_agent.blas import blas_identity, pin_blas
+
+pin_blas()  # before numpy and torch load OpenBLAS: the same kernel on every CPU (asg_agent/blas.py)
+
+from asg_agent.campaign.loop import CANDIDATE_RULES, REWARDS, Campaign  # noqa: E402
+from asg_agent.campaign.policy import CampaignError, campaign_settings, reference_roles, worker_names  # noqa: E402
+from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collector  # noqa: E402
+from asg_agent.cli.signals import stop_on_signals  # noqa: E402
+from asg_agent.scoring import attribution as attr  # noqa: E402
+from asg_agent.records.experiment import ExperimentError, load_experiment  # noqa: E402
+from asg_agent.search.methods import METHODS, make_method  # noqa: E402
+from asg_agent.records.store import Store, StoreError, checkpoint_path  # noqa: E402
+from asg_agent.search.td3 import TD3Config  # noqa: E402
 
 
 def open_tensorboard(a, store, name, c):
@@ -448,6 +452,7 @@ def main(argv=None):
         pool, references = make_pools(a, exp, workers, roles)
         method = make_search(a, exp)
         settings = campaign_settings(a, exp, workers, roles, candidates)
+        settings["agent_blas"] = blas_identity()  # the search's arithmetic (asg_agent/blas.py)
         if not a.fake_workers:
             check_stacks(exp, settings, workers, roles)
     except (ExperimentError, ValueError, CampaignError) as e:

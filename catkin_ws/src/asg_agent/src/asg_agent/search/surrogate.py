@@ -29,7 +29,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from asg_agent.records.experiment import Experiment
-from asg_agent.search.methods import SearchMethod
+from asg_agent.search.base import SearchMethod
 from asg_scenario.catalogue import MESHES
 from asg_scenario.layout import RouteFrame, mesh_of_instances
 
