@@ -6,8 +6,6 @@ import os
 import platform
 from typing import Dict, List, Tuple
 
-# Stages that are waiting, not work: left out of a node's busy time.
-IDLE = {("scene_worker", "wait"), ("scene_worker", "acks")}
 PAPER_RATE = 625.0  # scenarios an hour: 5,000 in about 8 hours (the paper)
 
 

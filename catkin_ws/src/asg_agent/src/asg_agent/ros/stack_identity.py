@@ -46,7 +46,12 @@ def stack_mismatch(worker: str, settings: dict) -> list:
                 rospy.get_param(f"{worker}/segmenter/backend", LEGACY_UNET_BACKEND) or DEFAULT_UNET_BACKEND,
                 settings.get("unet_backend", LEGACY_UNET_BACKEND),
             )
-            if backend != ran:
+            # channels_last and polyphase are one function, their runs bit for bit each other's
+            # (asg_perception.numerics.FP32_PORTABLE_BACKENDS): a campaign of one resumes on the other
+            from asg_perception.numerics import FP32_PORTABLE_BACKENDS
+
+            portable = {backend, ran} <= set(FP32_PORTABLE_BACKENDS)
+            if backend != ran and not portable:
                 out.append(f"the campaign's stack runs the {ran!r} inference backend, {worker} runs {backend!r}")
             # Issue #36: the numerics (oneDNN kernels, threads, torch) the runs were made with.
             recorded = settings.get("numerics", "")
