@@ -24,6 +24,7 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 
 
+from asg_agent.campaign.dispatch import Dispatcher, Outcome, Pool, run_each  # noqa: F401 (Outcome, Pool, run_each: their old home)
 from asg_agent.records.experiment import Experiment
 from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
 from asg_agent.search.base import SearchMethod
@@ -33,25 +34,15 @@ from asg_agent.scoring import rewards
 from asg_agent.search.td3 import load_checked, save_atomic
 
 
-#: what a search can maximise (Campaign's `reward`, the campaign's --reward)
-REWARDS = ("proxy", "differential", "collision", "clearance", "ttc", "regret", "flaw", "regression")
+#: what a search can maximise (Campaign's `reward`, the campaign's --reward): scoring/rewards.py's
+#: registry, each entry declaring what it needs
+REWARDS = rewards.REWARDS
 #: which scenarios run on the reference stacks: "failures" (the candidates of
 #: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
 CANDIDATE_RULES = ("failures", "all")
 #: rewards that read a reference run (the search waits for it)
-REFERENCE_REWARDS = ("differential", "collision", "regret", "flaw", "regression")
-#: the rewards of a class of attribution (scoring/rewards.py flaw_reward): the class that scores 1,
-#: and the reference role whose run the graded part compares with
-CLASS_REWARDS = {"flaw": ("flaw", attr.FULL), "regression": ("regression", attr.RELEASE)}
-
-
-def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
-    """The "collision" reward: the proxy, plus `bonus` [-] when the stack under test collided and
-    the reference stack (where there is one) reached the goal on the same scene: a perception
-    collision as every count of the project defines it, which the proxy alone scores like any
-    run that ended early."""
-    collided = termination == "COLLISION" and reference_termination in (None, "SUCCESS")
-    return proxy + (bonus if collided else 0.0)
+REFERENCE_REWARDS = tuple(r.name for r in rewards.REGISTRY.values() if r.waits)
+collision_reward = rewards.collision_reward  # its old home
 
 
 class Stages:
@@ -74,66 +65,6 @@ def kept_xy(trajectory) -> list:
 
 
 @dataclass
-class Outcome:
-    """What a pool returns for a job: the result as plain values."""
-
-    job: int
-    worker: str
-    termination: str
-    error: str = ""
-    sim_time: float = 0.0
-    num_control_msgs: int = 0
-    trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 5), np.float32))  # t, x, y, yaw, yaw rate
-    visibility: List[float] = field(default_factory=list)
-    removed: List[list] = field(default_factory=list)  # [layout, instance, reason]
-    collision_with: str = ""
-    wall_time: float = 0.0
-
-
-class Pool:
-    """Workers that run scenario requests (the ROS adapter is pool_ros.WorkerPool)."""
-
-    def free(self) -> List[str]:
-        raise NotImplementedError
-
-    def submit(self, worker: str, job: int, request: dict):
-        raise NotImplementedError
-
-    def poll(self, timeout: float) -> List[Outcome]:
-        raise NotImplementedError
-
-
-def run_each(
-    pool: Pool,
-    requests: List[dict],
-    on_outcome: Callable[[int, Outcome], None],
-    poll: float = 0.2,
-    max_attempts: int = 3,
-):
-    """Runs every request once on `pool`, outside any campaign (re-runs, suites): an ERROR is run
-    again, up to `max_attempts` runs; `on_outcome(k, outcome)` as request k ends, in any order.
-    A late answer of a run given up on is ignored."""
-    queue, running, attempts, done = list(range(len(requests))), {}, {}, set()
-    while len(done) < len(requests):
-        for w in pool.free():
-            if not queue:
-                break
-            k = queue.pop(0)
-            attempts[k] = attempts.get(k, 0) + 1
-            running[k] = w
-            pool.submit(w, k, requests[k])
-        for o in pool.poll(poll):
-            if running.get(o.job) != o.worker:
-                continue
-            del running[o.job]
-            if o.termination == "ERROR" and attempts[o.job] < max_attempts:
-                queue.insert(0, o.job)
-                continue
-            done.add(o.job)
-            on_outcome(o.job, o)
-
-
-@dataclass
 class Job:
     job: int
     slot: int
@@ -143,7 +74,7 @@ class Job:
     action: np.ndarray
     request: dict
     attempts: int = 0
-    avoid: str = ""  # the worker that failed it last
+    avoid: str = ""  # (kept for checkpoints: the dispatcher keeps a job's attempts and avoid)
 
 
 @dataclass
@@ -154,8 +85,6 @@ class RefJob:
     request: dict
     row: dict  # the stored row of the run on the stack under test
     got: Dict[str, dict] = field(default_factory=dict)  # role -> the reference run as stored
-    attempts: Dict[str, int] = field(default_factory=dict)
-    avoid: Dict[str, str] = field(default_factory=dict)
 
 
 def reference_setup(reward, references, reference, candidates, collision_bonus):
@@ -179,14 +108,14 @@ def reference_setup(reward, references, reference, candidates, collision_bonus):
     candidates = candidates or "failures"
     if candidates not in CANDIDATE_RULES:
         raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
-    if reward == "differential" and not references:
-        raise ValueError("the differential reward needs a reference stack")
-    if reward in ("differential", "regret") and candidates != "all":
+    need = rewards.REGISTRY[reward]
+    if need.any_reference and not references:
+        raise ValueError(f"the {reward} reward needs a reference stack")
+    if need.every_scenario and candidates != "all":
         raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
-    if reward in ("regret", "flaw") and attr.FULL not in references:
-        raise ValueError(f"the {reward} reward needs the {attr.FULL!r} reference stack")
-    if reward == "regression" and attr.RELEASE not in references:
-        raise ValueError(f"the regression reward needs the {attr.RELEASE!r} reference stack")
+    for role in need.roles:
+        if role not in references:
+            raise ValueError(f"the {reward} reward needs the {role!r} reference stack")
     if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
         raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
     return references, candidates
@@ -241,17 +170,17 @@ class Campaign:
         self.references, self.candidates = references, candidates
         self.reward, self.collision_bonus = reward, float(collision_bonus)
         # The single-reference mode stores each row with its reference run, as round 3 did.
-        self.wait_for_references = bool(references) and (reward in REFERENCE_REWARDS or candidates == "all")
+        self.rule = rewards.REGISTRY[reward]
+        self.wait_for_references = bool(references) and (self.rule.waits or candidates == "all")
         # attributed(job, class, counts of every class): called as each candidate's references
         # are in (tensorboard_log.TensorBoardLog.attribution); out of job order.
         self.attributed: Optional[Callable[[int, str, dict], None]] = None
         self.ref_jobs: Dict[int, RefJob] = {}
-        self.ref_queue: Dict[str, List[int]] = {role: [] for role in references}
-        self.ref_running: Dict[str, Dict[int, str]] = {role: {} for role in references}
         self.pending: Dict[int, Job] = {}  # proposed, not applied
         self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
-        self.queue: List[int] = []  # proposed jobs waiting for a worker
-        self.running: Dict[int, str] = {}
+        # proposed jobs to the workers under test, each candidate to each reference stack
+        self.jobs = Dispatcher(pool, max_attempts, self._retrying)
+        self.refs = {role: Dispatcher(p, max_attempts, self._retrying_on(role)) for role, p in references.items()}
         self.slot_state: List[Optional[dict]] = [None] * slots
         self.next_job = 0
         self.next_apply = 0
@@ -321,7 +250,8 @@ class Campaign:
             for j in [j for j in self.pending if j >= self.total]:
                 del self.pending[j]
             self.next_job = min(self.next_job, max(self.total, self.next_apply))
-            self.queue = sorted(self.pending)
+            for j in sorted(self.pending):
+                self.jobs.add(j, self.pending[j].request)
             # A resume may also raise the budget of a finished (or cut) campaign: slots left
             # without a proposal by the old budget propose again, in slot order. The extension
             # is deterministic given the stored history (not the same scenarios a campaign run
@@ -341,8 +271,7 @@ class Campaign:
         for row in self.store.rows(self.name, self.next_apply - 1):
             if not (self.wait_for_references and row["job"] in waiting):
                 self.finished[row["job"]] = dict(row)
-            if row["job"] in self.queue:
-                self.queue.remove(row["job"])
+            self.jobs.discard(row["job"])
         self.done_at_start = self.store.count(self.name)
         summary = self.store.summary(self.name, top=0)
         self.stats.update(
@@ -375,7 +304,7 @@ class Campaign:
         self.stages.add("propose", t0)
         self.pending[j] = Job(j, slot, st["episode"], st["step"], st["state"], action, request)
         if j not in self.finished:
-            self.queue.append(j)
+            self.jobs.add(j, request)
 
     # -- the loop -------------------------------------------------------------------------------
     def run(self, poll_timeout: float = 0.2, deadline: Optional[float] = None) -> dict:
@@ -388,13 +317,15 @@ class Campaign:
             t0 = time.perf_counter()
             outcomes = self.pool.poll(poll_timeout if self.next_apply < self.total else 0.0)
             self.stages.add("wait", t0)
-            for outcome in outcomes:
-                self._on_outcome(outcome)
-            for role, pool in self.references.items():
-                ref = pool.poll(
+            for outcome in self.jobs.take(outcomes):
+                job = self.pending[outcome.job]
+                job.attempts = self.jobs.attempts[outcome.job]
+                self._finish(job, outcome)
+            for role, d in self.refs.items():
+                ref = d.pool.poll(
                     0.0 if outcomes or self.next_apply < self.total else poll_timeout / len(self.references)
                 )
-                for outcome in ref:
+                for outcome in d.take(ref):
                     self._on_ref_outcome(role, outcome)
                 outcomes = outcomes + ref
             if outcomes and self.early_dispatch:  # freed workers get a waiting proposal before the agent learns
@@ -409,62 +340,33 @@ class Campaign:
         return self.store.summary(self.name)
 
     def _dispatch(self):
-        free = self.pool.free()
-        for worker in free:
-            pick = next((j for j in self.queue if self.pending[j].avoid != worker or len(free) == 1), None)
-            if pick is None:
-                continue
-            self.queue.remove(pick)
-            job = self.pending[pick]
-            job.attempts += 1
-            self.running[pick] = worker
-            self.pool.submit(worker, pick, job.request)
-        for role, pool in self.references.items():
-            queue, running = self.ref_queue[role], self.ref_running[role]
-            free = pool.free() if queue else []
-            for worker in free:
-                pick = next((j for j in queue if self.ref_jobs[j].avoid.get(role) != worker or len(free) == 1), None)
-                if pick is None:
-                    continue
-                queue.remove(pick)
-                rj = self.ref_jobs[pick]
-                rj.attempts[role] = rj.attempts.get(role, 0) + 1
-                running[pick] = worker
-                pool.submit(worker, pick, rj.request)
+        self.jobs.dispatch()
+        for d in self.refs.values():
+            d.dispatch()
 
-    def _on_outcome(self, o: Outcome):
-        job = self.pending.get(o.job)
-        if job is None or self.running.get(o.job) != o.worker:
-            return  # a late answer for a job already re-queued elsewhere: never counted twice
-        del self.running[o.job]
-        if o.termination == "ERROR" and job.attempts < self.max_attempts:
-            self.stats["retries"] += 1
-            job.avoid = o.worker
-            self.queue.insert(0, o.job)
-            print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
-            return
-        self._finish(job, o)
+    def _retrying(self, o: Outcome):
+        self.stats["retries"] += 1
+        print(f"[campaign] job {o.job} failed on {o.worker} ({o.error}); retrying elsewhere", file=sys.stderr)
 
-    def _on_ref_outcome(self, role: str, o: Outcome):
-        rj = self.ref_jobs.get(o.job)
-        running = self.ref_running[role]
-        if rj is None or running.get(o.job) != o.worker:
-            return  # a late answer for a run already re-queued elsewhere
-        del running[o.job]
-        if o.termination == "ERROR" and rj.attempts.get(role, 0) < self.max_attempts:
+    def _retrying_on(self, role: str):
+        def retrying(o: Outcome):
             self.stats["retries"] += 1
-            rj.avoid[role] = o.worker
-            self.ref_queue[role].insert(0, o.job)
             print(
                 f"[campaign] job {o.job} failed on {o.worker} ({role} reference: {o.error}); retrying elsewhere",
                 file=sys.stderr,
             )
+
+        return retrying
+
+    def _on_ref_outcome(self, role: str, o: Outcome):
+        rj = self.ref_jobs.get(o.job)
+        if rj is None:
             return
         _, terms = self._terms(rj.request, o)
         rj.got[role] = {
             "stack": role,
             "worker": o.worker,
-            "attempts": rj.attempts.get(role, 0),
+            "attempts": self.refs[role].attempts.get(o.job, 0),
             "termination": o.termination,
             "error": o.error,
             **term_values(terms),
@@ -479,8 +381,10 @@ class Campaign:
         """Sends a stored candidate to every reference stack."""
         j = row["job"]
         self.ref_jobs[j] = RefJob(j, json.loads(row["request"]), row)
-        for role in self.references:
-            self.ref_queue[role].append(j)
+        for d in self.refs.values():
+            d.attempts.pop(j, None)  # a candidate queued again on resume starts anew
+            d.avoid.pop(j, None)
+            d.add(j, self.ref_jobs[j].request)
 
     def _attach(self, rj: RefJob):
         """Every reference run of a candidate is in: its class, stored with the runs."""
@@ -495,39 +399,10 @@ class Campaign:
         proxy, tproxy = row["proxy"], (truth or {}).get("proxy")
         diff = proxy - tproxy if proxy is not None and tproxy is not None else None
         reward = row["reward"]
-        if self.reward == "differential":
-            reward = diff
-        elif self.reward == "collision" and proxy is not None:
-            ref = truth or rj.got.get(attr.RELEASE)
-            reward = collision_reward(proxy, row["termination"], ref["termination"], self.collision_bonus)
-        elif self.reward == "regret":
-            full = rj.got[attr.FULL]
-            reward = None
-            if proxy is not None and full["proxy"] is not None:
-                removed = json.loads(row["removed"])
-                xy = unpack_trajectory(row["trajectory"])[:: rewards.SAMPLE_EVERY, 1:3]
-                reward = rewards.regret_reward(
-                    proxy,
-                    rewards.min_clearance(rj.request, xy, removed),
-                    full["proxy"],
-                    rewards.min_clearance(rj.request, np.asarray(full["trajectory_xy"]), removed),
-                )
-        elif self.reward in CLASS_REWARDS:
-            target, role = CLASS_REWARDS[self.reward]
-            clean = rj.got[role]
-            reward = None
-            if proxy is not None:
-                removed = json.loads(row["removed"])
-                xy = unpack_trajectory(row["trajectory"])[:: rewards.SAMPLE_EVERY, 1:3]
-                reward = rewards.flaw_reward(
-                    cls,
-                    proxy,
-                    rewards.min_clearance(rj.request, xy, removed),
-                    clean["termination"],
-                    clean["proxy"],
-                    rewards.min_clearance(rj.request, np.asarray(clean["trajectory_xy"]), removed),
-                    target=target,
-                )
+        if self.rule.attached is not None:  # a reward that reads the references (scoring/rewards.py)
+            xy = unpack_trajectory(row["trajectory"])[:: rewards.SAMPLE_EVERY, 1:3]
+            run = rewards.Run(proxy, row["termination"], rj.request, xy, json.loads(row["removed"]))
+            reward = self.rule.attached(run, rj.got, cls, self.collision_bonus)
         t0 = time.perf_counter()
         self.store.set_references(self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy, reward)
         self.stages.add("store", t0)
@@ -553,23 +428,16 @@ class Campaign:
     def _finish(self, job: Job, o: Outcome):
         t0 = time.perf_counter()
         traj, terms = self._terms(job.request, o)
-        reward = terms.proxy if terms else None
-        if self.reward == "collision" and terms:  # with references, rewritten once they are in
-            reward = collision_reward(terms.proxy, o.termination, None, self.collision_bonus)
-        elif self.reward in ("clearance", "ttc") and terms:  # scoring/rewards.py, from the 10 Hz positions
-            xy = traj[:: rewards.SAMPLE_EVERY, 1:3]
-            if self.reward == "clearance":
-                reward = rewards.clearance_reward(terms.proxy, rewards.min_clearance(job.request, xy, o.removed))
-            else:
-                reward = rewards.ttc_reward(terms.proxy, rewards.min_time_to_collision(job.request, xy, o.removed))
+        reward = None
+        if terms:  # the reward from this run alone (scoring/rewards.py), from the 10 Hz positions
+            run = rewards.Run(terms.proxy, o.termination, job.request, traj[:: rewards.SAMPLE_EVERY, 1:3], o.removed)
+            reward = self.rule.own(run, self.collision_bonus)
         label, candidate = None, False
         if self.references:
             candidate = self.candidates == "all" or attr.is_candidate(o.termination, terms.proxy if terms else None)
             label = attr.PENDING if candidate else attr.NOT_CANDIDATE
-            if candidate and self.reward in REFERENCE_REWARDS:
+            if candidate and self.rule.waits:
                 reward = None  # known once the references are in
-            elif self.reward in CLASS_REWARDS and terms:
-                reward = rewards.NON_CANDIDATE_FLAW
         row = {
             "campaign": self.name,
             "job": o.job,

@@ -29,7 +29,8 @@ from xml.etree import ElementTree as ET
 import numpy as np
 import yaml
 
-from asg_agent.campaign.loop import Outcome, Pool, kept_xy, run_each
+from asg_agent.campaign.dispatch import Outcome, Pool, run_each
+from asg_agent.campaign.loop import kept_xy
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring.proxy import run_terms
 

@@ -27,6 +27,7 @@ from typing import Dict, List
 
 import numpy as np
 
+from asg_agent.campaign.dispatch import run_each
 from asg_agent.records.experiment import load_experiment
 from asg_agent.scoring.proxy import run_terms
 from asg_agent.search.methods import RandomSearch
@@ -95,26 +96,6 @@ def row_of(k: int, req: dict, o) -> dict:
     return r
 
 
-def run_requests(pool, requests: List[dict], todo: List[int], on_row, max_attempts: int = 3):
-    """Runs requests[k] for k in todo on the pool's free workers; on_row(k, outcome) for each,
-    in the order they finish. An ERROR is retried on another worker up to max_attempts."""
-    pending, attempts, running = list(todo), {}, set()
-    while pending or running:
-        for w in pool.free():
-            if not pending:
-                break
-            k = pending.pop(0)
-            attempts[k] = attempts.get(k, 0) + 1
-            running.add(k)
-            pool.submit(w, k, requests[k])
-        for o in pool.poll(0.2):
-            running.discard(o.job)
-            if o.termination == "ERROR" and attempts[o.job] < max_attempts:
-                pending.insert(0, o.job)
-                continue
-            on_row(o.job, o)
-
-
 def run(a) -> int:
     from asg_agent.campaign.policy import worker_names
     from asg_agent.ros.pool import WorkerPool
@@ -148,7 +129,7 @@ def run(a) -> int:
                 f"{r['termination']} proxy {r['proxy'] if r['proxy'] is None else round(r['proxy'], 2)}"
             )
 
-        run_requests(pool, reqs, todo, on_row)
+        run_each(pool, reqs, on_row, keys=todo)  # campaign.dispatch: retries elsewhere, late answers dropped
     bar.close()
     return 0
 

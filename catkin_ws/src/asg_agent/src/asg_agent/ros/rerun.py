@@ -25,7 +25,7 @@ import numpy as np
 
 from asg_agent.records.export import read_export
 from asg_agent.scoring.attribution import FINDING, RERUN_CLASSES, rerun_class, still_failing
-from asg_agent.campaign.loop import run_each
+from asg_agent.campaign.dispatch import run_each
 from asg_agent.scoring.proxy import run_terms, term_values
 
 

@@ -25,7 +25,8 @@ All distances are read at 10 Hz (every 6th sample of the 60 Hz trajectory, as at
 reference run's positions), so the stack under test and a reference are measured alike.
 """
 
-from typing import Optional, Sequence
+from dataclasses import dataclass
+from typing import Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -120,3 +121,143 @@ def flaw_reward(
     c, cf = min(clearance, CLEARANCE_RANGE), min(full_clearance, CLEARANCE_RANGE)
     dc = max(cf - c, 0.0) / CLEARANCE_RANGE
     return GRADED_CAP * 0.5 * (dp + dc) * (1.0 - 1e-9)
+
+
+def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
+    """The "collision" reward: the proxy, plus `bonus` [-] when the stack under test collided and
+    the reference stack (where there is one) reached the goal on the same scene: a perception
+    collision as every count of the project defines it, which the proxy alone scores like any
+    run that ended early."""
+    collided = termination == "COLLISION" and reference_termination in (None, "SUCCESS")
+    return proxy + (bonus if collided else 0.0)
+
+
+# -- the registry: what a campaign can maximise, each with what it needs (issue #69) -------------
+
+
+@dataclass(frozen=True)
+class Run:
+    """The stack under test's run of a scenario, as a reward reads it: its proxy (None when it
+    has none), termination, request, 10 Hz positions [m] and removed obstacles."""
+
+    proxy: Optional[float]
+    termination: str
+    request: dict
+    xy: np.ndarray
+    removed: Sequence = ()
+
+
+@dataclass(frozen=True)
+class Reward:
+    """A reward (`Campaign`'s `reward`): `own(run, bonus)` its value from the stack under test's
+    run alone (None without a proxy); `attached(run, refs, cls, bonus)` its value once the
+    candidate's reference runs are in (refs: role -> the stored reference run; cls: attribution's
+    class), None to keep `own`'s. `waits`: the search waits for the references of a candidate
+    (rewards that read them); `roles`: the reference roles it needs; `any_reference`: it needs one,
+    whichever; `every_scenario`: every scenario must be re-run (candidates 'all')."""
+
+    name: str
+    own: Callable
+    attached: Optional[Callable] = None
+    waits: bool = False
+    roles: Tuple[str, ...] = ()
+    any_reference: bool = False
+    every_scenario: bool = False
+
+
+def _truth_or_release(refs):
+    from asg_agent.scoring import attribution as attr
+
+    return refs.get(attr.TRUTH) or refs.get(attr.RELEASE)
+
+
+def _differential(run, refs, cls, bonus):
+    t = _truth_or_release(refs)
+    return run.proxy - t["proxy"] if run.proxy is not None and t and t["proxy"] is not None else None
+
+
+def _collision_attached(run, refs, cls, bonus):
+    if run.proxy is None:
+        return None
+    return collision_reward(run.proxy, run.termination, _truth_or_release(refs)["termination"], bonus)
+
+
+def _regret(run, refs, cls, bonus):
+    from asg_agent.scoring import attribution as attr
+
+    full = refs[attr.FULL]
+    if run.proxy is None or full["proxy"] is None:
+        return None
+    ref_xy = np.asarray(full["trajectory_xy"])
+    return regret_reward(
+        run.proxy,
+        min_clearance(run.request, run.xy, run.removed),
+        full["proxy"],
+        min_clearance(run.request, ref_xy, run.removed),
+    )
+
+
+def _class_reward(target: str, role: str):
+    def attached(run, refs, cls, bonus):
+        clean = refs[role]
+        if run.proxy is None:
+            return None
+        return flaw_reward(
+            cls,
+            run.proxy,
+            min_clearance(run.request, run.xy, run.removed),
+            clean["termination"],
+            clean["proxy"],
+            min_clearance(run.request, np.asarray(clean["trajectory_xy"]), run.removed),
+            target=target,
+        )
+
+    return attached
+
+
+def _registry() -> Dict[str, Reward]:
+    from asg_agent.scoring import attribution as attr
+
+    def proxy(run, bonus):
+        return run.proxy
+
+    return {
+        r.name: r
+        for r in (
+            Reward("proxy", proxy),
+            Reward("differential", proxy, _differential, waits=True, any_reference=True, every_scenario=True),
+            Reward(
+                "collision",
+                lambda run, bonus: collision_reward(run.proxy, run.termination, None, bonus),
+                _collision_attached,
+                waits=True,
+            ),
+            Reward(
+                "clearance",
+                lambda run, bonus: clearance_reward(run.proxy, min_clearance(run.request, run.xy, run.removed)),
+            ),
+            Reward(
+                "ttc", lambda run, bonus: ttc_reward(run.proxy, min_time_to_collision(run.request, run.xy, run.removed))
+            ),
+            Reward("regret", proxy, _regret, waits=True, roles=(attr.FULL,), every_scenario=True),
+            Reward(
+                "flaw",
+                lambda run, bonus: NON_CANDIDATE_FLAW,
+                _class_reward("flaw", attr.FULL),
+                waits=True,
+                roles=(attr.FULL,),
+            ),
+            Reward(
+                "regression",
+                lambda run, bonus: NON_CANDIDATE_FLAW,
+                _class_reward("regression", attr.RELEASE),
+                waits=True,
+                roles=(attr.RELEASE,),
+            ),
+        )
+    }
+
+
+#: every reward by name, in the order the campaign's --reward lists them
+REGISTRY: Dict[str, Reward] = _registry()
+REWARDS = tuple(REGISTRY)
