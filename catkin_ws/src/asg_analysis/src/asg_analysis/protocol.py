@@ -188,8 +188,8 @@ def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
     if s.get("reward", "proxy") != c["reward"]:
         out.append(f"{c['name']}: reward {s.get('reward')!r}, the protocol says {c['reward']!r}")
     refs = sorted((s.get("references") or {}).keys())
-    if refs != sorted(attr.ROLES):
-        out.append(f"{c['name']}: reference stacks {refs}, the protocol says {sorted(attr.ROLES)}")
+    if refs != sorted(attr.THREE_STACK):
+        out.append(f"{c['name']}: reference stacks {refs}, the protocol says {sorted(attr.THREE_STACK)}")
     if len(s.get("workers", [])) != p["workers"]:
         out.append(f"{c['name']}: {len(s.get('workers', []))} workers under test, the protocol says {p['workers']}")
     if c["band"] is not None and abs(float((s.get("method_config") or {}).get("band", -1)) - c["band"]) > 1e-9:

@@ -11,7 +11,7 @@ from typing import Dict, List
 
 import numpy as np
 
-from asg_agent.campaign.loop import Outcome, Pool
+from asg_agent.campaign.dispatch import Outcome, Pool
 from asg_agent.scoring.optimal_path import obstacle_discs, shortest_path
 from asg_agent.scoring.proxy import resample_path
 

@@ -15,7 +15,6 @@ nothing twice and none is stored twice (the store's (campaign, job) key).
 """
 
 import json
-import math
 import sys
 import time
 from dataclasses import dataclass, field
@@ -24,11 +23,14 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 
 
+from asg_agent.campaign.policy import CANDIDATE_RULES, reference_setup  # noqa: F401 (CANDIDATE_RULES: its old home)
+from asg_agent.campaign import tally
+from asg_agent.campaign.tally import Stages
 from asg_agent.campaign.dispatch import Dispatcher, Outcome, Pool, run_each  # noqa: F401 (Outcome, Pool, run_each: their old home)
 from asg_agent.records.experiment import Experiment
 from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
 from asg_agent.search.base import SearchMethod
-from asg_agent.records.store import Store, pack_trajectory, provenance, unpack_trajectory
+from asg_agent.records.store import Store, kept_xy, provenance, scenario_row, unpack_trajectory  # noqa: F401 (kept_xy: its old home)
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring import rewards
 from asg_agent.search.td3 import load_checked, save_atomic
@@ -37,31 +39,9 @@ from asg_agent.search.td3 import load_checked, save_atomic
 #: what a search can maximise (Campaign's `reward`, the campaign's --reward): scoring/rewards.py's
 #: registry, each entry declaring what it needs
 REWARDS = rewards.REWARDS
-#: which scenarios run on the reference stacks: "failures" (the candidates of
-#: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
-CANDIDATE_RULES = ("failures", "all")
 #: rewards that read a reference run (the search waits for it)
 REFERENCE_REWARDS = tuple(r.name for r in rewards.REGISTRY.values() if r.waits)
 collision_reward = rewards.collision_reward  # its old home
-
-
-class Stages:
-    """Wall seconds and calls per stage of the campaign loop (docs/benchmarks.md: `bench`)."""
-
-    NAMES = ("propose", "update", "proxy", "store", "checkpoint", "dispatch", "wait")
-
-    def __init__(self):
-        self.seconds = {n: 0.0 for n in self.NAMES}
-        self.calls = {n: 0 for n in self.NAMES}
-
-    def add(self, name: str, t0: float):
-        self.seconds[name] += time.perf_counter() - t0
-        self.calls[name] += 1
-
-
-def kept_xy(trajectory) -> list:
-    """The positions attribution stores of a reference run: every 6th sample (10 Hz), to 1 cm."""
-    return np.round(np.asarray(trajectory, np.float32).reshape(-1, 5)[::6, 1:3], 2).tolist()
 
 
 @dataclass
@@ -85,40 +65,6 @@ class RefJob:
     request: dict
     row: dict  # the stored row of the run on the stack under test
     got: Dict[str, dict] = field(default_factory=dict)  # role -> the reference run as stored
-
-
-def reference_setup(reward, references, reference, candidates, collision_bonus):
-    """The campaign's reference stacks by role and its candidate rule, checked against the reward
-    (ValueError naming what does not fit); `reference` alone is round 3's single-reference mode."""
-    if reward not in REWARDS:
-        raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
-    references = dict(references or {})
-    if reference is not None:
-        if references:
-            raise ValueError("give `reference` (ground truth, every scenario) or `references`, not both")
-        references = {attr.TRUTH: reference}
-        candidates = candidates or "all"
-    unknown = sorted(set(references) - set(attr.ROLES))
-    if unknown:
-        raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")
-    if references and attr.TRUTH not in references and attr.RELEASE not in references:
-        raise ValueError(
-            f"attribution needs a {attr.TRUTH!r} (or, for a stack pair, a {attr.RELEASE!r}) reference stack"
-        )
-    candidates = candidates or "failures"
-    if candidates not in CANDIDATE_RULES:
-        raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
-    need = rewards.REGISTRY[reward]
-    if need.any_reference and not references:
-        raise ValueError(f"the {reward} reward needs a reference stack")
-    if need.every_scenario and candidates != "all":
-        raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
-    for role in need.roles:
-        if role not in references:
-            raise ValueError(f"the {reward} reward needs the {role!r} reference stack")
-    if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
-        raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
-    return references, candidates
 
 
 class Campaign:
@@ -157,15 +103,9 @@ class Campaign:
         self.scalars = scalars
         self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
         # Attribution (scoring/attribution.py): the scenarios the `candidates` rule picks run again
-        # on each reference stack, keyed by role: "full" (the unflawed U-Net) and/or "ground_truth"
-        # (the simulator's labels), the same planner and follower. `reference` alone is the
-        # single-reference mode of round 3: ground truth, every scenario. reward "proxy": the search
-        # learns from the stack under test's proxy (the paper) and never waits for a reference;
-        # "differential": from proxy - ground-truth proxy (every scenario must be re-run);
-        # "collision": the proxy plus `collision_bonus` [-] when the stack under test collided
-        # (with a ground-truth reference: only where it reached the goal), since the proxy itself
-        # scores a collision like any short run (issue #27). Rewards that read a reference wait
-        # for it before the search learns, so a campaign stays a function of its seed.
+        # on each reference stack, keyed by role (`reference` alone: round 3's single-reference
+        # mode, ground truth, every scenario). The reward is scoring/rewards.py's entry: one that
+        # reads the references waits for them before the search learns (a function of the seed).
         references, candidates = reference_setup(reward, references, reference, candidates, collision_bonus)
         self.references, self.candidates = references, candidates
         self.reward, self.collision_bonus = reward, float(collision_bonus)
@@ -186,21 +126,7 @@ class Campaign:
         self.next_apply = 0
         self.next_episode = 0
         self.episodes_done = 0
-        # best/ge3/ge4: the proxy of the stack under test; diff_best/diff_ge1: differential
-        # campaigns' reward (proxy - reference proxy), its largest and how often it reached 1.
-        # perception/stack: findings (proxy >= 3) with the reference below 2 / at least 3.
-        self.stats = {
-            "best": -math.inf,
-            "ge3": 0,
-            "ge4": 0,
-            "errors": 0,
-            "retries": 0,
-            "diff_best": -math.inf,
-            "diff_ge1": 0,
-            "perception": 0,
-            "stack": 0,
-            "classes": attr.count_classes(()),
-        }
+        self.stats = tally.new()  # campaign/tally.py
         self.t0 = time.time()
         self.done_at_start = 0
         self.stages = Stages()
@@ -274,16 +200,7 @@ class Campaign:
             self.jobs.discard(row["job"])
         self.done_at_start = self.store.count(self.name)
         summary = self.store.summary(self.name, top=0)
-        self.stats.update(
-            best=summary["max_proxy"] if summary["max_proxy"] is not None else -math.inf,
-            ge3=summary["proxy_ge_3"],
-            ge4=summary["proxy_ge_4"],
-            errors=summary["terminations"].get("ERROR", 0),
-            perception=summary["perception_ge3"],
-            stack=summary["stack_ge3"],
-            diff_ge1=summary["differential_ge1"],
-            classes=summary["classes"],
-        )
+        tally.from_summary(self.stats, summary)
         self._apply_ready()
 
     # -- episodes and proposals -----------------------------------------------------------------
@@ -397,7 +314,6 @@ class Campaign:
             else None
         )
         proxy, tproxy = row["proxy"], (truth or {}).get("proxy")
-        diff = proxy - tproxy if proxy is not None and tproxy is not None else None
         reward = row["reward"]
         if self.rule.attached is not None:  # a reward that reads the references (scoring/rewards.py)
             xy = unpack_trajectory(row["trajectory"])[:: rewards.SAMPLE_EVERY, 1:3]
@@ -406,19 +322,11 @@ class Campaign:
         t0 = time.perf_counter()
         self.store.set_references(self.name, rj.job, json.dumps(rj.got, sort_keys=True), cls, legacy, reward)
         self.stages.add("store", t0)
-        classes = self.stats["classes"]
-        classes[attr.PENDING] = max(0, classes.get(attr.PENDING, 0) - 1)
-        classes[cls] = classes.get(cls, 0) + 1
-        if diff is not None:
-            self.stats["diff_best"] = max(self.stats["diff_best"], diff)
-            self.stats["diff_ge1"] += diff >= attr.DIFFERENTIAL
-            _, perception, stack = attr.attribute(proxy, tproxy)
-            self.stats["perception"] += perception
-            self.stats["stack"] += stack
+        tally.attributed(self.stats, cls, proxy, tproxy)
         if self.wait_for_references and rj.job >= self.next_apply:
             self.finished[rj.job] = dict(row, reward=reward, attribution=cls, reference=legacy)
         if self.attributed:
-            self.attributed(rj.job, cls, dict(classes))
+            self.attributed(rj.job, cls, dict(self.stats["classes"]))
         if self.progress:
             self.progress(self.status())
 
@@ -438,52 +346,16 @@ class Campaign:
             label = attr.PENDING if candidate else attr.NOT_CANDIDATE
             if candidate and self.rule.waits:
                 reward = None  # known once the references are in
-        row = {
-            "campaign": self.name,
-            "job": o.job,
-            "method": self.method.name,
-            "episode": job.episode,
-            "step": job.step,
-            "worker": o.worker,
-            "attempts": job.attempts,
-            "scenario_id": job.request["scenario_id"],
-            "request": json.dumps(job.request, sort_keys=True),
-            "termination": o.termination,
-            "error": o.error,
-            **term_values(terms),
-            "path_length": terms.path_length if terms else None,
-            "optimal_length": terms.optimal_length if terms else None,
-            "sim_time": o.sim_time,
-            "num_control_msgs": o.num_control_msgs,
-            "visibility": json.dumps([float(v) for v in o.visibility]),
-            "removed": json.dumps(o.removed),
-            "collision_with": o.collision_with,
-            "trajectory": pack_trajectory(traj),
-            "samples": len(traj),
-            "wall_time": o.wall_time,
-            "finished": time.time(),
-            "reference": None,
-            "reward": reward,
-            "reference_runs": None,
-            "attribution": label,
-        }
+        row = scenario_row(self.name, self.method.name, job, o, traj, terms, reward, label)
         self.stages.add("proxy", t0)
         t0 = time.perf_counter()
         self.store.add(row)
         self.stages.add("store", t0)
         if candidate:
             self._queue_references(row)
-            self.stats["classes"][attr.PENDING] += 1
-        elif label is not None:
-            self.stats["classes"][label] += 1
         if not (candidate and self.wait_for_references):
             self.finished[o.job] = row
-        if terms:
-            self.stats["best"] = max(self.stats["best"], terms.proxy)
-            self.stats["ge3"] += terms.proxy >= attr.FINDING
-            self.stats["ge4"] += terms.proxy >= attr.FINDING_STRONG
-        else:
-            self.stats["errors"] += 1
+        tally.scenario(self.stats, terms, label, candidate)
         if self.progress:
             self.progress(self.status())
 
@@ -527,51 +399,15 @@ class Campaign:
         self.stages.add("checkpoint", t0)
 
     def _write_checkpoint(self):
-        pending = [
-            dict(
-                job=j.job,
-                slot=j.slot,
-                episode=j.episode,
-                step=j.step,
-                state=j.state,
-                action=j.action,
-                request=j.request,
-                attempts=0,
-                avoid="",
-            )
-            for j in self.pending.values()
-        ]
-        save_atomic(
-            {
-                "method": self.method.state_dict(),
-                "next_job": self.next_job,
-                "next_apply": self.next_apply,
-                "next_episode": self.next_episode,
-                "episodes_done": self.episodes_done,
-                "stats": self.stats,
-                "slot_state": self.slot_state,
-                "pending": pending,
-            },
-            self.checkpoint_path,
-        )
+        from dataclasses import asdict
+
+        keys = ("next_job", "next_apply", "next_episode", "episodes_done", "stats", "slot_state")
+        state = {k: getattr(self, k) for k in keys}
+        pending = [dict(asdict(j), attempts=0, avoid="") for j in self.pending.values()]
+        save_atomic(dict(state, method=self.method.state_dict(), pending=pending), self.checkpoint_path)
 
     def status(self) -> dict:
         stored = self.store.count(self.name)
-        elapsed = max(1e-6, time.time() - self.t0)
-        return {
-            "done": stored,
-            "total": self.total,
-            "rate_per_hour": (stored - self.done_at_start) / elapsed * 3600,
-            "best": self.stats["best"],
-            "ge3": self.stats["ge3"],
-            "ge4": self.stats["ge4"],
-            "errors": self.stats["errors"],
-            "retries": self.stats["retries"],
-            "diff_best": self.stats["diff_best"] if attr.TRUTH in self.references else None,
-            "diff_ge1": self.stats["diff_ge1"] if attr.TRUTH in self.references else None,
-            "perception": self.stats["perception"] if attr.TRUTH in self.references else None,
-            "stack": self.stats["stack"] if attr.TRUTH in self.references else None,
-            # attribution classes (candidates re-run, not_candidate, pending) with named references
-            "classes": dict(self.stats["classes"]) if self.references else None,
-            "roles": list(self.references),
-        }
+        return tally.status(
+            self.stats, stored, self.total, stored - self.done_at_start, time.time() - self.t0, self.references
+        )

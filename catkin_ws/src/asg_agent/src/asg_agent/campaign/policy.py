@@ -3,7 +3,15 @@ stacks' namespaces, and the settings the store keeps (the stack's identity, the 
 reward). No ROS: the pools and the checks against running workers are asg_agent.ros.campaign_pools."""
 
 from asg_agent.paths import repo_relative
+import math
+
 from asg_agent.scoring import attribution as attr
+from asg_agent.scoring import rewards
+
+#: which scenarios run on the reference stacks: "failures" (the candidates of
+#: scoring/attribution.is_candidate) or "all" (every scenario: the single-reference mode of round 3)
+CANDIDATE_RULES = ("failures", "all")
+REWARDS = rewards.REWARDS
 
 
 class CampaignError(Exception):
@@ -131,3 +139,37 @@ def registered_settings(exp) -> dict:
         "stack_file": repo_relative(reg.path) or reg.path,
         "registration": {"mode": reg.mode, "command": reg.command, "sim_time": reg.sim_time, "identity": reg.identity},
     }
+
+
+def reference_setup(reward, references, reference, candidates, collision_bonus):
+    """The campaign's reference stacks by role and its candidate rule, checked against the reward
+    (ValueError naming what does not fit); `reference` alone is round 3's single-reference mode."""
+    if reward not in REWARDS:
+        raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
+    references = dict(references or {})
+    if reference is not None:
+        if references:
+            raise ValueError("give `reference` (ground truth, every scenario) or `references`, not both")
+        references = {attr.TRUTH: reference}
+        candidates = candidates or "all"
+    unknown = sorted(set(references) - set(attr.ROLES))
+    if unknown:
+        raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")
+    if references and attr.TRUTH not in references and attr.RELEASE not in references:
+        raise ValueError(
+            f"attribution needs a {attr.TRUTH!r} (or, for a stack pair, a {attr.RELEASE!r}) reference stack"
+        )
+    candidates = candidates or "failures"
+    if candidates not in CANDIDATE_RULES:
+        raise ValueError(f"candidates {candidates!r}: must be one of {', '.join(CANDIDATE_RULES)}")
+    need = rewards.REGISTRY[reward]
+    if need.any_reference and not references:
+        raise ValueError(f"the {reward} reward needs a reference stack")
+    if need.every_scenario and candidates != "all":
+        raise ValueError(f"the {reward} reward needs every scenario re-run (candidates 'all')")
+    for role in need.roles:
+        if role not in references:
+            raise ValueError(f"the {reward} reward needs the {role!r} reference stack")
+    if not (math.isfinite(collision_bonus) and collision_bonus >= 0.0):
+        raise ValueError(f"collision_bonus {collision_bonus!r}: must be a finite number >= 0")
+    return references, candidates

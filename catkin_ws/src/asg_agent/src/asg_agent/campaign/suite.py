@@ -30,7 +30,7 @@ import numpy as np
 import yaml
 
 from asg_agent.campaign.dispatch import Outcome, Pool, run_each
-from asg_agent.campaign.loop import kept_xy
+from asg_agent.records.store import kept_xy
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring.proxy import run_terms
 

@@ -127,6 +127,51 @@ def pack_trajectory(traj: np.ndarray) -> bytes:
     return zlib.compress(traj.tobytes(), 6)
 
 
+def kept_xy(trajectory) -> list:
+    """The positions attribution stores of a reference run: every 6th sample (10 Hz), to 1 cm."""
+    return np.round(np.asarray(trajectory, np.float32).reshape(-1, 5)[::6, 1:3], 2).tolist()
+
+
+def scenario_row(campaign: str, method: str, job, o, traj: np.ndarray, terms, reward, label) -> Dict:
+    """The store's row of a finished scenario: `job` as the campaign proposed it (job, episode,
+    step, attempts, request), `o` the pool's Outcome, `traj` its trajectory, `terms` its proxy terms
+    (scoring.proxy; None without), `reward` what the search learns from, `label` its attribution."""
+    import json
+    import time
+
+    from asg_agent.scoring.proxy import term_values
+
+    return {
+        "campaign": campaign,
+        "job": o.job,
+        "method": method,
+        "episode": job.episode,
+        "step": job.step,
+        "worker": o.worker,
+        "attempts": job.attempts,
+        "scenario_id": job.request["scenario_id"],
+        "request": json.dumps(job.request, sort_keys=True),
+        "termination": o.termination,
+        "error": o.error,
+        **term_values(terms),
+        "path_length": terms.path_length if terms else None,
+        "optimal_length": terms.optimal_length if terms else None,
+        "sim_time": o.sim_time,
+        "num_control_msgs": o.num_control_msgs,
+        "visibility": json.dumps([float(v) for v in o.visibility]),
+        "removed": json.dumps(o.removed),
+        "collision_with": o.collision_with,
+        "trajectory": pack_trajectory(traj),
+        "samples": len(traj),
+        "wall_time": o.wall_time,
+        "finished": time.time(),
+        "reference": None,
+        "reward": reward,
+        "reference_runs": None,
+        "attribution": label,
+    }
+
+
 def unpack_trajectory(blob: bytes) -> np.ndarray:
     return np.frombuffer(zlib.decompress(blob), dtype=np.float32).reshape(-1, 5)
 

@@ -23,7 +23,7 @@ from asg_msgs.msg import RunScenarioAction
 
 from asg_scenario.convert import to_goal_msg
 
-from asg_agent.campaign.loop import Outcome, Pool
+from asg_agent.campaign.dispatch import Outcome, Pool
 
 STATUS = {
     GoalStatus.PENDING: "PENDING",

@@ -27,7 +27,8 @@ import numpy as np
 
 from asg_scenario import ScenarioError, load_scenario
 
-from asg_agent.campaign.loop import Outcome, kept_xy
+from asg_agent.campaign.dispatch import Outcome
+from asg_agent.records.store import kept_xy
 from asg_agent.records.experiment import LEGACY_UNET_BACKEND
 from asg_agent.scoring.proxy import run_terms
 from asg_agent.records.store import Store, unpack_trajectory

@@ -61,6 +61,8 @@ FULL = "full"  # role of the unflawed-model reference
 TRUTH = "ground_truth"  # role of the ground-truth reference
 RELEASE = "release"  # role of the registration the stack under test is compared against
 ROLES = (FULL, TRUTH, RELEASE)
+#: the roles of three-stack attribution (attribution:=three)
+THREE_STACK = (FULL, TRUTH)
 
 #: the classes of a candidate, in the order tables show them
 CLASSES = ("flaw", "model", "stack", "perception", "regression", "shared", "unclear", "reverse", "pass", "error")
