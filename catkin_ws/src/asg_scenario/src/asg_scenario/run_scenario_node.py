@@ -70,7 +70,7 @@ def run_goal(client, goal, timeout_s=None, feedback_cb=None):
     return gh.get_result()
 
 
-def main(argv=None):
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="run_scenario",
         description="Run a scenario YAML file on a scene worker and write the outcome "
@@ -90,64 +90,12 @@ def main(argv=None):
     parser.add_argument(
         "--top-down", type=int, default=768, help="size of the rendered top-down picture [px] (768; 0: none)"
     )
-    args = parser.parse_args(argv)
+    return parser
 
-    try:
-        scenario = load_scenario(args.scenario)
-    except ScenarioError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    if args.scenario_id is not None:
-        scenario["scenario_id"] = args.scenario_id
 
-    import actionlib
-    import rospy
-    from asg_msgs.msg import RunScenarioAction
-
-    from .ros_node import init_node
-
-    try:  # under /use_sim_time: waits for /clock, or the deadline below is past before it starts
-        init_node("run_scenario", anonymous=True, disable_signals=True)
-    except RuntimeError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    name = args.worker.rstrip("/") + "/run_scenario"
-    client = actionlib.ActionClient(name, RunScenarioAction)
-    print(f"waiting for worker action server {name} ...", flush=True)
-    if not client.wait_for_server(rospy.Duration(60.0)):
-        print(f"error: no action server at {name} after 60 s (is the worker launched?)", file=sys.stderr)
-        return 3
-    last = [-1.0]
-    votes = {}
-    if args.votes:
-        from visualization_msgs.msg import MarkerArray
-
-        def on_votes(msg):
-            for m in msg.markers:
-                if m.ns == "votes":
-                    votes["cells"] = [(p.x, p.y, c.a) for p, c in zip(m.points, m.colors)]
-                    votes["size"] = m.scale.x
-
-        rospy.Subscriber(args.worker.rstrip("/") + "/planner/votes", MarkerArray, on_votes)
-
-    def feedback(fb):
-        if fb.sim_time - last[0] >= 1.0:
-            last[0] = fb.sim_time
-            print(f"  t = {fb.sim_time:6.1f} s   distance to goal {fb.distance_to_goal:7.2f} m", flush=True)
-
-    print(f"running scenario {scenario['scenario_id']} ({scenario['name'] or args.scenario})", flush=True)
-    goal = to_goal_msg(scenario)
-    goal.top_down_px = max(0, args.top_down)
-    import time
-
-    wall0 = time.monotonic()
-    result = run_goal(client, goal, args.timeout, feedback)
-    if result is None:
-        print(f"error: no result within {args.timeout:g} s", file=sys.stderr)
-        return 4
-    wall = time.monotonic() - wall0
-    if args.votes:
-        rospy.sleep(0.5)  # the last replan's markers
+def _write_outputs(args, scenario: dict, result, votes: dict, wall: float) -> int:
+    """result.yaml, trajectory.csv, scenario.yaml and run.png of a run in args.out; the summary
+    line; 0, or 1 for a run that ended in ERROR."""
     samples = _samples(result)
     xy = [(s["x"], s["y"]) for s in samples]
     os.makedirs(args.out, exist_ok=True)
@@ -211,3 +159,65 @@ def main(argv=None):
     )
     print(f"wrote {args.out}/result.yaml, trajectory.csv, scenario.yaml, run.png")
     return 0 if name != "ERROR" else 1
+
+
+def main(argv=None):
+    args = _parser().parse_args(argv)
+
+    try:
+        scenario = load_scenario(args.scenario)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if args.scenario_id is not None:
+        scenario["scenario_id"] = args.scenario_id
+
+    import actionlib
+    import rospy
+    from asg_msgs.msg import RunScenarioAction
+
+    from .ros_node import init_node
+
+    try:  # under /use_sim_time: waits for /clock, or the deadline below is past before it starts
+        init_node("run_scenario", anonymous=True, disable_signals=True)
+    except RuntimeError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    name = args.worker.rstrip("/") + "/run_scenario"
+    client = actionlib.ActionClient(name, RunScenarioAction)
+    print(f"waiting for worker action server {name} ...", flush=True)
+    if not client.wait_for_server(rospy.Duration(60.0)):
+        print(f"error: no action server at {name} after 60 s (is the worker launched?)", file=sys.stderr)
+        return 3
+    last = [-1.0]
+    votes = {}
+    if args.votes:
+        from visualization_msgs.msg import MarkerArray
+
+        def on_votes(msg):
+            for m in msg.markers:
+                if m.ns == "votes":
+                    votes["cells"] = [(p.x, p.y, c.a) for p, c in zip(m.points, m.colors)]
+                    votes["size"] = m.scale.x
+
+        rospy.Subscriber(args.worker.rstrip("/") + "/planner/votes", MarkerArray, on_votes)
+
+    def feedback(fb):
+        if fb.sim_time - last[0] >= 1.0:
+            last[0] = fb.sim_time
+            print(f"  t = {fb.sim_time:6.1f} s   distance to goal {fb.distance_to_goal:7.2f} m", flush=True)
+
+    print(f"running scenario {scenario['scenario_id']} ({scenario['name'] or args.scenario})", flush=True)
+    goal = to_goal_msg(scenario)
+    goal.top_down_px = max(0, args.top_down)
+    import time
+
+    wall0 = time.monotonic()
+    result = run_goal(client, goal, args.timeout, feedback)
+    if result is None:
+        print(f"error: no result within {args.timeout:g} s", file=sys.stderr)
+        return 4
+    wall = time.monotonic() - wall0
+    if args.votes:
+        rospy.sleep(0.5)  # the last replan's markers
+    return _write_outputs(args, scenario, result, votes, wall)

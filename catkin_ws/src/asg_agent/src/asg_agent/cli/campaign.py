@@ -48,6 +48,15 @@ def open_tensorboard(a, store, name, c):
 
 def parse(argv):
     p = argparse.ArgumentParser(prog="campaign", description=__doc__.split("\n\n")[0])
+    _search_options(p)
+    _run_options(p)
+    a = p.parse_args(argv)
+    _check(p, a)
+    return a
+
+
+def _search_options(p):
+    """What runs: the experiment, the search, its budget and seed, the workers and the store."""
     p.add_argument("experiment", help="experiment file (experiments/expN.yaml)")
     p.add_argument("--method", default="td3-per-asp", choices=METHODS)
     p.add_argument("--scenarios", type=int, default=500, help="scenarios to run in all (default 500)")
@@ -89,6 +98,10 @@ def parse(argv):
         default=1.0,
         help="[-] route-random: the share of obstacles placed in the band, the rest anywhere (default 1)",
     )
+
+
+def _run_options(p):
+    """How it runs: stand-in workers, references and attribution, the reward, reports and outputs."""
     p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
     p.add_argument(
         "--reference-workers",
@@ -166,7 +179,10 @@ def parse(argv):
         "tensorboard/NAME beside the store; docs/agent.md)",
     )
     p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard event files")
-    a = p.parse_args(argv)
+
+
+def _check(p, a):
+    """Options that do not fit together: p.error naming them."""
     if a.scenarios < 1:
         p.error("--scenarios must be >= 1")
     if a.reward == "regret" and not (any(r.startswith("full=") for r in a.reference) and a.candidates == "all"):
@@ -193,7 +209,6 @@ def parse(argv):
         p.error("--reward regression needs --reference release=WORKERS (attribution:=release)")
     if not (math.isfinite(a.collision_bonus) and a.collision_bonus >= 0.0):
         p.error(f"--collision-bonus {a.collision_bonus}: must be a finite number >= 0")
-    return a
 
 
 def generator_line(camp) -> str:

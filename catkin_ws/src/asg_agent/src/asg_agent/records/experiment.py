@@ -221,7 +221,8 @@ class Experiment:
         return s
 
 
-def load_experiment(path: str) -> Experiment:
+def _read(path: str):
+    """(text, mapping) of an experiment file; ExperimentError naming what is wrong."""
     try:
         with open(path, encoding="utf-8") as f:
             text = f.read()
@@ -237,6 +238,92 @@ def load_experiment(path: str) -> Experiment:
         raise ExperimentError(f"{path}: nested too deeply to be an experiment file") from None
     if not isinstance(data, dict):
         raise ExperimentError(f"{path}: must be a mapping")
+    return text, data
+
+
+def _textural_free(data: dict, problems: list) -> list:
+    """[(key, lo, hi)] of the file's textural_free; each problem appended to `problems`."""
+    free = []
+    tf = data.get("textural_free", {})
+    if not isinstance(tf, dict):
+        problems.append("textural_free: must be a mapping of textural attribute to [lo, hi]")
+        tf = {}
+    for k, r in tf.items():
+        f = FREE_TEXTURAL.get(k)
+        if f is None:
+            problems.append(
+                f"textural_free.{k}: not a textural attribute a search can set (one of {', '.join(FREE_TEXTURAL)})"
+            )
+        elif (
+            not isinstance(r, list)
+            or len(r) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in r)
+        ):
+            problems.append(f"textural_free.{k}: {r!r}, must be [lo, hi], two numbers in {f.unit}")
+        elif not f.lo <= r[0] < r[1] <= f.hi:
+            problems.append(
+                f"textural_free.{k}: [{r[0]}, {r[1]}] must satisfy {f.lo:g} <= lo < hi <= {f.hi:g} ({f.unit})"
+            )
+        else:
+            free.append((k, float(r[0]), float(r[1])))
+    return free
+
+
+def _terrain_free(data: dict, problems: list):
+    """({amplitude_m, hill_height_m: (lo, hi)}, hill_positions) of the file's terrain_free."""
+    terrain_free = data.get("terrain_free", {})
+    if not isinstance(terrain_free, dict):
+        problems.append("terrain_free: must be a mapping (keys: " + ", ".join(TERRAIN_FREE_KEYS) + ")")
+        terrain_free = {}
+    for k in terrain_free:
+        if k not in TERRAIN_FREE_KEYS:
+            problems.append(f"terrain_free.{k}: unknown key (allowed: {', '.join(TERRAIN_FREE_KEYS)})")
+    ranges = {}
+    for k, (lo_lim, hi_lim) in (("amplitude_m", (0.0, 5.0)), ("hill_height_m", (-10.0, 10.0))):
+        if k not in terrain_free:
+            continue
+        r = terrain_free[k]
+        if (
+            not isinstance(r, list)
+            or len(r) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in r)
+        ):
+            problems.append(f"terrain_free.{k}: {r!r}, must be [lo, hi], two numbers in m")
+        elif not lo_lim <= r[0] < r[1] <= hi_lim:
+            problems.append(f"terrain_free.{k}: [{r[0]}, {r[1]}] must satisfy {lo_lim:g} <= lo < hi <= {hi_lim:g} (m)")
+        else:
+            ranges[k] = (float(r[0]), float(r[1]))
+    hill_positions = terrain_free.get("hill_positions", False)
+    if not isinstance(hill_positions, bool):
+        problems.append(f"terrain_free.hill_positions: {hill_positions!r}, must be true or false")
+        hill_positions = False
+    return ranges, hill_positions
+
+
+def _check_terrain(scenario: dict, ranges: dict, hill_positions: bool, problems: list):
+    """Every request the search can make must be a valid scene: the ranges within the scenario's
+    steepness bounds (docs/scenario-format.md)."""
+    terrain = scenario["structural"]["terrain"]
+    if "amplitude_m" in ranges and ranges["amplitude_m"][1] > terrain["wavelength_m"] / 10.0:
+        problems.append(
+            f"terrain_free.amplitude_m: hi {ranges['amplitude_m'][1]:g} m is too steep for the scenario's "
+            f"wavelength_m {terrain['wavelength_m']:g} (at most wavelength_m / 10)"
+        )
+    if ("hill_height_m" in ranges or hill_positions) and not terrain["hills"]:
+        problems.append(
+            "terrain_free: hill_height_m and hill_positions need hills in the scenario's structural.terrain"
+        )
+    if "hill_height_m" in ranges and terrain["hills"]:
+        lim = min(h["radius_m"] for h in terrain["hills"]) / 2.0
+        if max(abs(v) for v in ranges["hill_height_m"]) > lim:
+            problems.append(
+                f"terrain_free.hill_height_m: {list(ranges['hill_height_m'])} is too steep for the smallest hill "
+                f"(|height| at most radius_m / 2 = {lim:g} m)"
+            )
+
+
+def load_experiment(path: str) -> Experiment:
+    text, data = _read(path)
     problems = [f"{k}: unknown key (allowed: {', '.join(sorted(KEYS))})" for k in data if k not in KEYS]
     for key in ("name", "scenario"):
         if not isinstance(data.get(key), str) or not data.get(key):
@@ -264,55 +351,8 @@ def load_experiment(path: str) -> Experiment:
     for key in ("model", "planner_config", "description"):
         if key in data and not isinstance(data[key], str):
             problems.append(f"{key}: must be a string")
-    free = []
-    tf = data.get("textural_free", {})
-    if not isinstance(tf, dict):
-        problems.append("textural_free: must be a mapping of textural attribute to [lo, hi]")
-        tf = {}
-    for k, r in tf.items():
-        f = FREE_TEXTURAL.get(k)
-        if f is None:
-            problems.append(
-                f"textural_free.{k}: not a textural attribute a search can set (one of {', '.join(FREE_TEXTURAL)})"
-            )
-        elif (
-            not isinstance(r, list)
-            or len(r) != 2
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in r)
-        ):
-            problems.append(f"textural_free.{k}: {r!r}, must be [lo, hi], two numbers in {f.unit}")
-        elif not f.lo <= r[0] < r[1] <= f.hi:
-            problems.append(
-                f"textural_free.{k}: [{r[0]}, {r[1]}] must satisfy {f.lo:g} <= lo < hi <= {f.hi:g} ({f.unit})"
-            )
-        else:
-            free.append((k, float(r[0]), float(r[1])))
-    terrain_free = data.get("terrain_free", {})
-    if not isinstance(terrain_free, dict):
-        problems.append("terrain_free: must be a mapping (keys: " + ", ".join(TERRAIN_FREE_KEYS) + ")")
-        terrain_free = {}
-    for k in terrain_free:
-        if k not in TERRAIN_FREE_KEYS:
-            problems.append(f"terrain_free.{k}: unknown key (allowed: {', '.join(TERRAIN_FREE_KEYS)})")
-    ranges = {}
-    for k, (lo_lim, hi_lim) in (("amplitude_m", (0.0, 5.0)), ("hill_height_m", (-10.0, 10.0))):
-        if k not in terrain_free:
-            continue
-        r = terrain_free[k]
-        if (
-            not isinstance(r, list)
-            or len(r) != 2
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in r)
-        ):
-            problems.append(f"terrain_free.{k}: {r!r}, must be [lo, hi], two numbers in m")
-        elif not lo_lim <= r[0] < r[1] <= hi_lim:
-            problems.append(f"terrain_free.{k}: [{r[0]}, {r[1]}] must satisfy {lo_lim:g} <= lo < hi <= {hi_lim:g} (m)")
-        else:
-            ranges[k] = (float(r[0]), float(r[1]))
-    hill_positions = terrain_free.get("hill_positions", False)
-    if not isinstance(hill_positions, bool):
-        problems.append(f"terrain_free.hill_positions: {hill_positions!r}, must be true or false")
-        hill_positions = False
+    free = _textural_free(data, problems)
+    ranges, hill_positions = _terrain_free(data, problems)
     space = data.get("action_space", "absolute")
     if space not in ACTION_SPACES:
         problems.append(f"action_space: {space!r}, must be one of {', '.join(ACTION_SPACES)}")
@@ -334,25 +374,7 @@ def load_experiment(path: str) -> Experiment:
         scenario["operational"]["sim_timeout"] = float(timeout)
     if instance_count(scenario) == 0:
         raise ExperimentError(f"{path}: the scenario has no obstacle to place")
-    # Every request the search can make must be a valid scene: the ranges within the scenario's
-    # steepness bounds (docs/scenario-format.md).
-    terrain = scenario["structural"]["terrain"]
-    if "amplitude_m" in ranges and ranges["amplitude_m"][1] > terrain["wavelength_m"] / 10.0:
-        problems.append(
-            f"terrain_free.amplitude_m: hi {ranges['amplitude_m'][1]:g} m is too steep for the scenario's "
-            f"wavelength_m {terrain['wavelength_m']:g} (at most wavelength_m / 10)"
-        )
-    if ("hill_height_m" in ranges or hill_positions) and not terrain["hills"]:
-        problems.append(
-            "terrain_free: hill_height_m and hill_positions need hills in the scenario's structural.terrain"
-        )
-    if "hill_height_m" in ranges and terrain["hills"]:
-        lim = min(h["radius_m"] for h in terrain["hills"]) / 2.0
-        if max(abs(v) for v in ranges["hill_height_m"]) > lim:
-            problems.append(
-                f"terrain_free.hill_height_m: {list(ranges['hill_height_m'])} is too steep for the smallest hill "
-                f"(|height| at most radius_m / 2 = {lim:g} m)"
-            )
+    _check_terrain(scenario, ranges, hill_positions, problems)
     if problems:
         raise ExperimentError(f"{path}: " + "; ".join(problems))
     return Experiment(
