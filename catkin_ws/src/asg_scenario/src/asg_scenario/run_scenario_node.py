@@ -40,34 +40,15 @@ def removed_set(result):
 
 
 def run_goal(client, goal, timeout_s=None, feedback_cb=None):
-    """Sends `goal` on `client` (actionlib.ActionClient of a worker's run_scenario) and waits for
-    its result: the result, or None after `timeout_s` [s, wall] (the goal is then cancelled) or
-    at shutdown. The plain ActionClient, one handle for the goal: SimpleActionClient logs "Got a
-    transition callback on a goal handle that we're not tracking" whenever the worker answers
-    before its send_goal has returned, which a worker that starts at once does on every run."""
-    import threading
-    import time
-
-    import rospy
-    from actionlib.action_client import CommState
-
-    done = threading.Event()
-
-    def transition(gh):
-        if gh.get_comm_state() == CommState.DONE:
-            done.set()
-
-    def feedback(gh, fb):
-        if feedback_cb is not None:
-            feedback_cb(fb)
-
-    gh = client.send_goal(goal, transition_cb=transition, feedback_cb=feedback)
-    end = None if timeout_s is None else time.monotonic() + timeout_s
-    while not done.wait(0.1):
-        if rospy.is_shutdown() or (end is not None and time.monotonic() > end):
-            gh.cancel()
-            return None
-    return gh.get_result()
+    """Sends `goal` on `client` (ros_node.GoalClient of a worker's run_scenario) and waits for its
+    result: the result, or None after `timeout_s` [s, wall] (the goal is then cancelled) or at
+    shutdown. GoalClient ties the goal's callbacks to its handle before sending it, so a worker
+    that answers at once (before send_goal returns) is never lost."""
+    client.send_goal(goal, feedback_cb=feedback_cb)
+    if not client.wait_for_result(timeout_s or 0.0):
+        client.cancel_goal()
+        return None
+    return client.get_result()
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -172,11 +153,10 @@ def main(argv=None):
     if args.scenario_id is not None:
         scenario["scenario_id"] = args.scenario_id
 
-    import actionlib
     import rospy
     from asg_msgs.msg import RunScenarioAction
 
-    from .ros_node import init_node
+    from .ros_node import GoalClient, init_node
 
     try:  # under /use_sim_time: waits for /clock, or the deadline below is past before it starts
         init_node("run_scenario", anonymous=True, disable_signals=True)
@@ -184,7 +164,7 @@ def main(argv=None):
         print(f"error: {e}", file=sys.stderr)
         return 2
     name = args.worker.rstrip("/") + "/run_scenario"
-    client = actionlib.ActionClient(name, RunScenarioAction)
+    client = GoalClient(name, RunScenarioAction)
     print(f"waiting for worker action server {name} ...", flush=True)
     if not client.wait_for_server(rospy.Duration(60.0)):
         print(f"error: no action server at {name} after 60 s (is the worker launched?)", file=sys.stderr)

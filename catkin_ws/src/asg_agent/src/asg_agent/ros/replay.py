@@ -352,10 +352,10 @@ def bring_up_worker(stack: dict, port: int):
 
 
 def run_replay(a, request, row, settings) -> int:
-    import actionlib
     import rospy
     from asg_msgs.msg import RunScenarioAction
     from asg_scenario.convert import to_goal_msg
+    from asg_scenario.ros_node import GoalClient
     from asg_scenario.run_scenario_node import run_goal
     from asg_agent.ros.pool import result_to_outcome
 
@@ -373,7 +373,7 @@ def run_replay(a, request, row, settings) -> int:
                 file=sys.stderr,
             )
             return 2
-    client = actionlib.ActionClient(worker + "/run_scenario", RunScenarioAction)
+    client = GoalClient(worker + "/run_scenario", RunScenarioAction)
     if not client.wait_for_server(rospy.Duration(90)):
         print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
         return 2
