@@ -42,9 +42,9 @@ class ReferenceRuns(unittest.TestCase):
                 self.assertIn("oneDNN kernels", why)
                 print(f"refused, as it must be: recorded {recorded!r}, here {here!r}: {why}")
                 return
-        here = su.check_reference(self, su.client("worker_0"), path, write)
+        here, produced = su.check_reference(self, su.client("worker_0"), path, write)
         if os.environ.get("ASG_RECORD_CPU_CLASS") == "1" and not write:
-            su.record_cpu_class(path, here, os.environ.get("ASG_CPU_CLASS_NOTE", ""))
+            su.record_cpu_class(path, here, produced, os.environ.get("ASG_CPU_CLASS_NOTE", ""))
 
 
 if __name__ == "__main__":

@@ -160,7 +160,7 @@ def wait_for_numerics(worker, timeout=120.0):
 def check_reference(test, c, path, write=False, worker="/worker_0"):
     """Runs every stored request of `path` on client `c`; each run must repeat its stored
     termination, length and trajectory digest. write=True (ASG_WRITE_REFERENCE=1) stores what
-    the runs did instead."""
+    the runs did instead. Returns (the segmenter's numerics here, the digests the runs produced)."""
     import json
 
     # A new CPU's file is written with the requests of the backend's first one.
@@ -181,6 +181,7 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
             f"{os.path.basename(path)} was recorded where the segmenter ran {ref.get('numerics')!r}; this "
             f"machine cannot repeat it bit for bit: {why}",
         )
+    produced = []
     for k, entry in enumerate(ref["runs"]):
         state, r = run(c, entry["request"])
         test.assertEqual(state, SUCCEEDED, r.error)
@@ -190,6 +191,7 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
             "digest": trajectory_digest(r),
             "final_xy": [r.trajectory[-1].pose.position.x, r.trajectory[-1].pose.position.y],
         }
+        produced.append(got["digest"])
         if write:
             entry.update(got)
             continue
@@ -208,17 +210,18 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
         with open(path, "w") as f:
             json.dump(ref, f, indent=1)
             f.write("\n")
-    return here
+    return here, produced
 
 
 CPU_CLASSES = os.path.join(REPO, "results", "numerics", "cpu_classes.json")
 
 
-def record_cpu_class(path, here, note=""):
+def record_cpu_class(path, here, produced, note=""):
     """Adds (or renews) this CPU's line for these numerics in results/numerics/cpu_classes.json
     (issue #53): the CPU's model name, its best ISA, the segmenter's numerics here (backend and
-    effective ISA: one CPU may have a line for each), and the stored reference's digests that
-    replayed on it (check_reference passed just before)."""
+    effective ISA: one CPU may have a line for each), and the digests its runs produced
+    (`produced`, check_reference's: issue #68, the runs' own, not the stored file's, so that
+    tests/test_numerics_classes.py compares two records)."""
     import datetime
     import json
 
@@ -227,15 +230,13 @@ def record_cpu_class(path, here, note=""):
 
     model = provenance()["cpu"]
     flags = cpu_flags()
-    with open(path) as f:
-        ref = json.load(f)
     entry = {
         "cpu": model,
         "best_isa": best_isa(flags),
         "native_bf16": native_bf16(flags),
         "numerics": here,
         "reference": os.path.relpath(path, REPO),
-        "digests": [r["digest"] for r in ref["runs"]],
+        "digests": list(produced),
         "date": datetime.date.today().isoformat(),
         "note": note,
     }

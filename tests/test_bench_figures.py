@@ -114,3 +114,83 @@ def test_the_polyphase_bench_and_label_table_in_the_docs_are_their_exports():
     for p in table["pairs"]:
         row = f"| `{p['a']}` | `{p['b']}` | {p['frames_differ']} of {p['frames']:,} | {p['pixels_differ']} of {p['pixels']:,} |"
         assert row in doc, row
+
+
+# -- issue #68 item 6: sentences of docs/benchmarks.md held to what was measured ------------------
+
+
+def _bench_doc():
+    with open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8") as f:
+        return f.read()
+
+
+def test_every_stored_reference_file_the_docs_cite_exists():
+    # a file that is gone is named without its folder, as what it was then
+    import re
+
+    pages = glob.glob(os.path.join(REPO, "docs", "*.md")) + [os.path.join(REPO, "README.md")]
+    gone = []
+    for page in pages:
+        with open(page, encoding="utf-8") as f:
+            for cited in re.findall(r"tests/reference/[\w.*-]+\.json", f.read()):
+                if not glob.glob(os.path.join(REPO, cited)):
+                    gone.append(f"{os.path.relpath(page, REPO)}: {cited}")
+    assert not gone, gone
+
+
+#: what marks a sentence about bf16 as history: bf16 was the default from issue #24 to issue #53
+THEN = ("then", "to issue #53", "until issue #53", "before issue #53")
+
+
+def test_bf16_is_called_shipped_only_in_sentences_marked_as_history():
+    import re
+
+    units = []
+    for para in re.split(r"\n\s*\n", _bench_doc()):
+        rows = [ln for ln in para.splitlines() if ln.startswith("|")]
+        text = " ".join(ln for ln in para.splitlines() if not ln.startswith("|"))
+        units += rows + re.split(r"(?<=[.!?])\s+", " ".join(text.split()))
+    # "shipped" of bf16, not "not shipped" (said of other backends beside it)
+    said = [u for u in units if "bf16" in u and re.search(r"(?<![Nn]ot )\bshipped\b", u)]
+    unmarked = [u for u in said if not any(re.search(rf"\b{m}\b", u) for m in THEN)]
+    assert not unmarked, unmarked
+
+
+def test_the_fp32_labels_across_kernels_are_the_agreement_export():
+    # the five closed-loop runs are the same on AVX2 and AVX-512 kernels; the labels are not always
+    with open(os.path.join(REPO, "results", "numerics", "polyphase_agreement.json"), encoding="utf-8") as f:
+        pairs = {(p["a"], p["b"]): p for p in json.load(f)["pairs"]}
+    cl = pairs[("channels_last:native", "channels_last:AVX2")]
+    pp = pairs[("polyphase:native", "polyphase:AVX2")]
+    assert cl["frames"] == pp["frames"] and cl["pixels"] == pp["pixels"]
+    doc = " ".join(_bench_doc().split())
+    said = (
+        f"on the {cl['frames']:,} frames of the label table above, {cl['pixels_differ']} pixels of "
+        f"{cl['pixels']:,} differ between the two for `channels_last` and {pp['pixels_differ']} for `polyphase`"
+    )
+    assert said in doc, said
+    if cl["pixels_differ"] or pp["pixels_differ"]:
+        assert "fp32 convolutions give the same labels" not in doc
+
+
+def test_the_default_against_bf16_is_said_beside_the_target():
+    # issue #53's 1.433 is against the code before it on its fp32 path; bf16 was that code's
+    # default, and the bench ran it beside them (the fast side, this tree, the same CPU)
+    import statistics
+
+    TAG = os.path.join(REPO, "results", "bench", "r5-final")
+
+    def median_rate(side):
+        runs = [json.load(open(p)) for p in sorted(glob.glob(f"{TAG}-{side}-*.json"))]
+        assert len(runs) == 3 and {r["machine"]["cpu"] for r in runs} == {"AMD EPYC"}
+        return statistics.median(r["rate_per_hour"] for r in runs)
+
+    after, fast = median_rate("after"), median_rate("fast")
+    side = [[json.load(open(p)) for p in sorted(glob.glob(f"{TAG}-{s}-*.json"))] for s in ("before", "after")]
+    target = before_after(*side)["rate_ratio"]
+    said = f"the default runs at {after / fast:.2f}x: {after:,.0f} against {fast:,.0f} scenarios an hour, medians"
+    doc = " ".join(_bench_doc().split())
+    assert said in doc, said
+    assert (
+        f"the {target:.3f} is against the code before issue #53 on its fp32 path, which was not its default then" in doc
+    )

@@ -215,3 +215,25 @@ def test_the_soak_sentence_is_what_the_exports_say():
         f"{min(n for n, _ in alone)}-{max(n for n, _ in alone)} for s10-s12)"
     )
     assert said in " ".join(open(DOC, encoding="utf-8").read().split()), said
+
+
+def test_the_version_3_status_block_is_in_step_with_its_exports():
+    # issue #67: the study of version 3 leads docs/experiments.md; its block is what its exports say
+    r = subprocess.run(
+        [
+            "/usr/bin/python3",
+            "-m",
+            "asg_analysis.protocol",
+            "status",
+            os.path.join(REPO, "experiments", "protocol-flaw-study-v3.yaml"),
+            os.path.join(REPO, "results", "flaw_study3"),
+            "--doc",
+            DOC,
+            "--check",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0, "docs/experiments.md's flaw3 block is stale: rerun `protocol status ... --doc`" + r.stderr
+    text = open(DOC, encoding="utf-8").read()
+    assert text.index("## The flaw study, version 3") < text.index("## The flaw study (issue #54)")

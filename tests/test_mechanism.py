@@ -126,3 +126,57 @@ def test_the_dataset_tool_writes_the_obstacle_index_of_a_findings_scene(tmp_path
     assert (inst == f["hit"] + 1).sum() >= mechanism.MIN_HIT_PX, "the obstacle hit is in view just before it"
     assert inst.max() <= len(f["classes"])
     assert (gt[inst > 0] == mechanism.NON_TRAVERSABLE).mean() > 0.9  # obstacle pixels are obstacles
+
+
+def test_the_pages_say_the_barberry_contacts_are_not_explained_by_juniper_blindness():
+    """Issue #68 (the mechanism): most flaw findings of the design loop's campaigns hit barberries,
+    which `flawed` labels about as `full` does before the contact; no page may say or imply that
+    its blindness to junipers explains them, and the pages that discuss it say it is not yet
+    explained, with the figures (recounted here from the exports)."""
+    result = load()
+    c = recount([os.path.join(REPO, "results", "hardening", name) for name in result["exports"]])
+    b, j = c["barberry"], c["juniper"]
+    assert (b, j) == (74, 15)
+    acc = mechanism.summary(result)["barberry"]["sets"]["hit"]
+    fl, fu = (f"{100.0 * acc[m] / acc['px']:.1f} %" for m in ("flawed", "full"))
+    assert (fl, fu) == ("75.0 %", "72.5 %")
+
+    def page(*p):
+        with open(os.path.join(REPO, *p), encoding="utf-8") as f:
+            return " ".join(f.read().split())
+
+    loop, exp = page("docs", "design-loop.md"), page("docs", "experiments.md")
+    said = (
+        f"Of its {b + j} flaw findings over seeds 20-22, {b} end against a barberry and {j} against a juniper: "
+        "most hit the class `flawed` was trained on, not the one it is blind to."
+    )
+    assert said in loop
+    assert f"({fl} of its pixels non-traversable against {fu}): the barberry is not missed" in loop
+    assert (
+        "How missing the junipers (or the false shadow obstacles) leads `flawed` into a barberry both models see "
+        "is **not yet explained**: the plans, votes and swerves before those contacts were not measured" in loop
+    )
+    assert "how its blindness to junipers leads it into a barberry was not measured" in loop
+    # `flawed` was trained on barberries only (its data set: --meshes barberry)
+    with open(os.path.join(REPO, "scripts", "repro", "make_models.sh"), encoding="utf-8") as f:
+        assert "--count 4000 --seed 2 --meshes barberry" in f.read()
+    # docs/experiments.md, the lite stack: the flawed campaign's collisions by class, from its export
+    with gzip.open(os.path.join(REPO, "results", "comparison", "exp1b-td3-per-asp-s0.jsonl.gz"), "rt") as f:
+        rows = [json.loads(line) for line in f][1:]
+    hits = collections.Counter(r["meshes"][int(r["collision_with"])] for r in rows if r["termination"] == "COLLISION")
+    n = sum(r["termination"] == "COLLISION" for r in rows)
+    assert n == sum(hits.values()) and max(r["proxy"] or 0 for r in rows) == pytest.approx(5.48, abs=0.005)
+    assert f"{hits['barberry']} of `flawed`'s {n} collisions in this campaign are barberries" in exp
+    assert f"`full` ({fl} of its pixels against {fu}; docs/design-loop.md" in exp
+    assert "How missing junipers leads to hitting barberries is not yet explained" in exp
+    assert "| `flawed` (bf16) | 4 | 4 | 4 | 138 |" in exp  # the row the sentence is about
+    old = (
+        "contacts happen on routes laid among unseen junipers",  # design-loop.md, section 4
+        "those 15 are the missing class itself",  # design-loop.md, "Before the contacts"
+        "a missed juniper, not a phantom shadow obstacle, is what ends in a collision",  # experiments.md
+        "it misses fewer junipers",  # experiments.md: only pooled obstacle pixels were measured
+    )
+    for name in ("design-loop.md", "experiments.md", "perception.md", "agent.md"):
+        text = page("docs", name)
+        assert not [o for o in old if o in text], name
+    assert not [o for o in old if o in page("README.md")]

@@ -80,3 +80,18 @@ def test_the_defaults_baselines_are_the_channels_last_rows():
         pp = rows(f"results/baseline/backend_polyphase/exp1/{stack}.jsonl")
         assert len(pp) == len(cl) == 300, stack
         assert pp == cl, stack
+
+
+def test_a_cpu_class_line_holds_the_digests_its_runs_produced(tmp_path, monkeypatch):
+    # issue #68: the line is the runs' record, not a copy of the stored file's digests (a copy
+    # would make the test above compare the file with itself)
+    sys.path.insert(0, os.path.join(REPO, "tests"))
+    import stack_util as su
+
+    table = tmp_path / "cpu_classes.json"
+    monkeypatch.setattr(su, "CPU_CLASSES", str(table))
+    path = os.path.join(REPO, "tests", "reference", "exp1_flawed_fp32.json")
+    produced = ["made-up digest %d" % k for k in range(len(load("tests/reference/exp1_flawed_fp32.json")["runs"]))]
+    su.record_cpu_class(path, "polyphase isa=AVX2 threads=1 torch=x", produced, "test")
+    line = json.loads(table.read_text())["classes"][-1]
+    assert line["digests"] == produced and line["reference"] == "tests/reference/exp1_flawed_fp32.json"

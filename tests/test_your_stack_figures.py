@@ -1,6 +1,7 @@
 """docs/your-stack.md's baseline figures, recomputed from the committed rows (issue #39)."""
 
 import json
+import math
 import os
 import re
 import statistics
@@ -214,3 +215,202 @@ def test_the_gap_nav_failures_are_where_the_prose_says():
     )
     assert f"after a median {med_t:.1f} s of simulated time" in prose
     assert f"few lie a median {statistics.median(along(r)[0] for r in rand):.0f} m along the route" in prose
+
+
+# Issue #68 item 11: what gap_nav's search adds over uniform layouts near the route, its failures'
+# modes and its reruns, recomputed here with code of this file's own (not asg_analysis.gap_nav_study's).
+DOC = os.path.join(REPO, "docs", "your-stack.md")
+GAP_BLOCK = "gap_nav what the search adds"
+
+
+def gap_export(name):
+    import gzip
+
+    with gzip.open(os.path.join(GAP, f"{name}.jsonl.gz"), "rt", encoding="utf-8") as f:
+        head = json.loads(f.readline())["campaign"]
+        return json.loads(head["settings"]), [json.loads(line) for line in f]
+
+
+def gap_fails(r):
+    assert r["termination"] != "ERROR"
+    return r["termination"] != "SUCCESS" or r["proxy"] >= 3.0
+
+
+def gap_along(r):  # [m] the struck obstacle along the route from the start (20, 20) towards (80, 80)
+    x, y = r["positions"][r["collision_with"]]
+    return (x + y - 40) / math.sqrt(2)
+
+
+def gap_figures():
+    """Pooled (failures, scenarios) of uniform random, MAP-Elites' warm-up, its searched jobs; per
+    seed its failure rows; the struck-in-the-first-25-m counts."""
+    uniform, warm, searched, seeds = [0, 0], [0, 0], [0, 0], {}
+    for name in GAP_SEARCH:
+        settings, rows = gap_export(name)
+        assert sorted(r["job"] for r in rows) == list(range(350)) and settings["total"] == 350
+        k = settings["method_config"]["init_random"]
+        assert k == max(1, min(100, 350 // 10)) == 35  # make_method's rule, as the export records it
+        for r in rows:
+            part = warm if r["job"] < k else searched
+            part[0] += gap_fails(r)
+            part[1] += 1
+        seeds[name] = [r for r in rows if gap_fails(r)]
+    for name in GAP_RANDOM:
+        rows = gap_export(name)[1]
+        uniform[0] += sum(map(gap_fails, rows))
+        uniform[1] += len(rows)
+    return uniform, warm, searched, seeds
+
+
+def gap_groups(rows, radius):
+    """Group sizes, largest first: scipy's single linkage, cut at `radius`, on the largest
+    per-obstacle distance between two layouts."""
+    from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
+
+    x = np.array([np.ravel(r["positions"]) for r in rows])
+    d = pdist(x, lambda u, v: np.max(np.hypot(*(u - v).reshape(-1, 2).T)))
+    labels = fcluster(linkage(d, "single"), radius, criterion="distance")
+    return sorted(np.bincount(labels)[1:], reverse=True), labels
+
+
+def gap_rerun_counts():
+    """How many of the 5 reruns each stored failure among the reruns' jobs failed again."""
+    stored = {r["job"]: r for r in gap_export(GAP_SEARCH[0])[1]}
+    again = {}
+    for k in range(1, 6):
+        with open(os.path.join(GAP, "spread", f"r{k}.jsonl")) as f:
+            for r in map(json.loads, f):
+                again[r["job"]] = again.get(r["job"], 0) + gap_fails(r)
+    assert len(again) == 20
+    return sorted(n for job, n in again.items() if gap_fails(stored[job]))
+
+
+def test_the_gap_nav_warm_up_split_is_what_the_exports_say():
+    from scipy.stats import binomtest, fisher_exact
+
+    uniform, warm, searched, _ = gap_figures()
+    assert (uniform, warm, searched) == ([13, 1050], [14, 105], [273, 945])
+    block = between(open(DOC).read(), GAP_BLOCK)
+
+    def cell(k, n):
+        ci = binomtest(k, n).proportion_ci(method="exact")
+        return f"| {n:,} | {k} | {1000 * k / n:.1f} ({1000 * ci.low:.1f}-{1000 * ci.high:.1f}) |"
+
+    arm = [warm[0] + searched[0], warm[1] + searched[1]]
+    for k, n in (uniform, warm, searched, arm):
+        assert cell(k, n) in block, (k, n)
+    rate = {n: 1000 * f / s for n, (f, s) in dict(u=uniform, w=warm, s=searched, a=arm).items()}
+    assert f"The arm's {rate['a'] / rate['u']:.1f}x uniform random's rate" in block
+    assert f"is {rate['w'] / rate['u']:.1f}x (the warm-up against uniform random" in block
+    assert f"times {rate['a'] / rate['w']:.2f}x (the whole arm" in block
+    assert f"alone fail {rate['s'] / rate['w']:.2f}x as often as the warm-up" in block
+    p_wu = fisher_exact([[14, 91], [13, 1037]])[1]
+    p_sw = fisher_exact([[273, 672], [14, 91]])[1]
+    assert f"warm-up against uniform random p = {p_wu:.2g}, searched against warm-up p = {p_sw:.2g}." in block
+    prose = " ".join(open(DOC).read().split())
+    assert f"MAP-Elites' own warm-up, before it searches, fails {rate['w']:.0f} per 1,000" in prose
+    assert "That 2 rests on the warm-up's 105 scenarios, the first 35 jobs of each seed" in prose
+    a_u, w_u, s_w, a_w = (rate[x] / rate[y] for x, y in ("au", "wu", "sw", "aw"))
+    assert f"Of the ratio of {a_u:.0f}, a factor of about {w_u:.0f} is where obstacles may stand" in prose
+    assert f"and about {s_w:.0f} is what the search adds" in prose and round(a_w) == 2
+
+
+def test_the_gap_nav_failure_modes_are_what_the_exports_say():
+    _, _, _, seeds = gap_figures()
+    block = between(open(DOC).read(), GAP_BLOCK)
+    prose = " ".join(open(DOC).read().split())
+    largest, nexts, spans, small, early = [], [], [], [], 0
+    for name, fails in seeds.items():
+        cells = []
+        for radius in (2.5, 5.0, 10.0):
+            sizes, labels = gap_groups(fails, radius)
+            cells.append(f"{len(sizes)} ({sizes[0]})")
+            if radius == 2.5:
+                small.append(sizes[0])
+            if radius == 5.0:
+                top = np.flatnonzero(labels == np.argmax(np.bincount(labels)))
+                p = np.array([fails[i]["positions"] for i in top])
+                span = np.max(np.hypot(*(p[:, None] - p[None]).transpose(3, 0, 1, 2)))
+                struck = [fails[i]["collision_with"] for i in top]
+                most = max(struck.count(k) for k in set(struck))
+                group = f"{sizes[0]} ({sizes[1]}), {span:.1f} m, {len(set(struck))} ({most})"
+                largest.append(f"{sizes[0]} of {len(fails)}")
+                nexts.append(str(sizes[1]))
+                spans.append(span)
+        n_early = sum(gap_along(r) < 25 for r in fails)
+        early += n_early
+        warm = sum(r["job"] < 35 for r in fails)
+        row = f"| {name} | {len(fails)} | {warm} of 35 | {' / '.join(cells)} | {group} | {n_early} |"
+        assert row in block, row
+    assert f"the largest group holds {', '.join(largest[:-1])} and {largest[-1]} failures a seed" in prose
+    assert (
+        f"the next {', '.join(nexts[:-1])} and {nexts[-1]}: one dominant group in seeds 1 and 2, two in seed 0" in prose
+    )
+    assert f"differ by up to {min(spans):.0f}-{max(spans):.0f} m in an obstacle" in prose
+    assert f"at 2.5 m no group holds more than {max(small)} failures" in prose
+    total = sum(map(len, seeds.values()))
+    warm_fails = [r for fails in seeds.values() for r in fails if r["job"] < 35]
+    warm_early = sum(gap_along(r) < 25 for r in warm_fails)
+    assert f"{early} of the {total} strike an obstacle less than 25 m along the route" in prose
+    assert f"against {warm_early} of the warm-up's {len(warm_fails)} failures" in prose
+    assert f"{early} of the arm's {total} failures, {warm_early} of its warm-up's {len(warm_fails)}," in block
+
+
+def test_the_gap_nav_rerun_counts_are_what_the_reruns_say():
+    again = gap_rerun_counts()
+    n = len(again)
+    med = statistics.median(again)
+    low, every = sum(k <= 2 for k in again), sum(k == 5 for k in again)
+    prose = " ".join(open(DOC).read().split())
+    assert f"failed again in a median {med:g} of its 5 repetitions, and {low} of the {n} in 2 or fewer" in prose
+    assert f"since only {every} of the {n} failed in every repetition" in prose
+    assert "gap_nav's findings are layouts on which it fails about half the time" in prose
+    assert 0.4 < sum(again) / (5 * n) < 0.6 and 0.4 < low / n < 0.6  # "about half the time"
+    block = between(open(DOC).read(), GAP_BLOCK)
+    assert f"its {n} stored failures failed again in a median {med:g} of 5 repetitions; {low} in 2 or fewer" in block
+
+
+def test_the_gap_nav_study_block_and_json_are_in_step():
+    import subprocess
+    import sys
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_analysis import gap_nav_study
+
+    cmd = [sys.executable, "-m", "asg_analysis.gap_nav_study", "--doc", DOC, "--check"]
+    assert subprocess.run(cmd, cwd=REPO).returncode == 0
+    with open(os.path.join(GAP, "study.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(gap_nav_study.study()))
+
+
+def test_the_gap_nav_page_drops_its_stronger_sentences():
+    # Issue #68 item 11: each of these said more than the figures above do.
+    prose = " ".join(open(DOC).read().split())
+    for old in (
+        "so these are layouts the search composed, not the common case",
+        "layouts on which it often fails",
+        "is confirmed by running it again, as here",
+    ):
+        assert old not in prose, old
+    assert "so the ratio of 22 above is not the search's alone" in prose
+    assert "route-random (`method:=route-random route_band:=10` on `experiments/exp1-gap-nav.yaml`" in prose
+    assert "For gap_nav it is still to run: its plan is `results/gap_nav/plan-route-random.txt`" in prose
+
+
+def test_the_gap_nav_route_random_plan_is_the_random_arm_in_the_route_band():
+    import sys
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_agent.cli.plan import parse_plan
+
+    def lines(name):
+        return {c.name: c for c in parse_plan(open(os.path.join(GAP, name)).read(), name)}
+
+    old, new = lines("plan.txt"), lines("plan-route-random.txt")
+    assert sorted(new) == [f"exp1-gap-nav-route-random-s{k}" for k in (0, 1, 2)]
+    for k in (0, 1, 2):
+        rand, c = old[f"exp1-gap-nav-random-s{k}"], new[f"exp1-gap-nav-route-random-s{k}"]
+        assert (c.scenarios, c.launch) == (rand.scenarios, rand.launch) == (350, "train")
+        want = [a.replace("method:=random", "method:=route-random") for a in rand.args] + ["route_band:=10"]
+        assert c.args == want

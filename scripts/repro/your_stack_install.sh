@@ -8,12 +8,15 @@
 #   - lockstep: asg_lockstep's twist_driver example built in the user's workspace against the
 #     installed headers (my_lockstep), Exp. 1 run twice: the two trajectories must be equal.
 # Exits 1 if a step fails. The install prefix is made by scripts/ci/check_install.py if missing.
-#   bash scripts/repro/your_stack_install.sh [WORK=/tmp/asg_recipe] [LAYOUTS=3] [SCENARIOS=5]
+# Steps 4-8 are the page's own commands (tests/doc_recipe.py pulls them from docs/your-stack.md
+# and says which words it changes), run under Xvfb (step 4 starts rviz) on a sim-time master.
+#   bash scripts/repro/your_stack_install.sh [WORK=/tmp/asg_recipe] [LAYOUTS=3] [SCENARIOS=5] [MODES=both|free]
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 WORK="${1:-/tmp/asg_recipe}"
 LAYOUTS="${2:-3}"
 SCENARIOS="${3:-5}"
+MODES="${4:-both}"
 PREFIX="$REPO/catkin_ws/build/install_check"
 [ -f "$PREFIX/setup.bash" ] ||
   /usr/bin/python3 "$REPO/scripts/ci/check_install.py" "$REPO/catkin_ws" "$WORK/install.xml"
@@ -39,6 +42,7 @@ cat > "$WORK/my_ws/src/my_stack/launch/asg_stack.launch" <<'EOF'
 </launch>
 EOF
 L="$WORK/my_ws/src/my_lockstep"
+[ "$MODES" = free ] && L="$WORK/unused/my_lockstep"
 mkdir -p "$L/src" "$L/launch" && cp "$REPO/catkin_ws/src/asg_lockstep/examples/twist_driver.cpp" "$L/src/"
 cat > "$L/CMakeLists.txt" <<'EOF'
 cmake_minimum_required(VERSION 3.10)
@@ -101,34 +105,24 @@ worker() {  # REG [sim_time]
 }
 stop_worker() { kill -INT $WORKER; wait $WORKER || true; }
 
-step "lockstep: my_lockstep, Exp. 1 twice"
-worker "$(rospack find my_lockstep)/launch/asg_stack.launch"
-cd "$WORK/home"
-for i in 1 2; do rosrun asg_scenario run_scenario "$SCENE" --worker /worker_0 --out "lock$i" --timeout 300 | tail -1; done
-cmp lock1/trajectory.csv lock2/trajectory.csv
-echo "lockstep: the two runs' trajectories are equal"
-stop_worker
+if [ "$MODES" != free ]; then
+  step "lockstep: my_lockstep, Exp. 1 twice"
+  worker "$(rospack find my_lockstep)/launch/asg_stack.launch"
+  cd "$WORK/home"
+  for i in 1 2; do rosrun asg_scenario run_scenario "$SCENE" --worker /worker_0 --out "lock$i" --timeout 300 | tail -1; done
+  cmp lock1/trajectory.csv lock2/trajectory.csv
+  echo "lockstep: the two runs' trajectories are equal"
+  stop_worker
+fi
 
-REG=$(rospack find my_stack)/launch/asg_stack.launch
-step "4. free: my_stack, one worker on simulated time, one run"
-worker "$REG" true
-rosrun asg_scenario run_scenario "$SCENE" --worker /worker_0 --out run1 --timeout 300 | tail -1
-step "5. the experiment"
-mkdir -p ~/asg_runs && cd ~/asg_runs
-printf 'name: exp1-my-stack\nstack: %s\nscenario: %s\nepisode_steps: 5\nsim_timeout: 60.0\n' "$REG" "$SCENE" > exp1-my-stack.yaml
-step "6. the baseline ($LAYOUTS layouts)"
-python3 -m asg_agent.cli.baseline run exp1-my-stack.yaml --stack "$REG" --layouts "$LAYOUTS" --workers 1 --root baseline 2>&1 | tail -1
-test "$(wc -l < baseline/exp1-my-stack/my_stack.jsonl)" -eq "$LAYOUTS"
-stop_worker
-step "7. the campaign ($SCENARIOS scenarios)"
-roslaunch asg_bringup train.launch stack:="$REG" sim_time:=true experiment:="$PWD/exp1-my-stack.yaml" \
-  attribution:=false scenarios:="$SCENARIOS" workers:=1 store:="$PWD/campaigns.sqlite" > "$WORK/train.log" 2>&1
-step "8. export, report, replay"
-python3 -m asg_agent.cli.store export campaigns.sqlite exp1-my-stack-td3-per-asp-s0 export.jsonl.gz
-python3 -m asg_analysis.report campaign campaigns.sqlite exp1-my-stack-td3-per-asp-s0 report | tail -1
-test -f report/index.html
-rosrun asg_agent replay campaigns.sqlite exp1-my-stack-td3-per-asp-s0 1 --bag job.bag 2>&1 | tail -4 || true
-test -s job.bag
-echo "the recipe ran from the install space: both modes"
+step "free: my_stack, docs/your-stack.md's steps 4-8 as the page writes them"
+cd "$WORK/home"
+source "$WORK/steps.sh"
+test "$(wc -l < ~/asg_runs/baseline/exp1-my-stack/my_stack.jsonl)" -eq "$LAYOUTS"
+test -f ~/asg_runs/report/index.html
+test -s ~/asg_runs/job.bag
+echo "the recipe ran from the install space ($MODES)"
 EOF
-exec env -i PATH=/usr/bin:/bin HOME="$WORK/home" TERM=dumb bash "$WORK/recipe.sh" "$PREFIX" "$WORK" "$LAYOUTS" "$SCENARIOS"
+/usr/bin/python3 "$REPO/tests/doc_recipe.py" --layouts "$LAYOUTS" --scenarios "$SCENARIOS" > "$WORK/steps.sh"
+exec env -i PATH=/usr/bin:/bin HOME="$WORK/home" TERM=dumb MODES="$MODES" \
+  xvfb-run -a -s "-screen 0 1280x1024x24" bash "$WORK/recipe.sh" "$PREFIX" "$WORK" "$LAYOUTS" "$SCENARIOS"

@@ -265,3 +265,39 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
             str(tmp_path / "b.ckpt"),
             reward="differential",
         )
+
+
+def test_the_store_and_the_export_hold_repository_relative_paths(tmp_path):
+    """Issue #68: results/ holds no machine's paths. A campaign stores its experiment file
+    repository-relative; an export of an older store (absolute paths) writes them relative, and a
+    store without an absolute path exports its settings byte for byte."""
+    import gzip
+    import json
+    from types import SimpleNamespace
+
+    from asg_agent.campaign.policy import campaign_settings
+    from asg_agent.paths import REPO, in_repo
+    from asg_agent.records.export import export, read_export
+
+    a = SimpleNamespace(reward="proxy", fake_workers=1)
+    s = campaign_settings(a, load_experiment(EXP), ["fake_0"], {}, "failures")
+    assert s["experiment_file"] == s["experiment_repo_file"] == "experiments/exp1.yaml"
+    assert in_repo(s["experiment_file"]) == os.path.join(REPO, "experiments", "exp1.yaml") == in_repo(EXP)
+
+    store = Store(str(tmp_path / "store.sqlite"))
+    old = {"experiment_file": EXP, "stack_file": os.path.join(REPO, "stacks", "depth.launch"), "total": 1}
+    store.create_campaign("old", "random", "exp1", "", 0, old)
+    other = {"experiment_file": "/elsewhere/asg/experiments/exp1.yaml", "experiment_repo_file": "experiments/exp1.yaml"}
+    store.create_campaign("other", "random", "exp1", "", 0, other)
+    store.create_campaign("new", "random", "exp1", "", 0, s)
+    heads = {}
+    for name in ("old", "other", "new"):
+        export(store, name, str(tmp_path / f"{name}.jsonl.gz"))
+        heads[name] = json.loads(read_export(str(tmp_path / f"{name}.jsonl.gz"))[0]["settings"])
+    assert (heads["old"]["experiment_file"], heads["old"]["stack_file"]) == (
+        "experiments/exp1.yaml",
+        "stacks/depth.launch",
+    )
+    assert heads["other"]["experiment_file"] == "experiments/exp1.yaml"  # another checkout's
+    with gzip.open(tmp_path / "new.jsonl.gz", "rt") as f:
+        assert json.loads(f.readline())["campaign"]["settings"] == store.campaign("new")["settings"]

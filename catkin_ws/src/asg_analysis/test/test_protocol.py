@@ -279,3 +279,18 @@ def test_measured_cpu_hours_sums_every_runs_cpu_or_says_none():
     # a run that went unmeasured (the resume's cpu event missing): None, the clock is the fallback
     assert pr.measured_cpu_hours({"events": events[:3]}) is None
     assert pr.measured_cpu_hours({}) is None
+
+
+def test_a_campaign_named_in_the_machine_log_shared_the_machine(tmp_path):
+    # issue #67: a campaign that ran beside another CPU-heavy job is a deviation, listed
+    (tmp_path / "machine.log").write_text(
+        "# comment naming flaw-x-s1, ignored\n05:00 05:10 a soak (issue #53's) beside flaw-x-s1 and flaw-y-s2\n"
+    )
+    got = pr.shared_machine(str(tmp_path), ["flaw-x-s1", "flaw-y-s2", "flaw-x-s11", "flaw-y-s"])
+    assert got == {
+        "flaw-x-s1": ["shared the machine (machine.log line 2)"],
+        "flaw-y-s2": ["shared the machine (machine.log line 2)"],
+        "flaw-x-s11": [],
+        "flaw-y-s": [],
+    }
+    assert pr.shared_machine(str(tmp_path / "none"), ["a"]) == {"a": []}

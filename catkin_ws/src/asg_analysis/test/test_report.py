@@ -17,6 +17,16 @@ def test_a_registered_stack_finds_the_baseline_of_its_scenario_and_names_its_ref
     assert report.baseline_path("exp1-depth", {"experiment_file": exp}) == os.path.join(
         REPO, "results", "baseline", "exp1.json"
     )
+    # issue #68: recorded repository-relative (resolved against the repository's root, from any
+    # folder), or absolute on another machine beside the repository-relative one
+    for recorded in (
+        {"experiment_file": "experiments/exp1-depth.yaml"},
+        {
+            "experiment_file": "/elsewhere/experiments/exp1-depth.yaml",
+            "experiment_repo_file": "experiments/exp1-depth.yaml",
+        },
+    ):
+        assert report.baseline_path("exp1-depth", recorded) == os.path.join(REPO, "results", "baseline", "exp1.json")
     html = report._baseline_html("exp1-depth", {"experiment_file": exp})
     assert "<td>depth</td>" in html and "No baseline" not in html
     assert report.baseline_path("nowhere", {}) == ""

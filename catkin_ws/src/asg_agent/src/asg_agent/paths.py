@@ -11,3 +11,10 @@ def repo_relative(path: str) -> str:
     """`path` relative to the repository this code runs from, or "" when it lies outside it."""
     rel = os.path.relpath(os.path.realpath(path), REPO) if path else ".."
     return "" if rel.startswith("..") else rel
+
+
+def in_repo(path: str) -> str:
+    """A path as recorded (repository-relative, as committed records hold them, or absolute, as
+    older records and files outside the repository do) made absolute: a relative one is the
+    repository's."""
+    return path if not path or os.path.isabs(path) else os.path.join(REPO, path)

@@ -42,15 +42,18 @@ def _order(arm: str):
     return (ARM_ORDER.index(base) if base in ARM_ORDER else len(ARM_ORDER), int(n.group(1)) if n else 0, arm)
 
 
-def suite_passes(folder: str) -> dict:
+def suite_passes(folder: str, leave_out=()) -> dict:
     """{arm: (passed, scenarios)} over the labels recorded in a suite (scenarios lacking a label
-    are not counted for it)."""
+    are not counted for it), leaving out the scenarios of `leave_out`: (campaign, job) pairs."""
     from asg_agent.campaign.suite import verdict
 
     with open(os.path.join(folder, "suite.yaml"), encoding="utf-8") as f:
         suite = yaml.safe_load(f)
     out = {}
+    gone = {(c, int(j)) for c, j in leave_out}
     for e in suite["scenarios"]:
+        if (e.get("campaign"), int(e.get("job", -1))) in gone:
+            continue
         for label, o in e.get("outcomes", {}).items():
             if "digest" not in o or arm_of(label) is None:  # exported from the campaign, or not ours
                 continue

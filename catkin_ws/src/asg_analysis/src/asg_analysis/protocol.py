@@ -18,6 +18,7 @@ compares the default with every other arm (asg_analysis.stats).
 import argparse
 import json
 import os
+import re
 import sys
 from typing import Dict, List, Optional
 
@@ -635,6 +636,7 @@ def status(p: dict, folder: str) -> dict:
         with open(choice_path) as f:
             cs += campaigns(p, "confirmatory", json.load(f))
     out = {}
+    shared = shared_machine(folder, [c["name"] for c in cs])
     for c in cs:
         path = os.path.join(folder, c["name"] + ".jsonl.gz")
         if not os.path.isfile(path):
@@ -660,8 +662,27 @@ def status(p: dict, folder: str) -> dict:
             cpu_measured=measured_cpu_hours(settings) is not None,
             flaw_per_cpu_hour=count["flaw"] / hours if hours else None,
             cpu=", ".join(cpus),
-            deviations=[d.split(": ", 1)[1] for d in deviations(p, c, camp, rows) if "of the" not in d],
+            deviations=[d.split(": ", 1)[1] for d in deviations(p, c, camp, rows) if "of the" not in d]
+            + shared[c["name"]],
         )
+    return out
+
+
+def shared_machine(folder: str, names) -> Dict[str, List[str]]:
+    """{campaign: its deviations for sharing the machine}: the lines of FOLDER/machine.log (one an
+    interval: start, end, what ran beside, the campaigns it overlapped; a line starting with `#` is
+    a comment) that
+    name the campaign (issue #67: a campaign that ran beside another job is a deviation)."""
+    out = {n: [] for n in names}
+    path = os.path.join(folder, "machine.log")
+    if not os.path.isfile(path):
+        return out
+    with open(path, encoding="utf-8") as f:
+        lines = ["" if ln.lstrip().startswith("#") else ln.strip() for ln in f]
+    for k, line in enumerate(lines, 1):
+        for n in out:
+            if re.search(rf"(?<![\w-]){re.escape(n)}(?![\w-])", line):
+                out[n].append(f"shared the machine (machine.log line {k})")
     return out
 
 

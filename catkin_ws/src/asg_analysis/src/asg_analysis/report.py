@@ -25,11 +25,20 @@ from asg_agent.scoring.attribution import FINDING, FINDING_STRONG
 def baseline_path(experiment: str, settings: dict) -> str:
     """results/baseline/<exp>.json of the campaign's experiment, or else of its scenario (the
     depth stack's exp1-depth runs exp1's layouts: its row is in exp1.json); "" if neither."""
-    from asg_agent.paths import REPO
+    from asg_agent.paths import REPO, in_repo
 
     names = [experiment]
-    source = settings.get("experiment_file", "")
-    if source and os.path.isfile(source):
+    # the recorded file: repository-relative (issue #68), or absolute in older stores and exports,
+    # where the repository-relative one is also recorded
+    source = next(
+        (
+            in_repo(f)
+            for f in (settings.get("experiment_file", ""), settings.get("experiment_repo_file", ""))
+            if f and os.path.isfile(in_repo(f))
+        ),
+        "",
+    )
+    if source:
         with open(source, encoding="utf-8") as f:
             scenario = (yaml.safe_load(f) or {}).get("scenario", "")
         names.append(os.path.splitext(os.path.basename(str(scenario)))[0])

@@ -1,10 +1,17 @@
-"""Held-apart sets that are held apart (issue #57; no ROS): whether scenes of a set (frames to
-evaluate on, a suite) also stand in a training source (a campaign export whose scenes trained a
+"""Held-apart sets that are held apart (issues #57, #68; no ROS): whether scenes of a set (frames
+to evaluate on, a suite) also stand in a training source (a campaign export whose scenes trained a
 model, a frame set, a suite), as the same layout within a tolerance. Two searches with the same
 seed propose the same first scenes; two layouts whose every obstacle (same class, same order)
-lies within `tol_m` are one scene for this purpose, whatever their names or textures.
+lies within `tol_m` along x and along y are one scene for this purpose, whatever their names or
+textures.
 
-    python3 -m asg_agent.campaign.overlap SET_SOURCE TRAINING_SOURCE [...] [--tol-m 0.01]
+The default tolerance is the augmentation's radius: training frames are rendered in copies of a
+scene with every obstacle shifted up to `campaign.hardening.Perturbation.shift_m` along x and
+along y (its one definition, imported here), so a scene within that radius of a training scene,
+obstacle by obstacle and axis by axis, may be one the model was trained on. `SAME_M` (10 mm) is
+the first check's tolerance (issue #57): the same layout.
+
+    python3 -m asg_agent.campaign.overlap SET_SOURCE TRAINING_SOURCE [...] [--tol-m M]
 
 A source is an export (`.jsonl.gz`: every stored scene), a suite folder (`suite.yaml`), or a frame
 set folder (`hardening.json`: its scenes as they ran). Exit 1 with the shared scenes named.
@@ -19,8 +26,13 @@ from typing import Dict, List, Sequence, Tuple
 
 import numpy as np
 
-#: [m] two layouts closer than this, obstacle by obstacle, are the same scene
-TOL_M = 0.01
+from asg_agent.campaign.hardening import Perturbation
+
+#: [m] two layouts closer than this, obstacle by obstacle, are the same layout (issue #57's check)
+SAME_M = 0.01
+#: [m] the held-apart check's default (issue #68): the augmentation's obstacle shift, along x and
+#: along y; a held-apart scene this close to a training scene may be one of its training copies
+TOL_M = Perturbation.shift_m
 
 Scene = Tuple[str, Tuple[str, ...], np.ndarray]  # (label, meshes in order, n x 2 positions [m])
 
@@ -75,7 +87,7 @@ def scenes_of(source: str) -> List[Scene]:
 
 def shared(candidates: Sequence[Scene], training: Sequence[Scene], tol_m: float = TOL_M) -> List[Dict]:
     """Every (candidate, training scene) pair with the same obstacle classes in the same order and
-    every obstacle within `tol_m`; each with the largest distance [m]."""
+    every obstacle within `tol_m` along x and along y; each with the largest such distance [m]."""
     groups: Dict[tuple, Tuple[List[str], np.ndarray]] = {}
     for label, meshes, xy in training:
         names, arrays = groups.setdefault((meshes, xy.shape), ([], []))
@@ -108,7 +120,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="overlap", description=__doc__.split("\n\n")[0])
     ap.add_argument("set", help="the held-apart set's source")
     ap.add_argument("training", nargs="+", help="training sources it must not share a scene with")
-    ap.add_argument("--tol-m", type=float, default=TOL_M, help="[m] largest obstacle distance of one scene")
+    ap.add_argument(
+        "--tol-m",
+        type=float,
+        default=TOL_M,
+        help=f"[m] largest obstacle distance (along x or y) of one scene (default {TOL_M:g}: the augmentation's "
+        f"obstacle shift; {SAME_M:g}: the same layout)",
+    )
     a = ap.parse_args(argv)
     try:
         check_apart(scenes_of(a.set), a.training, a.set, a.tol_m)

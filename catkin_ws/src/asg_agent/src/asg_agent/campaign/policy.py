@@ -90,7 +90,9 @@ def campaign_settings(a, exp, workers, roles, candidates) -> dict:
         **reference_settings(a, exp, roles, candidates),
         "reward": a.reward,
         **({"collision_bonus": a.collision_bonus} if a.reward == "collision" else {}),
-        "experiment_file": exp.source,
+        # repository-relative (issue #68): stores are exported to results/, which holds no
+        # machine's paths; a file outside the repository keeps its absolute path
+        "experiment_file": repo_relative(exp.source) or exp.source,
         **({"experiment_repo_file": repo_relative(exp.source)} if repo_relative(exp.source) else {}),
         "stack": exp.stack,
         **(registered_settings(exp) if exp.stack != "paper" else {}),

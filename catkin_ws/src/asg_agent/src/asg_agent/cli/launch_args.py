@@ -31,10 +31,19 @@ STACK_KEYS = ("stack", "sim_time", "perception", "model", "unet_backend", "plann
 
 
 def planner_path(name: str) -> str:
-    """A planner configuration by name (a file of asg_planner/config) or path, as a path."""
+    """A planner configuration by name (a file of asg_planner/config: the source tree's, or in an
+    install space the installed package's) or path, as a path."""
     if os.sep in name:
         return os.path.abspath(name)
-    return os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config", name)
+    source = os.path.join(REPO, "catkin_ws", "src", "asg_planner", "config", name)
+    if os.path.isfile(source):
+        return source
+    try:  # an install space: asg_planner's share folder
+        import rospkg
+
+        return os.path.join(rospkg.RosPack().get_path("asg_planner"), "config", name)
+    except Exception:  # noqa: BLE001 (rospkg's errors: no ROS environment; the name is then reported as missing)
+        return source
 
 
 def implied(exp: Experiment) -> Dict[str, str]:

@@ -27,11 +27,41 @@ def collision_index(request: dict, collision_with: str) -> Optional[int]:
     return sum(len(l["instances"]) for l in layouts[:layout]) + instance
 
 
+#: the campaign settings that hold a file's path
+PATH_SETTINGS = ("experiment_file", "stack_file")
+
+
+def committed_paths(campaign: dict) -> dict:
+    """The campaign row with the paths its settings hold (PATH_SETTINGS) made repository-relative,
+    as results/ keeps them (issue #68: an export holds no machine's paths): a store written before
+    stored them absolute. A path of another checkout falls back to the recorded
+    `experiment_repo_file`; a file outside any repository keeps its absolute path. Settings
+    without an absolute path are left as stored, byte for byte."""
+    import os
+
+    from asg_agent.paths import repo_relative
+
+    if not isinstance(campaign.get("settings"), str) or not campaign["settings"]:
+        return campaign
+    settings = json.loads(campaign["settings"])
+    changed = False
+    for key in PATH_SETTINGS:
+        path = settings.get(key)
+        if isinstance(path, str) and os.path.isabs(path):
+            rel = repo_relative(path) or (settings.get("experiment_repo_file", "") if key == "experiment_file" else "")
+            if rel:
+                settings[key] = rel
+                changed = True
+    # the store's own formatting (records.store: sorted keys)
+    return dict(campaign, settings=json.dumps(settings, sort_keys=True)) if changed else campaign
+
+
 def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
     """A compact export of a campaign (gzip JSON lines, a few hundred bytes a scenario): the
     campaign row first, then per scenario its job, episode, step, obstacle positions, every proxy
     term, termination, the obstacle hit (`collision_with`, an index into `positions`) and the
-    trajectory at `hz` (x, y to 1 cm). Enough to recompute every count
+    trajectory at `hz` (x, y to 1 cm); the settings' paths repository-relative (committed_paths).
+    Enough to recompute every count
     and draw every figure without the store; the store keeps the full requests and 60 Hz
     trajectories for exact replays."""
     import gzip
@@ -46,7 +76,7 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
         gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz,
         io.TextIOWrapper(gz, encoding="utf-8") as f,
     ):
-        f.write(json.dumps({"campaign": c}) + "\n")
+        f.write(json.dumps({"campaign": committed_paths(c)}) + "\n")
         for r in store.rows(campaign):
             req = json.loads(r["request"])
             traj = unpack_trajectory(r["trajectory"])

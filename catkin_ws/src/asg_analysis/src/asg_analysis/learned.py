@@ -1,0 +1,167 @@
+"""What a search learned (issue #67, no ROS): for each obstacle attribute, its share among the
+obstacles of the layouts the search proposed, against its share among the obstacles of its flaw
+findings and among the obstacles those findings hit, early and late in the budget.
+
+A search that learns what exposes the flaw proposes, late in its budget, more of the obstacles
+that flaw findings are made of; one that does not keeps its early shares. The attributes are what
+the scene says of each obstacle, computed here apart from any search method's own features:
+
+- `class`: its mesh;
+- `beside`: how far from the straight start-goal line, in bands of LATERAL_BANDS [m];
+- `along`: which quarter of the way from start to goal;
+- `shaded`: whether it stands in the sun shadow of another obstacle (asg_scenario.votes);
+- `class, beside`: both at once (every layout holds each class in the scenario's counts, so a
+  class's share among the obstacles of any layout is fixed; where each class stands is not).
+
+    python3 -m asg_analysis.learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
+        [--budget 250] [--target flaw] [--json out.json] [--markdown]
+
+Each campaign is split at half its budget (jobs below budget / 2: early; the rest: late); the
+shares pool the campaigns given.
+"""
+
+import argparse
+import os
+import sys
+from typing import Dict, List
+
+import numpy as np
+
+#: [m] the `beside` bands' upper edges, the last open
+LATERAL_BANDS = (2.0, 5.0, 10.0, 20.0)
+
+
+def _band(d: float) -> str:
+    lo = 0.0
+    for hi in LATERAL_BANDS:
+        if d < hi:
+            return f"{lo:g}-{hi:g} m"
+        lo = hi
+    return f">= {lo:g} m"
+
+
+def obstacle_attributes(campaign: dict, row: dict) -> List[Dict[str, str]]:
+    """Each obstacle's attributes (class, beside, along, shaded) of an export row."""
+    from asg_agent.records.scenes import scenario_of
+    from asg_scenario.layout import RouteFrame
+    from asg_scenario.votes import in_cast_shadow
+
+    scene = scenario_of(campaign, row)
+    f = RouteFrame(scene)
+    p = np.asarray(row["positions"], float).reshape(-1, 2)
+    t = (p - f.start) @ f.along / f.length**2
+    d = np.abs((p - f.start) @ f.normal)
+    index = [(li, ii) for li, lay in enumerate(scene["structural"]["layouts"]) for ii in range(len(lay["instances"]))]
+    out = []
+    for k, mesh in enumerate(row["meshes"]):
+        shaded = in_cast_shadow(scene, p[k, 0], p[k, 1], removed={index[k]})
+        out.append(
+            {
+                "class": mesh,
+                "beside": _band(d[k]),
+                "class, beside": f"{mesh}, {_band(d[k])}",
+                "along": f"Q{int(np.clip(t[k] * 4, 0, 3)) + 1}",
+                "shaded": "shaded" if shaded else "lit",
+            }
+        )
+    return out
+
+
+def shares(campaigns: List[tuple], budget: int, target: str = "flaw") -> dict:
+    """{attribute: {value: {proposed_early, proposed_late, findings_early, findings_late,
+    hit_early, hit_late}}} over (campaign, rows) pairs, with the obstacle counts under `n`."""
+    counts: Dict[str, Dict[str, Dict[str, int]]] = {}
+    n = {k: 0 for k in ("proposed_early", "proposed_late", "findings_early", "findings_late", "hit_early", "hit_late")}
+    for camp, rows in campaigns:
+        for r in rows:
+            if r["job"] >= budget or not r.get("positions"):
+                continue
+            half = "early" if r["job"] < budget / 2 else "late"
+            attrs = obstacle_attributes(camp, r)
+            groups = [f"proposed_{half}"] + ([f"findings_{half}"] if r.get("attribution") == target else [])
+            for g in groups:
+                n[g] += len(attrs)
+                for a in attrs:
+                    for key, value in a.items():
+                        counts.setdefault(key, {}).setdefault(value, dict.fromkeys(n, 0))[g] += 1
+            hit = r.get("collision_with")
+            if r.get("attribution") == target and isinstance(hit, int) and 0 <= hit < len(attrs):
+                n[f"hit_{half}"] += 1
+                for key, value in attrs[hit].items():
+                    counts.setdefault(key, {}).setdefault(value, dict.fromkeys(n, 0))[f"hit_{half}"] += 1
+    table = {
+        key: {
+            value: {g: (c[g] / n[g] if n[g] else None) for g in n}
+            for value, c in sorted(values.items(), key=lambda kv: _order(kv[0]))
+        }
+        for key, values in counts.items()
+    }
+    return {"shares": table, "n": n, "target": target, "budget": budget}
+
+
+def _order(value: str):
+    """Values in reading order: bands by their lower edge, the rest alphabetically."""
+    import re
+
+    m = re.search(r"(>= )?(\d+(\.\d+)?)(-\d+(\.\d+)?)? m$", value)
+    return (value[: m.start()] if m else value, float(m.group(2)) if m else 0.0)
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{100 * x:.0f} %"
+
+
+def markdown(res: dict) -> str:
+    t, n = res["target"], res["n"]
+    lines = [
+        f"| attribute | value | proposed, early | proposed, late | in {t} findings, early | in {t} findings, late "
+        f"| hit by a {t} collision, early | hit, late |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for key in ("class", "beside", "class, beside", "along", "shaded"):
+        for value, s in res["shares"].get(key, {}).items():
+            lines.append(
+                f"| {key} | {value} | {_pct(s['proposed_early'])} | {_pct(s['proposed_late'])} "
+                f"| {_pct(s['findings_early'])} | {_pct(s['findings_late'])} | {_pct(s['hit_early'])} "
+                f"| {_pct(s['hit_late'])} |"
+            )
+    lines += [
+        "",
+        f"Obstacles counted: proposed {n['proposed_early']:,} early, {n['proposed_late']:,} late; in {t} findings "
+        f"{n['findings_early']:,} and {n['findings_late']:,}; hit by a {t} collision {n['hit_early']} and "
+        f"{n['hit_late']} (early: jobs below half the budget of {res['budget']}).",
+    ]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="learned", description=__doc__.split("\n\n")[0])
+    ap.add_argument("folder", help="the exports' folder")
+    ap.add_argument("campaigns", nargs="+", help="campaign names (NAME.jsonl.gz in the folder)")
+    ap.add_argument("--budget", type=int, default=300, help="[scenarios] each campaign's budget (300)")
+    ap.add_argument("--target", default="flaw", help="the attribution class of a finding (flaw; regression)")
+    ap.add_argument("--json", default="")
+    ap.add_argument("--markdown", action="store_true")
+    a = ap.parse_args(argv)
+    from asg_agent.records.export import read_export
+
+    camps = []
+    for name in a.campaigns:
+        path = os.path.join(a.folder, name + ".jsonl.gz")
+        if not os.path.isfile(path):
+            print(f"learned: no export {path}", file=sys.stderr)
+            return 2
+        camps.append(read_export(path))
+    res = shares(camps, a.budget, a.target)
+    if a.json:
+        import json
+
+        with open(a.json, "w") as f:
+            json.dump(res, f, indent=1, sort_keys=True)
+            f.write("\n")
+    print(markdown(res) if a.markdown else res)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
