@@ -25,6 +25,7 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
+from asg_agent.campaign.overlap import AUGMENT_SHIFT_M
 from asg_agent.paths import REPO
 
 DATASET_TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "asg_sim_dataset")
@@ -42,7 +43,7 @@ class Perturbation:
     variants: int = 4  #: [-] scenes per source: the scene as it ran and variants - 1 perturbed copies
     sun_inclination_deg: float = 10.0  #: [deg] change of the sun's elevation (kept within 0..90)
     sun_yaw_deg: float = 30.0  #: [deg] change of the direction the light comes from
-    shift_m: float = 0.5  #: [m] shift of every obstacle along x and along y
+    shift_m: float = AUGMENT_SHIFT_M  #: [m] shift of every obstacle along x and along y (overlap.py)
     lateral_m: float = 1.0  #: [m] sideways offset of a camera pose from the trajectory
     heading_rad: float = 0.15  #: [rad] change of a pose's heading from the trajectory's
     approach_m: float = 25.0  #: [m] last stretch of the run (a failure's approach) that gets half the poses

@@ -26,13 +26,15 @@ from typing import Dict, List, Sequence, Tuple
 
 import numpy as np
 
-from asg_agent.campaign.hardening import Perturbation
 
 #: [m] two layouts closer than this, obstacle by obstacle, are the same layout (issue #57's check)
 SAME_M = 0.01
 #: [m] the held-apart check's default (issue #68): the augmentation's obstacle shift, along x and
 #: along y; a held-apart scene this close to a training scene may be one of its training copies
-TOL_M = Perturbation.shift_m
+#: [m] the largest shift of an obstacle, along x and along y, with which hardening augments a
+#: training frame (campaign.hardening.Perturbation.shift_m takes it from here: one definition)
+AUGMENT_SHIFT_M = 0.5
+TOL_M = AUGMENT_SHIFT_M
 
 Scene = Tuple[str, Tuple[str, ...], np.ndarray]  # (label, meshes in order, n x 2 positions [m])
 
