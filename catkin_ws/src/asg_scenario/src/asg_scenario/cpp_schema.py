@@ -10,7 +10,7 @@ import math
 import re
 import sys
 
-from . import schema
+from . import catalogue, schema
 
 HEADER = "catkin_ws/src/asg_sim/include/asg_sim/scene_schema.hpp"
 
@@ -79,6 +79,10 @@ def header_text() -> str:
         f"constexpr std::size_t kMaxHills = {schema.MAX_HILLS};  ///< [-] hills and ditches in one scene",
         f"constexpr double kMaxAmplitudePerWavelength = {_num(schema.MAX_AMPLITUDE_PER_WAVELENGTH)};  ///< [-]",
         f"constexpr double kMaxHillHeightPerRadius = {_num(schema.MAX_HILL_HEIGHT_PER_RADIUS)};  ///< [-]",
+        "",
+        "// The vehicle, as the catalogue gives it (asg_scenario/catalogue.py).",
+        f"constexpr double kVehicleHalfWidth = {_num(catalogue.VEHICLE_HALF_WIDTH)};  ///< [m]",
+        f"constexpr double kTraversableHeight = {_num(catalogue.TRAVERSABLE_HEIGHT)};  ///< [m] driven over below it",
         "",
         "/// How a run ends (RunScenario.action's constants).",
         "enum class Termination : int {",

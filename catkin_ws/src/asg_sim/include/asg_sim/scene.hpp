@@ -16,12 +16,12 @@ namespace asg_sim {
 
 /// One placed obstacle.
 struct ObstacleInstance {
-  bool visible = true;      ///< false: not placed
-  bool cast_shadow = true;  ///< false: rendered without shadow
+  bool visible = schema::kInstanceVisible.default_value != 0.0;          ///< false: not placed
+  bool cast_shadow = schema::kInstanceCastShadow.default_value != 0.0;  ///< false: rendered without shadow
   double x = 0.0;           ///< [m]
   double y = 0.0;           ///< [m]
-  double yaw = 0.0;         ///< [rad]
-  double scale = 1.0;       ///< [-] > 0
+  double yaw = schema::kInstanceYaw.default_value;      ///< [rad]
+  double scale = schema::kInstanceScale.default_value;  ///< [-] > 0
 };
 
 /// All instances of one obstacle type.
@@ -32,34 +32,37 @@ struct ObstacleLayout {
 
 struct Landscape {
   double size = 100.0;          ///< [m] side of the nominal square
-  uint32_t subdivisions = 64;   ///< [-] ground cells per side
-  double border = 50.0;         ///< [m] ground beyond the nominal square
+  uint32_t subdivisions = static_cast<uint32_t>(schema::kLandscapeSubdivisions.default_value);  ///< [-] per side
+  double border = schema::kLandscapeBorder.default_value;  ///< [m] ground beyond the nominal square
 };
 
 struct Textural {
   double sun_inclination_deg = 45.0;  ///< [deg] elevation, 0..90
-  double sun_yaw_deg = 0.0;           ///< [deg] direction the light comes from
-  uint32_t ground_texture_seed = 0;
+  double sun_yaw_deg = schema::kTexturalSunYawDeg.default_value;  ///< [deg] direction the light comes from
+  uint32_t ground_texture_seed = static_cast<uint32_t>(schema::kTexturalGroundTextureSeed.default_value);
   /// [m] meteorological visibility of fog: the distance at which a surface keeps 5 % of its
   /// contrast (transmittance exp(-3 d / V)); 0: no fog. Beyond it nothing is labelled visible.
-  double fog_visibility_m = 0.0;
+  double fog_visibility_m = schema::kTexturalFogVisibilityM.default_value;
   /// [-] cloud cover, 0 (clear sky) .. 1 (overcast): the sun's direct light falls to 20 %, the
   /// diffuse sky light rises, so shadows are weaker, and the sky turns grey.
-  double cloud_cover = 0.0;
+  double cloud_cover = schema::kTexturalCloudCover.default_value;
 };
 
 struct Operational {
-  double start_x = 0, start_y = 0, start_yaw = 0;  ///< [m], [m], [rad]
-  double goal_x = 0, goal_y = 0;                   ///< [m]
-  double goal_radius = 11.0;                       ///< [m]
-  double safety_radius = 11.0;                     ///< [m]
-  double speed = 5.0;                              ///< [m/s]
-  double sim_timeout = 120.0;                      ///< [s], -1 disables
-  double idle_timeout = 10.0;                      ///< [s], -1 disables
-  double stuck_timeout = 10.0;                     ///< [s], -1 disables
-  double max_roll_deg = 70.0;                      ///< [deg]
-  double max_pitch_deg = 70.0;                     ///< [deg]
-  bool allow_collisions = false;
+  // The defaults are the schema's (scene_schema.hpp, generated from asg_scenario/schema.py);
+  // start and goal are required there (0 until a scenario sets them).
+  double start_x = 0, start_y = 0;                                        ///< [m]
+  double start_yaw = schema::kOperationalStartYaw.default_value;          ///< [rad]
+  double goal_x = 0, goal_y = 0;                                          ///< [m]
+  double goal_radius = schema::kOperationalGoalRadius.default_value;      ///< [m]
+  double safety_radius = schema::kOperationalSafetyRadius.default_value;  ///< [m]
+  double speed = schema::kOperationalSpeed.default_value;                 ///< [m/s]
+  double sim_timeout = schema::kOperationalSimTimeout.default_value;      ///< [s], -1 disables
+  double idle_timeout = schema::kOperationalIdleTimeout.default_value;    ///< [s], -1 disables
+  double stuck_timeout = schema::kOperationalStuckTimeout.default_value;  ///< [s], -1 disables
+  double max_roll_deg = schema::kOperationalMaxRollDeg.default_value;     ///< [deg]
+  double max_pitch_deg = schema::kOperationalMaxPitchDeg.default_value;   ///< [deg]
+  bool allow_collisions = schema::kOperationalAllowCollisions.default_value != 0.0;
 };
 
 struct SceneSpec {

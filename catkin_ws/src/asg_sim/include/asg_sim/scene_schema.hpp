@@ -64,6 +64,10 @@ constexpr std::size_t kMaxHills = 32;  ///< [-] hills and ditches in one scene
 constexpr double kMaxAmplitudePerWavelength = 0.1;  ///< [-]
 constexpr double kMaxHillHeightPerRadius = 0.5;  ///< [-]
 
+// The vehicle, as the catalogue gives it (asg_scenario/catalogue.py).
+constexpr double kVehicleHalfWidth = 0.75;  ///< [m]
+constexpr double kTraversableHeight = 0.2;  ///< [m] driven over below it
+
 /// How a run ends (RunScenario.action's constants).
 enum class Termination : int {
   kNone = -1,

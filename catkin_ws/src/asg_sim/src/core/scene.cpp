@@ -8,8 +8,10 @@
 namespace asg_sim {
 namespace {
 
-constexpr double kVehicleHalfWidth = 0.75;  // [m] same as asg_scenario.catalogue
-constexpr double kTraversableHeight = 0.20; // [m]
+// The vehicle's half width and the traversable height: asg_scenario/catalogue.py's, through the
+// generated scene_schema.hpp.
+using schema::kTraversableHeight;
+using schema::kVehicleHalfWidth;
 
 class Problems {
  public:
