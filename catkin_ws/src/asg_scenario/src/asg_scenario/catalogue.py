@@ -6,6 +6,7 @@ A test compares both sides (``asg_sim_catalogue`` prints the C++ figures).
 """
 
 from dataclasses import dataclass
+from typing import Tuple
 
 #: An obstacle no taller than this counts as traversable: the vehicle may drive over it [m].
 TRAVERSABLE_HEIGHT = 0.20
@@ -23,6 +24,7 @@ class MeshInfo:
     collision_radius: float  #: [m] radius of the vertical cylinder used for collisions
     shadow_opacity: float  #: [-] share of sunlight its shadow blocks (dense foliage 1)
     description: str
+    colour: Tuple[float, float, float] = (0.3, 0.3, 0.3)  #: [-] RGB in pictures, rviz and bags
 
 
 MESHES = {
@@ -32,6 +34,7 @@ MESHES = {
         collision_radius=1.2,
         shadow_opacity=1.0,
         description="Juniper tree: conifer, trunk and dense conical foliage",
+        colour=(0.1, 0.5, 0.15),
     ),
     "barberry": MeshInfo(
         "barberry",
@@ -39,6 +42,7 @@ MESHES = {
         collision_radius=0.8,
         shadow_opacity=0.55,
         description="Barberry bush: rounded, sparse-leaved shrub about 1.2 m tall",
+        colour=(0.7, 0.15, 0.15),
     ),
 }
 

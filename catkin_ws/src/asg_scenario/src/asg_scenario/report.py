@@ -76,7 +76,6 @@ def plot_run(
     if background is not None:
         ax.imshow(background, extent=(0, size, 0, size), origin="upper", interpolation="bilinear")
     ax.add_patch(plt.Rectangle((0, 0), size, size, fill=False, color="0.4"))
-    colors = {"juniper": "darkgreen", "barberry": "firebrick"}
     for i, layout in enumerate(scenario["structural"]["layouts"]):
         mesh = MESHES[layout["mesh_name"]]
         for j, inst in enumerate(layout["instances"]):
@@ -87,7 +86,7 @@ def plot_run(
                 Circle(
                     (inst["x"], inst["y"]),
                     mesh.collision_radius * inst["scale"],
-                    color=colors.get(layout["mesh_name"], "k"),
+                    color=mesh.colour,  # the catalogue's
                     fill=not gone and background is None,
                     ls="--" if gone else "-",
                     alpha=0.8,

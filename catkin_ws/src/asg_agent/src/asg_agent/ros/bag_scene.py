@@ -12,7 +12,13 @@ from visualization_msgs.msg import Marker, MarkerArray
 from asg_scenario.catalogue import MESHES
 from asg_scenario.terrain import scenario_terrain
 
-COLOURS = {"juniper": (0.1, 0.5, 0.15), "barberry": (0.7, 0.15, 0.15)}
+
+def _colour(mesh: str):
+    """RGB of a mesh in rviz: the catalogue's (grey for a mesh it lacks)."""
+    from asg_scenario.catalogue import MESHES
+
+    info = MESHES.get(mesh)
+    return info.colour if info else (0.3, 0.3, 0.3)
 
 
 def _path(points, stamp, z=0.15, ground=None):
@@ -86,9 +92,7 @@ def scene_messages(request, removed, optimal_points, trajectory_xy, stamp):
             m.scale.x = m.scale.y = 2 * mesh.collision_radius * inst["scale"]
             m.scale.z = h
             gone = (li, ii) in removed
-            m.color = ColorRGBA(
-                *((0.6, 0.6, 0.6) if gone else COLOURS.get(layout["mesh_name"], (0.3, 0.3, 0.3))), 0.35 if gone else 0.9
-            )
+            m.color = ColorRGBA(*((0.6, 0.6, 0.6) if gone else _colour(layout["mesh_name"])), 0.35 if gone else 0.9)
             arr.markers.append(m)
     op = request["operational"]
     arr.markers.append(
