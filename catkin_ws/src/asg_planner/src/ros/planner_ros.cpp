@@ -46,21 +46,39 @@ PlannerROS::PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
            labels_sub_.getTopic().c_str());
 }
 
+namespace {
+
+// The value of parameter `spec.name` as its kind wants it, false when it is not set. A value of
+// another type is refused by name (NodeHandle::param would silently keep the default: a string
+// for follower/kp ran with the default gain).
+bool readTyped(const ros::NodeHandle& pnh, const ParameterSpec& spec, double* v) {
+  XmlRpc::XmlRpcValue x;
+  if (!pnh.getParam(spec.name, x)) return false;
+  const auto t = x.getType();
+  const std::string what = std::string("planner parameter '") + spec.name + "': ";
+  if (spec.kind == ParameterSpec::kBool) {
+    if (t != XmlRpc::XmlRpcValue::TypeBoolean) throw std::invalid_argument(what + "must be true or false");
+    *v = bool(x) ? 1.0 : 0.0;
+  } else if (spec.kind == ParameterSpec::kInt) {
+    if (t != XmlRpc::XmlRpcValue::TypeInt) throw std::invalid_argument(what + "must be an integer");
+    *v = int(x);
+  } else if (t == XmlRpc::XmlRpcValue::TypeDouble) {
+    *v = double(x);
+  } else if (t == XmlRpc::XmlRpcValue::TypeInt) {
+    *v = int(x);
+  } else {
+    throw std::invalid_argument(what + "must be a number [" + spec.unit + "]");
+  }
+  return true;
+}
+
+}  // namespace
+
 // The planner's table (parameters.hpp) names, types and bounds every parameter; this only reads.
 void PlannerROS::readParameters() {
   for (const auto& spec : plannerParameters()) {
     double v = spec.get(params_);
-    if (spec.kind == ParameterSpec::kBool) {
-      bool b = v != 0.0;
-      pnh_.param(spec.name, b, b);
-      v = b;
-    } else if (spec.kind == ParameterSpec::kInt) {
-      int i = int(v);
-      pnh_.param(spec.name, i, i);
-      v = i;
-    } else {
-      pnh_.param(spec.name, v, v);
-    }
+    readTyped(pnh_, spec, &v);              // throws naming a parameter of the wrong type
     setParameter(&params_, spec.name, v);  // throws naming the parameter and its range
   }
   // The adapter's two, by type: a wrong one is named, never silently replaced by the default.

@@ -1,0 +1,50 @@
+"""Issue #69 item 3: a wrongly typed parameter is refused by name, on a master, for the planner.
+NodeHandle::param kept the default silently when a value had another type (a string for
+follower/kp ran with the default gain); the planner now reads each row of its table by type
+(planner_ros.cpp readTyped) and refuses to start, naming the parameter."""
+
+import os
+import subprocess
+import time
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+PLANNER = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_planner", "planner")
+PORT = 11473
+
+
+def _env():
+    return dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{PORT}", ROS_HOSTNAME="127.0.0.1", ROS_IP="127.0.0.1")
+
+
+def test_the_planner_refuses_a_parameter_of_the_wrong_type_by_name(tmp_path):
+    assert os.access(PLANNER, os.X_OK), f"{PLANNER}: not built"
+    env = dict(_env(), ROS_LOG_DIR=str(tmp_path))
+    core = subprocess.Popen(["roscore", "-p", str(PORT)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(120):
+            if subprocess.run(["rosparam", "get", "/run_id"], env=env, capture_output=True).returncode == 0:
+                break
+            time.sleep(0.5)
+        for value, want in (
+            ("fast", "planner parameter 'follower/kp': must be a number"),
+            ("true", "planner parameter 'follower/kp': must be a number"),
+        ):
+            subprocess.run(["rosparam", "set", "/planner/follower/kp", value], env=env, check=True)
+            r = subprocess.run([PLANNER, "__name:=planner"], env=env, capture_output=True, text=True, timeout=60)
+            assert r.returncode == 1 and want in r.stdout + r.stderr, (value, r.stdout[-500:], r.stderr[-500:])
+        # an integer where a boolean is wanted, and a real where an integer is
+        subprocess.run(["rosparam", "set", "/planner/follower/kp", "1.5"], env=env, check=True)
+        subprocess.run(["rosparam", "set", "/planner/publish_markers", "1"], env=env, check=True)
+        r = subprocess.run([PLANNER, "__name:=planner"], env=env, capture_output=True, text=True, timeout=60)
+        assert r.returncode == 1 and "planner parameter 'publish_markers': must be true or false" in r.stdout + r.stderr
+        # the right types start it (it spins until stopped)
+        subprocess.run(["rosparam", "set", "/planner/publish_markers", "false"], env=env, check=True)
+        p = subprocess.Popen([PLANNER, "__name:=planner"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        time.sleep(3.0)
+        alive = p.poll() is None
+        p.terminate()
+        p.wait(timeout=10)
+        assert alive, p.stdout.read().decode()[-500:]
+    finally:
+        core.terminate()
+        core.wait(timeout=20)
