@@ -294,3 +294,21 @@ def test_a_campaign_named_in_the_machine_log_shared_the_machine(tmp_path):
         "flaw-y-s": [],
     }
     assert pr.shared_machine(str(tmp_path / "none"), ["a"]) == {"a": []}
+
+
+def test_the_transfer_and_pair_studies_take_the_pilots_arm_to_their_scene():
+    # issue #67: the v3 pilot's arm runs unchanged on Exp. 4 and on the depth pair, in its action space there
+    for choice_exp, want in (("experiments/exp1-route-wide.yaml", "wide"), ("experiments/exp1-route.yaml", "route")):
+        choice = {"method": "surrogate-ts", "reward": "flaw", "experiment": choice_exp, "band_m": None}
+        t = pr.load(os.path.join(REPO, "experiments", "protocol-flaw-study-v3-transfer.yaml"))
+        cs = pr.campaigns(t, "confirmatory", choice)
+        default = [c for c in cs if c["arm"] == "default"]
+        assert len(cs) == 6 and all(c["budget"] == 200 for c in cs)
+        suffix = "exp4-route-wide.yaml" if want == "wide" else "exp4-route.yaml"
+        assert all(c["experiment"].endswith(suffix) and "reward:=flaw" in c["args"] for c in default)
+        d = pr.load(os.path.join(REPO, "experiments", "protocol-regression-depth.yaml"))
+        cs = pr.campaigns(d, "confirmatory", choice)
+        assert all("attribution:=release" in c["args"] for c in cs)
+        assert {c["reward"] for c in cs if c["arm"] == "default"} == {"regression"}
+        assert all("exp1-depth-rc" in c["experiment"] for c in cs)
+    assert pr.ATTRIBUTION_ROLES["release"] == ("release",)
