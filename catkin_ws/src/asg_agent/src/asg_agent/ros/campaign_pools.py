@@ -33,7 +33,8 @@ def make_pools(a, exp, workers, roles):
     # configuration (e.g. exp6's planner_terrain.yaml, not the flat planner.yaml).
     from asg_agent.ros.stack_identity import planner_mismatch
 
-    ref_workers = [w for ws in roles.values() for w in ws]
+    # the reference workers that run the paper's planner: all but a `release` of another stack
+    ref_workers = [w for role, ws in roles.items() if _runs_paper_planner(exp, role) for w in ws]
     checked = (list(workers) if exp.stack == "paper" else []) + ref_workers
     wrong = [m for w in checked for m in planner_mismatch(w, exp.planner_config)]
     if wrong:
@@ -43,6 +44,18 @@ def make_pools(a, exp, workers, roles):
             + "\n(launch the workers with planner_config:=... of that file)"
         )
     return pool, references
+
+
+def _runs_paper_planner(exp, role: str) -> bool:
+    """Whether a reference role's workers run the paper's planner: full and ground truth do; a
+    `release` (issue #67) runs the registration the stack under test names, paper or not."""
+    from asg_agent.records import stacks
+    from asg_agent.scoring import attribution as attr
+
+    if role != attr.RELEASE:
+        return True
+    reference = stacks.read(exp.stack_file).reference_file if exp.stack_file else ""
+    return bool(reference) and stacks.read(reference).name == "paper"
 
 
 def check_stacks(exp, settings: dict, workers, roles):
