@@ -25,6 +25,10 @@ SECTION = "## From an install space: your own stack, step by step"
 STEPS = (4, 5, 6, 7, 8)
 
 
+#: stops what the steps started in the background (under `set -e`: nothing here may fail)
+STOP = 'if [ ${#BG[@]} -gt 0 ]; then kill -INT "${BG[@]}" 2>/dev/null || true; wait "${BG[@]}" 2>/dev/null || true; BG=(); fi'
+
+
 def step_blocks(text: str) -> dict:
     """{step number: [command lines]} of the section's numbered steps' ```bash blocks, each command
     with its continuation lines joined."""
@@ -59,9 +63,7 @@ def script(text: str, layouts: int = 3, scenarios: int = 5) -> str:
     for s in STEPS:
         out.append(f'echo "== step {s}"')
         if s == 7:
-            out.append(
-                '[ ${#BG[@]} -eq 0 ] || { kill -INT "${BG[@]}" 2>/dev/null; wait "${BG[@]}" 2>/dev/null || true; }'
-            )
+            out.append(STOP)
         for line in steps[s]:
             cmd = substitute(line, layouts, scenarios)
             if cmd.endswith("&"):
@@ -73,7 +75,7 @@ def script(text: str, layouts: int = 3, scenarios: int = 5) -> str:
                 out.append('echo "$OUT" | tail -4')
             else:
                 out.append(f"{cmd} || fail {s} {shlex.quote(cmd)}")
-    out.append('[ ${#BG[@]} -eq 0 ] || { kill -INT "${BG[@]}" 2>/dev/null; wait "${BG[@]}" 2>/dev/null || true; }')
+    out.append(STOP)
     out.append('echo "== steps 4-8 ran as the page writes them"')
     return "\n".join(out) + "\n"
 

@@ -30,6 +30,17 @@ def test_launch_file_parses(path):
     assert nodes.strip(), f"{path}: no nodes"
 
 
+def _experiment(body: str) -> str:
+    """An experiment file of Exp. 1's scene with `body`'s keys (in a temporary folder)."""
+    import tempfile
+
+    folder = tempfile.mkdtemp()
+    path = os.path.join(folder, "exp.yaml")
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(f"name: exp\nscenario: {os.path.join(REPO, 'scenarios', 'exp1.yaml')}\n" + body)
+    return path
+
+
 def test_train_launch_starts_n_workers_and_the_campaign():
     path = os.path.join(REPO, "launch", "train.launch")
     nodes = roslaunch("--nodes", path, "workers:=3").split()
@@ -43,7 +54,9 @@ def test_train_launch_starts_n_workers_and_the_campaign():
     assert "--reference full=1 --reference ground_truth=1 --full-model full" in args
     import yaml
 
-    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "model:=flawed_lite"))
+    # train.launch refuses a model its experiment does not name (issue #68): an experiment of flawed_lite
+    lite = _experiment("model: flawed_lite\n")
+    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "model:=flawed_lite", f"experiment:={lite}"))
     assert params["/worker_3/segmenter/model"] == "full_lite" and "/worker_4/segmenter/model" not in params
     assert params["/worker_4/scene_worker/publish_labels"] is True
     for single in ("true", "ground_truth"):  # round 3's single-reference mode stays selectable
@@ -77,7 +90,10 @@ def test_train_launch_gives_every_worker_under_test_the_backend():
     import yaml
 
     path = os.path.join(REPO, "launch", "train.launch")
-    params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=3", "unet_backend:=channels_last"))
+    cl = os.path.join(REPO, "experiments", "exp1-channels-last.yaml")  # the launch checks its experiment's backend
+    params = yaml.safe_load(
+        roslaunch("--dump-params", path, "workers:=3", "unet_backend:=channels_last", f"experiment:={cl}")
+    )
     assert [params[f"/worker_{i}/segmenter/backend"] for i in range(3)] == ["channels_last"] * 3
     params = yaml.safe_load(roslaunch("--dump-params", path, "workers:=2"))
     # unset: empty, which the segmenter reads as the shipped default (asg_perception.numerics)

@@ -8,7 +8,10 @@ REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)),
 
 
 def repo_relative(path: str) -> str:
-    """`path` relative to the repository this code runs from, or "" when it lies outside it."""
+    """`path` relative to the repository this code runs from, or "" when it lies outside it (or
+    when this code runs from an install space, which is no repository)."""
+    if not os.path.isdir(os.path.join(REPO, "catkin_ws", "src")):
+        return ""
     rel = os.path.relpath(os.path.realpath(path), REPO) if path else ".."
     return "" if rel.startswith("..") else rel
 
