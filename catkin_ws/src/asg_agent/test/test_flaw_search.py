@@ -281,3 +281,51 @@ def test_a_pair_campaign_learns_from_its_regressions():
             reward="regression",
             references={attr.TRUTH: FakePool(1)},
         )
+
+
+def test_a_flaw_campaign_cut_with_candidates_pending_resumes_each_scenario_once(tmp_path):
+    # found resuming the v3 pilot: a stored candidate whose references were still out at the cut
+    # was proposed again on resume and run a second time ("already holds job N")
+    import sys
+
+    sys.path.insert(0, os.path.dirname(__file__))
+    from stand_ins import DyingPool, Interrupt
+
+    exp = load_experiment(WIDE)
+    store = Store(str(tmp_path / "s.sqlite"))
+
+    def make(name, pool, seed_refs):
+        refs = {
+            attr.FULL: FakePool(1, seed=seed_refs, gain=0.0, prefix="f"),
+            attr.TRUTH: FakePool(1, seed=seed_refs + 1, gain=0.0, prefix="g"),
+        }
+        c = Campaign(
+            name,
+            exp,
+            make_method("surrogate-ts", exp, 4, budget=30),
+            store,
+            pool,
+            30,
+            4,
+            str(tmp_path / f"{name}.ckpt"),
+            slots=4,
+            checkpoint_every=1,
+            reward="flaw",
+            references=refs,
+            collision_bonus=2.0,
+        )
+        return c
+
+    ref = make("ref", FakePool(2, seed=1, collide_jobs={3, 7, 12, 20}), 10)
+    ref.start()
+    ref.run(poll_timeout=0.0)
+    cut = make("cut", DyingPool(17, workers=2, seed=2, collide_jobs={3, 7, 12, 20}), 20)
+    cut.start()
+    with pytest.raises(Interrupt):
+        cut.run(poll_timeout=0.0)
+    assert store.pending_references("cut")  # candidates were still out at the cut
+    again = make("cut", FakePool(2, seed=3, collide_jobs={3, 7, 12, 20}), 30)
+    again.resume()
+    again.run(poll_timeout=0.0)
+    assert store.jobs("cut") == list(range(30))
+    assert store.content_digest("cut") == store.content_digest("ref")

@@ -118,6 +118,7 @@ class Campaign:
         self.ref_jobs: Dict[int, RefJob] = {}
         self.pending: Dict[int, Job] = {}  # proposed, not applied
         self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
+        self.stored: set = set()  # jobs a resume found stored after its checkpoint
         # proposed jobs to the workers under test, each candidate to each reference stack
         self.jobs = Dispatcher(pool, max_attempts, self._retrying)
         self.refs = {role: Dispatcher(p, max_attempts, self._retrying_on(role)) for role, p in references.items()}
@@ -195,6 +196,7 @@ class Campaign:
                 self._queue_references(dict(row))
                 waiting.add(row["job"])
         for row in self.store.rows(self.name, self.next_apply - 1):
+            self.stored.add(row["job"])  # never run again, even if proposed anew below
             if not (self.wait_for_references and row["job"] in waiting):
                 self.finished[row["job"]] = dict(row)
             self.jobs.discard(row["job"])
@@ -220,7 +222,7 @@ class Campaign:
         request = self.exp.request(action, scenario_id=j + 1)
         self.stages.add("propose", t0)
         self.pending[j] = Job(j, slot, st["episode"], st["step"], st["state"], action, request)
-        if j not in self.finished:
+        if j not in self.finished and j not in self.stored:  # a stored candidate awaits its references
             self.jobs.add(j, request)
 
     # -- the loop -------------------------------------------------------------------------------
