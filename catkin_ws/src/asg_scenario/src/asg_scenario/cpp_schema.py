@@ -1,5 +1,5 @@
 """The C++ side of the scenario format, generated from schema.py (issue #56: one source of keys,
-units, ranges, defaults and terminations). asg_sim's validator and YAML reader use the header this
+units, ranges, defaults and terminations) and catalogue.py (issue #69: the obstacle classes). asg_sim's validator and YAML reader use the header this
 writes; tests/test_scenario_schema.py fails when the committed header differs from what this module
 generates now.
 
@@ -42,6 +42,49 @@ def field_rows():
                 yield constant_name(section, f.key), key, f
 
 
+#: The C++ name of each mapping's key list (kKeysTop, ...), by the schema's path.
+KEY_LISTS = {
+    "": "Top",
+    "structural": "Structural",
+    "structural.landscape": "Landscape",
+    "structural.terrain": "Terrain",
+    "structural.terrain.hills[k]": "Hill",
+    "structural.layouts[i]": "Layout",
+    "structural.layouts[i].instances[j]": "Instance",
+    "textural": "Textural",
+    "operational": "Operational",
+}
+
+
+def key_list_lines() -> list:
+    """`constexpr const char* kKeysX[] = {...};` for every mapping of the format."""
+    out = ["// The keys each mapping of a scenario file may hold, sorted (schema.allowed_keys)."]
+    for path, name in KEY_LISTS.items():
+        keys = ", ".join(f'"{k}"' for k in schema.allowed_keys(path))
+        out.append(f"constexpr const char* kKeys{name}[] = {{{keys}}};")
+    return out
+
+
+def catalogue_lines() -> list:
+    """The obstacle catalogue's size figures, in catalogue.py's order."""
+    rows = ", ".join(
+        f'{{"{m.name}", {_num(m.height)}, {_num(m.collision_radius)}, {_num(m.shadow_opacity)}}}'
+        for m in catalogue.MESHES.values()
+    )
+    return [
+        "/// One obstacle class of the catalogue (asg_scenario/catalogue.py) at scale 1; asg_sim's",
+        "/// meshes.cpp gives each its mesh function.",
+        "struct CatalogueEntry {",
+        "  const char* name;",
+        "  double height;            ///< [m] top of the mesh above the ground",
+        "  double collision_radius;  ///< [m] radius of the collision cylinder",
+        "  double shadow_opacity;    ///< [-] share of sunlight its shadow blocks",
+        "};",
+        f"constexpr CatalogueEntry kCatalogue[] = {{{rows}}};",
+        f"constexpr std::size_t kCatalogueSize = {len(catalogue.MESHES)};",
+    ]
+
+
 def header_text() -> str:
     out = [
         "#pragma once",
@@ -71,7 +114,7 @@ def header_text() -> str:
             f'constexpr Field {name}{{"{key}", {_num(f.lo)}, {_num(f.hi)}, "{unit}", {_num(f.default)}, '
             f"{'true' if f.disable_value is not None else 'false'}}};"
         )
-    out += [
+    out += [""] + key_list_lines() + [
         "",
         "// The scene budget.",
         f"constexpr std::size_t kMaxObstacles = {schema.MAX_OBSTACLES};  ///< [-] obstacle instances, all layouts",
@@ -83,6 +126,8 @@ def header_text() -> str:
         "// The vehicle, as the catalogue gives it (asg_scenario/catalogue.py).",
         f"constexpr double kVehicleHalfWidth = {_num(catalogue.VEHICLE_HALF_WIDTH)};  ///< [m]",
         f"constexpr double kTraversableHeight = {_num(catalogue.TRAVERSABLE_HEIGHT)};  ///< [m] driven over below it",
+        "",
+        *catalogue_lines(),
         "",
         "/// How a run ends (RunScenario.action's constants).",
         "enum class Termination : int {",

@@ -219,6 +219,17 @@ TERMINATIONS = [
 #: The terminations that are a failure of the stack under test (not SUCCESS, not ERROR).
 FAILED_TERMINATIONS = tuple(name for name, _, _ in TERMINATIONS if name not in ("SUCCESS", "ERROR"))
 
+#: The keys of each mapping of the format that are not scalar fields of SECTIONS: the sections and
+#: lists nested in it, and the layout's mesh name. With a section's fields, the keys that mapping may
+#: hold (allowed_keys); asg_sim's C++ loader reads its key lists from the header generated from
+#: both (cpp_schema.py), so a key is added here once.
+NESTED_KEYS = {
+    "": ("structural", "textural", "operational"),
+    "structural": ("landscape", "layouts", "terrain"),
+    "structural.terrain": ("hills",),
+    "structural.layouts[i]": ("mesh_name", "instances"),
+}
+
 #: Sections of the format, for docs and iteration: (path, fields).
 SECTIONS = [
     ("", TOP_FIELDS),
@@ -229,6 +240,12 @@ SECTIONS = [
     ("textural", TEXTURAL_FIELDS),
     ("operational", OPERATIONAL_FIELDS),
 ]
+
+
+def allowed_keys(path: str) -> List[str]:
+    """Every key the mapping at `path` (a SECTIONS or NESTED_KEYS path) may hold, sorted."""
+    fields = dict(SECTIONS).get(path, [])
+    return sorted([f.key for f in fields] + list(NESTED_KEYS.get(path, ())))
 
 
 class ScenarioError(ValueError):
@@ -325,17 +342,11 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
     c = _Checker()
     if not isinstance(data, dict):
         raise ScenarioError([("<root>", f"must be a mapping of sections, got {type(data).__name__}")], source)
-    sections = {"structural", "textural", "operational"}
-    top_keys = {f.key for f in TOP_FIELDS}
-    for key in data:
-        if key not in sections | top_keys:
-            c.fail(str(key), f"unknown field (allowed: {', '.join(sorted(sections | top_keys))})")
+    _only(c, data, "")
     out = {f.key: c.scalar(data, f, "") for f in TOP_FIELDS}
 
     structural = c.mapping(data.get("structural"), "structural")
-    for key in structural:
-        if key not in ("landscape", "layouts", "terrain"):
-            c.fail(f"structural.{key}", "unknown field (allowed: landscape, layouts, terrain)")
+    _only(c, structural, "structural")
     landscape = c.fields(
         c.mapping(structural.get("landscape"), "structural.landscape"), LANDSCAPE_FIELDS, "structural.landscape"
     )
@@ -362,9 +373,7 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
     for i, raw in enumerate(raw_layouts):
         lpath = f"structural.layouts[{i}]"
         raw = c.mapping(raw, lpath)
-        for key in raw:
-            if key not in ("mesh_name", "instances"):
-                c.fail(f"{lpath}.{key}", "unknown field (allowed: mesh_name, instances)")
+        _only(c, raw, "structural.layouts[i]", lpath)
         mesh = raw.get("mesh_name")
         if mesh is None:
             c.fail(f"{lpath}.mesh_name", f"missing required field (one of {', '.join(sorted(MESHES))})")
@@ -393,6 +402,16 @@ def validate_scenario(data: Any, source: str = "scenario") -> dict:
     if c.problems:
         raise ScenarioError(c.problems, source)
     return out
+
+
+def _only(c: "_Checker", mapping: dict, path: str, where: Optional[str] = None):
+    """A problem for each key of `mapping` that the format's `path` does not hold (`where`: the
+    path as the problem names it, with list indices)."""
+    allowed = allowed_keys(path)
+    prefix = f"{where if where is not None else path}." if (where or path) else ""
+    for key in mapping:
+        if key not in allowed:
+            c.fail(f"{prefix}{key}", f"unknown field (allowed: {', '.join(allowed)})")
 
 
 def _check_geometry(s: dict, c: _Checker):

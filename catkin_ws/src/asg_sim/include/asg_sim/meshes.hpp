@@ -22,7 +22,7 @@ struct Mesh {
   std::vector<uint32_t> indices;  ///< triangles, counter-clockwise seen from outside
 };
 
-/// Size figures of an obstacle type at scale 1 (the Python catalogue holds the same).
+/// Size figures of an obstacle type at scale 1, from the catalogue (scene_schema.hpp kCatalogue).
 struct MeshInfo {
   std::string name;
   double height;            ///< [m]

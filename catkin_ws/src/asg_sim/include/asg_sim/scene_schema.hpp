@@ -57,6 +57,17 @@ constexpr Field kOperationalMaxRollDeg{"operational.max_roll_deg", 1.0, 180.0, "
 constexpr Field kOperationalMaxPitchDeg{"operational.max_pitch_deg", 1.0, 180.0, "deg", 70.0, false};
 constexpr Field kOperationalAllowCollisions{"operational.allow_collisions", std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), "", 0.0, false};
 
+// The keys each mapping of a scenario file may hold, sorted (schema.allowed_keys).
+constexpr const char* kKeysTop[] = {"format_version", "name", "operational", "record_labels", "scenario_id", "structural", "textural"};
+constexpr const char* kKeysStructural[] = {"landscape", "layouts", "terrain"};
+constexpr const char* kKeysLandscape[] = {"border", "size", "subdivisions"};
+constexpr const char* kKeysTerrain[] = {"amplitude_m", "hills", "seed", "wavelength_m"};
+constexpr const char* kKeysHill[] = {"height_m", "radius_m", "x", "y"};
+constexpr const char* kKeysLayout[] = {"instances", "mesh_name"};
+constexpr const char* kKeysInstance[] = {"cast_shadow", "scale", "visible", "x", "y", "yaw"};
+constexpr const char* kKeysTextural[] = {"cloud_cover", "fog_visibility_m", "ground_texture_seed", "sun_inclination_deg", "sun_yaw_deg"};
+constexpr const char* kKeysOperational[] = {"allow_collisions", "goal_radius", "goal_x", "goal_y", "idle_timeout", "max_pitch_deg", "max_roll_deg", "safety_radius", "sim_timeout", "speed", "start_x", "start_y", "start_yaw", "stuck_timeout"};
+
 // The scene budget.
 constexpr std::size_t kMaxObstacles = 512;  ///< [-] obstacle instances, all layouts
 constexpr double kMaxGroundCellsPerSide = 2048.0;  ///< [-]
@@ -67,6 +78,17 @@ constexpr double kMaxHillHeightPerRadius = 0.5;  ///< [-]
 // The vehicle, as the catalogue gives it (asg_scenario/catalogue.py).
 constexpr double kVehicleHalfWidth = 0.75;  ///< [m]
 constexpr double kTraversableHeight = 0.2;  ///< [m] driven over below it
+
+/// One obstacle class of the catalogue (asg_scenario/catalogue.py) at scale 1; asg_sim's
+/// meshes.cpp gives each its mesh function.
+struct CatalogueEntry {
+  const char* name;
+  double height;            ///< [m] top of the mesh above the ground
+  double collision_radius;  ///< [m] radius of the collision cylinder
+  double shadow_opacity;    ///< [-] share of sunlight its shadow blocks
+};
+constexpr CatalogueEntry kCatalogue[] = {{"juniper", 4.5, 1.2, 1.0}, {"barberry", 1.2, 0.8, 0.55}};
+constexpr std::size_t kCatalogueSize = 2;
 
 /// How a run ends (RunScenario.action's constants).
 enum class Termination : int {

@@ -1,5 +1,7 @@
 #include "asg_sim/meshes.hpp"
 
+#include "asg_sim/scene_schema.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -106,13 +108,26 @@ Mesh makeBarberry() {
   return m;
 }
 
+// Each class's mesh function, by its catalogue name (scene_schema.hpp's kCatalogue, generated
+// from asg_scenario/catalogue.py): a new obstacle class is a catalogue entry and a row here.
+struct MeshBuilder {
+  const char* name;
+  Mesh (*build)();
+};
+const MeshBuilder kMeshBuilders[] = {
+    {"juniper", makeJuniper},
+    {"barberry", makeBarberry},
+};
+
 }  // namespace
 
 const std::vector<MeshInfo>& meshCatalogue() {
-  static const std::vector<MeshInfo> catalogue = {
-      {"barberry", 1.2, 0.8, 0.55},
-      {"juniper", 4.5, 1.2, 1.0},
-  };
+  static const std::vector<MeshInfo> catalogue = [] {
+    std::vector<MeshInfo> c;
+    for (const auto& e : schema::kCatalogue) c.push_back({e.name, e.height, e.collision_radius, e.shadow_opacity});
+    std::sort(c.begin(), c.end(), [](const MeshInfo& a, const MeshInfo& b) { return a.name < b.name; });
+    return c;
+  }();
   return catalogue;
 }
 
@@ -123,9 +138,10 @@ const MeshInfo* findMesh(const std::string& name) {
 }
 
 Mesh makeObstacleMesh(const std::string& name) {
-  if (name == "juniper") return makeJuniper();
-  if (name == "barberry") return makeBarberry();
-  throw std::invalid_argument("unknown mesh '" + name + "'");
+  if (!findMesh(name)) throw std::invalid_argument("unknown mesh '" + name + "'");
+  for (const auto& b : kMeshBuilders)
+    if (name == b.name) return b.build();
+  throw std::invalid_argument("mesh '" + name + "' is in the catalogue but has no mesh function (meshes.cpp)");
 }
 
 Mesh makeGroundMesh(double size, double border, uint32_t subdivisions, const Terrain& terrain) {

@@ -2,7 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <regex>
@@ -126,52 +128,56 @@ class Reader {
     return n;
   }
 
-  void allowOnly(const YAML::Node& map, const std::set<std::string>& keys, const std::string& path) {
+  /// A problem for each key of `map` that is not in `keys` (a key list of scene_schema.hpp).
+  template <std::size_t N>
+  void allowOnly(const YAML::Node& map, const char* const (&keys)[N], const std::string& path) {
+    const std::set<std::string> known(std::begin(keys), std::end(keys));
     std::string allowed;
-    for (const auto& k : keys) allowed += (allowed.empty() ? "" : ", ") + k;
+    for (const auto& k : known) allowed += (allowed.empty() ? "" : ", ") + k;
     for (const auto& kv : map) {
       const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
-      if (!keys.count(key)) fail(join(path, key), "unknown field (allowed: " + allowed + ")");
+      if (!known.count(key)) fail(join(path, key), "unknown field (allowed: " + allowed + ")");
     }
   }
 
-  void number(const YAML::Node& map, const char* key, double* out, const std::string& path, bool required) {
+  // The readers of one field of the schema: its key is the last part of the field's dotted key,
+  // it is required when the schema gives no default, and an integer's bounds are the field's.
+  void number(const YAML::Node& map, const schema::Field& f, double* out, const std::string& path) {
     Scalar v;
-    if (!present(map, key, path, required, &v)) return;
+    if (!present(map, f, path, &v)) return;
     if (v.kind != Scalar::kInt && v.kind != Scalar::kFloat) {
-      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be a finite number");
+      fail(join(path, key(f)), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be a finite number");
       return;
     }
     // Finite values beyond double become +-inf, which validateScene names as not finite.
     *out = double(v.num);
-    if (v.kind == Scalar::kInt && !std::isfinite(*out)) fail(join(path, key), "= " + v.text + ": out of range");
+    if (v.kind == Scalar::kInt && !std::isfinite(*out)) fail(join(path, key(f)), "= " + v.text + ": out of range");
   }
 
   template <class T>
-  void integer(const YAML::Node& map, const char* key, T* out, const std::string& path, bool required,
-               long double lo, long double hi) {
+  void integer(const YAML::Node& map, const schema::Field& f, T* out, const std::string& path) {
     Scalar v;
-    if (!present(map, key, path, required, &v)) return;
+    if (!present(map, f, path, &v)) return;
     const bool integral = v.kind == Scalar::kInt ||
                           (v.kind == Scalar::kFloat && std::isfinite(v.num) && v.num == std::floor(v.num));
     if (!integral) {
-      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be an integer");
+      fail(join(path, key(f)), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be an integer");
       return;
     }
-    if (v.num < lo || v.num > hi) {
+    if (v.num < f.lo || v.num > f.hi) {
       std::ostringstream s;
-      s << "= " << v.text << ": out of range, must be an integer in [" << double(lo) << ", " << double(hi) << "]";
-      fail(join(path, key), s.str());
+      s << "= " << v.text << ": out of range, must be an integer in [" << f.lo << ", " << f.hi << "]";
+      fail(join(path, key(f)), s.str());
       return;
     }
     *out = T(v.num);
   }
 
-  void boolean(const YAML::Node& map, const char* key, bool* out, const std::string& path) {
+  void boolean(const YAML::Node& map, const schema::Field& f, bool* out, const std::string& path) {
     Scalar v;
-    if (!present(map, key, path, false, &v)) return;
+    if (!present(map, f, path, &v)) return;
     if (v.kind != Scalar::kBool) {
-      fail(join(path, key), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be true or false");
+      fail(join(path, key(f)), "= " + show(v) + ": wrong type " + kindName(v.kind) + ", must be true or false");
       return;
     }
     *out = v.b;
@@ -192,6 +198,13 @@ class Reader {
   }
 
  private:
+  static std::string key(const schema::Field& f) {
+    const char* dot = std::strrchr(f.key, '.');
+    return dot ? dot + 1 : f.key;
+  }
+  bool present(const YAML::Node& map, const schema::Field& f, const std::string& path, Scalar* v) {
+    return present(map, key(f).c_str(), path, std::isnan(f.default_value), v);
+  }
   bool present(const YAML::Node& map, const char* key, const std::string& path, bool required, Scalar* v) {
     const YAML::Node n = map[key];
     if (!n) {
@@ -260,9 +273,114 @@ std::string duplicateKey(const YAML::Node& n, int depth = 0) {
   return "";
 }
 
-}  // namespace
+namespace sc = schema;
 
-ScenarioFile loadScenarioYaml(const std::string& path) {
+void readTerrain(Reader& r, const YAML::Node& node, TerrainSpec* t) {
+  const std::string tp = "structural.terrain";
+  const YAML::Node tr = r.mapping(node, tp);
+  r.allowOnly(tr, sc::kKeysTerrain, tp);
+  r.number(tr, sc::kTerrainAmplitudeM, &t->amplitude_m, tp);
+  r.number(tr, sc::kTerrainWavelengthM, &t->wavelength_m, tp);
+  r.integer(tr, sc::kTerrainSeed, &t->seed, tp);
+  const YAML::Node hills = tr["hills"];
+  if (hills && !hills.IsSequence()) {
+    r.fail(tp + ".hills", "must be a list of hills");
+    return;
+  }
+  for (size_t i = 0; hills && i < hills.size(); ++i) {
+    const std::string hp = tp + ".hills[" + std::to_string(i) + "]";
+    const YAML::Node h = r.mapping(hills[i], hp);
+    r.allowOnly(h, sc::kKeysHill, hp);
+    Hill hill;
+    r.number(h, sc::kHillX, &hill.x, hp);
+    r.number(h, sc::kHillY, &hill.y, hp);
+    r.number(h, sc::kHillRadiusM, &hill.radius_m, hp);
+    r.number(h, sc::kHillHeightM, &hill.height_m, hp);
+    t->hills.push_back(hill);
+  }
+}
+
+void readLayouts(Reader& r, const YAML::Node& layouts, std::vector<ObstacleLayout>* out) {
+  if (!layouts) return;  // absent: none; null is refused, as in Python
+  if (!layouts.IsSequence()) {
+    r.fail("structural.layouts", "must be a list of layouts");
+    return;
+  }
+  for (size_t i = 0; i < layouts.size(); ++i) {
+    const std::string lp = "structural.layouts[" + std::to_string(i) + "]";
+    const YAML::Node l = r.mapping(layouts[i], lp);
+    r.allowOnly(l, sc::kKeysLayout, lp);
+    ObstacleLayout layout;
+    r.string(l, "mesh_name", &layout.mesh_name, lp, true);
+    const YAML::Node insts = l["instances"];
+    if (insts && !insts.IsSequence()) {  // absent: none; null is refused, as in Python
+      r.fail(lp + ".instances", "must be a list of instances");
+    } else {
+      for (size_t j = 0; insts && j < insts.size(); ++j) {
+        const std::string ip = lp + ".instances[" + std::to_string(j) + "]";
+        const YAML::Node n = r.mapping(insts[j], ip);
+        r.allowOnly(n, sc::kKeysInstance, ip);
+        ObstacleInstance inst;
+        r.boolean(n, sc::kInstanceVisible, &inst.visible, ip);
+        r.boolean(n, sc::kInstanceCastShadow, &inst.cast_shadow, ip);
+        r.number(n, sc::kInstanceX, &inst.x, ip);
+        r.number(n, sc::kInstanceY, &inst.y, ip);
+        r.number(n, sc::kInstanceYaw, &inst.yaw, ip);
+        r.number(n, sc::kInstanceScale, &inst.scale, ip);
+        layout.instances.push_back(inst);
+      }
+    }
+    out->push_back(layout);
+  }
+}
+
+void readStructural(Reader& r, const YAML::Node& root, SceneSpec* s) {
+  const YAML::Node st = r.mapping(root["structural"], "structural");
+  r.allowOnly(st, sc::kKeysStructural, "structural");
+  const std::string lp = "structural.landscape";
+  const YAML::Node ld = r.mapping(st["landscape"], lp);
+  r.allowOnly(ld, sc::kKeysLandscape, lp);
+  r.number(ld, sc::kLandscapeSize, &s->landscape.size, lp);
+  r.integer(ld, sc::kLandscapeSubdivisions, &s->landscape.subdivisions, lp);
+  r.number(ld, sc::kLandscapeBorder, &s->landscape.border, lp);
+  if (st["terrain"]) readTerrain(r, st["terrain"], &s->terrain);  // absent: flat; null is refused
+  readLayouts(r, st["layouts"], &s->layouts);
+}
+
+void readTextural(Reader& r, const YAML::Node& root, Textural* t) {
+  const std::string tp = "textural";
+  const YAML::Node tx = r.mapping(root["textural"], tp);
+  r.allowOnly(tx, sc::kKeysTextural, tp);
+  r.number(tx, sc::kTexturalSunInclinationDeg, &t->sun_inclination_deg, tp);
+  r.number(tx, sc::kTexturalSunYawDeg, &t->sun_yaw_deg, tp);
+  r.integer(tx, sc::kTexturalGroundTextureSeed, &t->ground_texture_seed, tp);
+  r.number(tx, sc::kTexturalFogVisibilityM, &t->fog_visibility_m, tp);
+  r.number(tx, sc::kTexturalCloudCover, &t->cloud_cover, tp);
+}
+
+void readOperational(Reader& r, const YAML::Node& root, Operational* o) {
+  const std::string ow = "operational";
+  const YAML::Node op = r.mapping(root["operational"], ow);
+  r.allowOnly(op, sc::kKeysOperational, ow);
+  r.number(op, sc::kOperationalStartX, &o->start_x, ow);
+  r.number(op, sc::kOperationalStartY, &o->start_y, ow);
+  r.number(op, sc::kOperationalStartYaw, &o->start_yaw, ow);
+  r.number(op, sc::kOperationalGoalX, &o->goal_x, ow);
+  r.number(op, sc::kOperationalGoalY, &o->goal_y, ow);
+  r.number(op, sc::kOperationalGoalRadius, &o->goal_radius, ow);
+  r.number(op, sc::kOperationalSafetyRadius, &o->safety_radius, ow);
+  r.number(op, sc::kOperationalSpeed, &o->speed, ow);
+  r.number(op, sc::kOperationalSimTimeout, &o->sim_timeout, ow);
+  r.number(op, sc::kOperationalIdleTimeout, &o->idle_timeout, ow);
+  r.number(op, sc::kOperationalStuckTimeout, &o->stuck_timeout, ow);
+  r.number(op, sc::kOperationalMaxRollDeg, &o->max_roll_deg, ow);
+  r.number(op, sc::kOperationalMaxPitchDeg, &o->max_pitch_deg, ow);
+  r.boolean(op, sc::kOperationalAllowCollisions, &o->allow_collisions, ow);
+}
+
+/// The parsed YAML of `path`, refused with the reason when it is not text YAML reads the way
+/// the Python loader does (bad characters, a syntax error, a key given twice).
+YAML::Node parseScenarioText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot read the file");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -281,113 +399,31 @@ ScenarioFile loadScenarioYaml(const std::string& path) {
   }
   const std::string dup = duplicateKey(root);
   if (!dup.empty()) throw SceneError(path + ": " + dup);
+  return root;
+}
+
+}  // namespace
+
+ScenarioFile loadScenarioYaml(const std::string& path) {
+  const YAML::Node root = parseScenarioText(path);
   Reader r(path);
   if (!root.IsMap()) {
     r.fail("<root>", "must be a mapping of sections");
     r.raise();
   }
   ScenarioFile f;
-  auto& s = f.spec;
-  r.allowOnly(root, {"format_version", "name", "scenario_id", "record_labels", "structural", "textural",
-                     "operational"}, "");
+  r.allowOnly(root, sc::kKeysTop, "");
   int version = 1;
-  r.integer(root, "format_version", &version, "", false, 1, 1);
-  r.integer(root, "scenario_id", &f.scenario_id, "", false, 1, 4294967295.0L);
-  r.boolean(root, "record_labels", &f.record_labels, "");
+  r.integer(root, sc::kTopFormatVersion, &version, "");
+  r.integer(root, sc::kTopScenarioId, &f.scenario_id, "");
+  r.boolean(root, sc::kTopRecordLabels, &f.record_labels, "");
   r.string(root, "name", &f.name, "", false);
-
-  const YAML::Node st = r.mapping(root["structural"], "structural");
-  r.allowOnly(st, {"landscape", "layouts", "terrain"}, "structural");
-  const YAML::Node ld = r.mapping(st["landscape"], "structural.landscape");
-  r.allowOnly(ld, {"size", "subdivisions", "border"}, "structural.landscape");
-  r.number(ld, "size", &s.landscape.size, "structural.landscape", true);
-  r.integer(ld, "subdivisions", &s.landscape.subdivisions, "structural.landscape", false, 1, 4096);
-  r.number(ld, "border", &s.landscape.border, "structural.landscape", false);
-  if (st["terrain"]) {  // absent: flat; null is refused, as in Python
-    const YAML::Node tr = r.mapping(st["terrain"], "structural.terrain");
-    r.allowOnly(tr, {"amplitude_m", "wavelength_m", "seed", "hills"}, "structural.terrain");
-    r.number(tr, "amplitude_m", &s.terrain.amplitude_m, "structural.terrain", false);
-    r.number(tr, "wavelength_m", &s.terrain.wavelength_m, "structural.terrain", false);
-    r.integer(tr, "seed", &s.terrain.seed, "structural.terrain", false, 0, 4294967295.0L);
-    const YAML::Node hills = tr["hills"];
-    if (hills && !hills.IsSequence()) {
-      r.fail("structural.terrain.hills", "must be a list of hills");
-    } else if (hills && hills.IsSequence()) {
-      for (size_t i = 0; i < hills.size(); ++i) {
-        const std::string hp = "structural.terrain.hills[" + std::to_string(i) + "]";
-        const YAML::Node h = r.mapping(hills[i], hp);
-        r.allowOnly(h, {"x", "y", "radius_m", "height_m"}, hp);
-        Hill hill;
-        r.number(h, "x", &hill.x, hp, true);
-        r.number(h, "y", &hill.y, hp, true);
-        r.number(h, "radius_m", &hill.radius_m, hp, true);
-        r.number(h, "height_m", &hill.height_m, hp, true);
-        s.terrain.hills.push_back(hill);
-      }
-    }
-  }
-  const YAML::Node layouts = st["layouts"];
-  if (layouts && !layouts.IsSequence()) {  // absent: none; null is refused, as in Python
-    r.fail("structural.layouts", "must be a list of layouts");
-  } else if (layouts && layouts.IsSequence()) {
-    for (size_t i = 0; i < layouts.size(); ++i) {
-      const std::string lp = "structural.layouts[" + std::to_string(i) + "]";
-      const YAML::Node l = r.mapping(layouts[i], lp);
-      r.allowOnly(l, {"mesh_name", "instances"}, lp);
-      ObstacleLayout layout;
-      r.string(l, "mesh_name", &layout.mesh_name, lp, true);
-      const YAML::Node insts = l["instances"];
-      if (insts && !insts.IsSequence()) {  // absent: none; null is refused, as in Python
-        r.fail(lp + ".instances", "must be a list of instances");
-      } else if (insts && insts.IsSequence()) {
-        for (size_t j = 0; j < insts.size(); ++j) {
-          const std::string ip = lp + ".instances[" + std::to_string(j) + "]";
-          const YAML::Node n = r.mapping(insts[j], ip);
-          r.allowOnly(n, {"visible", "cast_shadow", "x", "y", "yaw", "scale"}, ip);
-          ObstacleInstance inst;
-          r.boolean(n, "visible", &inst.visible, ip);
-          r.boolean(n, "cast_shadow", &inst.cast_shadow, ip);
-          r.number(n, "x", &inst.x, ip, true);
-          r.number(n, "y", &inst.y, ip, true);
-          r.number(n, "yaw", &inst.yaw, ip, false);
-          r.number(n, "scale", &inst.scale, ip, false);
-          layout.instances.push_back(inst);
-        }
-      }
-      s.layouts.push_back(layout);
-    }
-  }
-  const YAML::Node tx = r.mapping(root["textural"], "textural");
-  r.allowOnly(tx, {"sun_inclination_deg", "sun_yaw_deg", "ground_texture_seed", "fog_visibility_m", "cloud_cover"},
-              "textural");
-  r.number(tx, "sun_inclination_deg", &s.textural.sun_inclination_deg, "textural", true);
-  r.number(tx, "sun_yaw_deg", &s.textural.sun_yaw_deg, "textural", false);
-  r.integer(tx, "ground_texture_seed", &s.textural.ground_texture_seed, "textural", false, 0, 4294967295.0L);
-  r.number(tx, "fog_visibility_m", &s.textural.fog_visibility_m, "textural", false);
-  r.number(tx, "cloud_cover", &s.textural.cloud_cover, "textural", false);
-  const YAML::Node op = r.mapping(root["operational"], "operational");
-  const std::string ow = "operational";
-  r.allowOnly(op, {"start_x", "start_y", "start_yaw", "goal_x", "goal_y", "goal_radius", "safety_radius",
-                   "speed", "sim_timeout", "idle_timeout", "stuck_timeout", "max_roll_deg",
-                   "max_pitch_deg", "allow_collisions"}, ow);
-  auto& o = s.operational;
-  r.number(op, "start_x", &o.start_x, ow, true);
-  r.number(op, "start_y", &o.start_y, ow, true);
-  r.number(op, "start_yaw", &o.start_yaw, ow, false);
-  r.number(op, "goal_x", &o.goal_x, ow, true);
-  r.number(op, "goal_y", &o.goal_y, ow, true);
-  r.number(op, "goal_radius", &o.goal_radius, ow, false);
-  r.number(op, "safety_radius", &o.safety_radius, ow, false);
-  r.number(op, "speed", &o.speed, ow, false);
-  r.number(op, "sim_timeout", &o.sim_timeout, ow, false);
-  r.number(op, "idle_timeout", &o.idle_timeout, ow, false);
-  r.number(op, "stuck_timeout", &o.stuck_timeout, ow, false);
-  r.number(op, "max_roll_deg", &o.max_roll_deg, ow, false);
-  r.number(op, "max_pitch_deg", &o.max_pitch_deg, ow, false);
-  r.boolean(op, "allow_collisions", &o.allow_collisions, ow);
+  readStructural(r, root, &f.spec);
+  readTextural(r, root, &f.spec.textural);
+  readOperational(r, root, &f.spec.operational);
   r.raise();
   try {
-    validateScene(s);
+    validateScene(f.spec);
   } catch (const SceneError& e) {
     throw SceneError(path + ": " + e.what());
   }

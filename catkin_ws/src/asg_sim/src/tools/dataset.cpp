@@ -1,5 +1,6 @@
 // asg_sim_dataset: renders a segmentation dataset with the simulator's ground-truth labeler.
-//   asg_sim_dataset --out DIR --count N [--seed S] [--meshes juniper,barberry]
+//   asg_sim_dataset --out DIR --count N [--seed S] [--meshes NAME,NAME (default: every class of the
+//                   catalogue, in its order: juniper,barberry)]
 //                   [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]
 // Random scenes (deterministic from the seed), sun inclinations cycling through 0, 15, ..., 90
 // degrees, 10..30 obstacles per scene, camera poses mostly facing an obstacle at 3..20 m. Writes DIR/images/NNNNNN_{rgb,
@@ -33,17 +34,31 @@
 #include "asg_sim/meshes.hpp"
 #include "asg_sim/renderer.hpp"
 #include "asg_sim/scene.hpp"
+#include "asg_sim/scene_schema.hpp"
 #include "asg_sim/scene_yaml.hpp"
 
 using namespace asg_sim;
 
 namespace {
 
+/// Every class of the catalogue, in catalogue.py's order (the scenes' draws follow the order).
+std::vector<std::string> catalogueNames() {
+  std::vector<std::string> names;
+  for (const auto& e : schema::kCatalogue) names.push_back(e.name);
+  return names;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ",") + n;
+  return s;
+}
+
 struct Args {
   std::string out;
   int count = 0;
   uint64_t seed = 0;
-  std::vector<std::string> meshes{"juniper", "barberry"};
+  std::vector<std::string> meshes = catalogueNames();  ///< the classes scenes draw from
   int frames_per_scene = 8;
   double size = 100.0;
   double terrain = 0.0;  ///< [-] share of scenes with terrain
@@ -61,9 +76,9 @@ struct PoseRow {
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
                "error: %s\nusage: asg_sim_dataset --out DIR --count N [--seed S] "
-               "[--meshes juniper,barberry] [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]\n"
+               "[--meshes %s] [--frames-per-scene 8] [--size 100] [--terrain P] [--weather P]\n"
                "       asg_sim_dataset --out DIR --poses FILE.csv [--instances 1]\n",
-               why.c_str());
+               why.c_str(), joined(catalogueNames()).c_str());
   std::exit(2);
 }
 
