@@ -60,9 +60,25 @@ size_t instanceCount(const SceneSpec& spec) {
   return n;
 }
 
-void validateScene(const SceneSpec& spec) {
-  Problems p;
-  const auto& L = spec.landscape;
+namespace {
+
+// Whether (x, y) lies in the landscape [0, size]^2; a problem naming prefix + axis otherwise.
+bool insideLandscape(Problems& p, const std::string& prefix, double x, double y, double size) {
+  bool ok = true;
+  for (auto [axis, v] : {std::pair<const char*, double>{"x", x}, {"y", y}}) {
+    if (!std::isfinite(v)) {
+      p.finite(prefix + axis, v);
+      ok = false;
+    } else if (v < 0.0 || v > size) {
+      p.add(prefix + axis, "= " + Problems::num(v) + ": outside the landscape, must be in [0, " +
+                               Problems::num(size) + "] m");
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+void checkLandscape(Problems& p, const Landscape& L) {
   p.range(L.size, schema::kLandscapeSize);
   p.range(L.subdivisions, schema::kLandscapeSubdivisions);
   p.range(L.border, schema::kLandscapeBorder);
@@ -74,22 +90,9 @@ void validateScene(const SceneSpec& spec) {
                 " ground cells per side with the border: at most " +
                 Problems::num(kMaxGroundCellsPerSide) + " (subdivisions x (size + 2 border) / size)");
   }
-  const double size = std::isfinite(L.size) ? L.size : 0.0;
-  auto inside = [&](const std::string& prefix, double x, double y) {
-    bool ok = true;
-    for (auto [axis, v] : {std::pair<const char*, double>{"x", x}, {"y", y}}) {
-      if (!std::isfinite(v)) {
-        p.finite(prefix + axis, v);
-        ok = false;
-      } else if (v < 0.0 || v > size) {
-        p.add(prefix + axis, "= " + Problems::num(v) + ": outside the landscape, must be in [0, " +
-                                 Problems::num(size) + "] m");
-        ok = false;
-      }
-    }
-    return ok;
-  };
-  const auto& T = spec.terrain;
+}
+
+void checkTerrain(Problems& p, const TerrainSpec& T, double size) {
   p.range(T.amplitude_m, schema::kTerrainAmplitudeM);
   // The wavelength matters only with an amplitude: a message that leaves both 0 is flat.
   if (T.amplitude_m != 0.0) p.range(T.wavelength_m, schema::kTerrainWavelengthM);
@@ -104,7 +107,7 @@ void validateScene(const SceneSpec& spec) {
   for (size_t i = 0; i < T.hills.size() && i < kMaxHills; ++i) {
     const auto& h = T.hills[i];
     const std::string hp = "structural.terrain.hills[" + std::to_string(i) + "].";
-    inside(hp, h.x, h.y);
+    insideLandscape(p, hp, h.x, h.y, size);
     p.range(hp + "radius_m", h.radius_m, schema::kHillRadiusM);
     p.range(hp + "height_m", h.height_m, schema::kHillHeightM);
     if (std::isfinite(h.radius_m) && std::isfinite(h.height_m) &&
@@ -112,9 +115,11 @@ void validateScene(const SceneSpec& spec) {
       p.add(hp + "height_m", "= " + Problems::num(h.height_m) + ": too steep for radius_m " +
                                  Problems::num(h.radius_m) + ", |height_m| must be at most radius_m / 2 m");
   }
-  const auto& O = spec.operational;
-  inside("operational.start_", O.start_x, O.start_y);
-  inside("operational.goal_", O.goal_x, O.goal_y);
+}
+
+void checkOperationalAndTextural(Problems& p, const Operational& O, const Textural& X, double size) {
+  insideLandscape(p, "operational.start_", O.start_x, O.start_y, size);
+  insideLandscape(p, "operational.goal_", O.goal_x, O.goal_y, size);
   p.range(O.start_yaw, schema::kOperationalStartYaw);
   p.range(O.goal_radius, schema::kOperationalGoalRadius);
   p.range(O.safety_radius, schema::kOperationalSafetyRadius);
@@ -124,43 +129,55 @@ void validateScene(const SceneSpec& spec) {
   p.range(O.stuck_timeout, schema::kOperationalStuckTimeout);
   p.range(O.max_roll_deg, schema::kOperationalMaxRollDeg);
   p.range(O.max_pitch_deg, schema::kOperationalMaxPitchDeg);
-  p.range(spec.textural.sun_inclination_deg, schema::kTexturalSunInclinationDeg);
-  p.range(spec.textural.sun_yaw_deg, schema::kTexturalSunYawDeg);
-  p.range(spec.textural.fog_visibility_m, schema::kTexturalFogVisibilityM);
-  p.range(spec.textural.cloud_cover, schema::kTexturalCloudCover);
+  p.range(X.sun_inclination_deg, schema::kTexturalSunInclinationDeg);
+  p.range(X.sun_yaw_deg, schema::kTexturalSunYawDeg);
+  p.range(X.fog_visibility_m, schema::kTexturalFogVisibilityM);
+  p.range(X.cloud_cover, schema::kTexturalCloudCover);
+}
 
+void checkLayouts(Problems& p, const SceneSpec& spec, double size) {
+  const auto& O = spec.operational;
   const size_t n = instanceCount(spec);
   if (n > kMaxObstacles) {
     p.add("structural.layouts", std::to_string(n) + " obstacle instances: at most " +
                                     std::to_string(kMaxObstacles) + " allowed");
-  } else {
-    for (size_t i = 0; i < spec.layouts.size(); ++i) {
-      const auto& layout = spec.layouts[i];
-      const std::string lp = "structural.layouts[" + std::to_string(i) + "]";
-      const MeshInfo* mesh = findMesh(layout.mesh_name);
-      if (!mesh) {
-        std::string names;
-        for (const auto& m : meshCatalogue()) names += (names.empty() ? "" : ", ") + m.name;
-        p.add(lp + ".mesh_name", "= '" + layout.mesh_name + "': unknown mesh (one of " + names + ")");
-      }
-      for (size_t j = 0; j < layout.instances.size(); ++j) {
-        const auto& inst = layout.instances[j];
-        const std::string ip = lp + ".instances[" + std::to_string(j) + "].";
-        bool ok = inside(ip, inst.x, inst.y);
-        p.range(ip + "yaw", inst.yaw, schema::kInstanceYaw);
-        p.range(ip + "scale", inst.scale, schema::kInstanceScale);
-        ok = ok && std::isfinite(inst.scale) && inst.scale > 0;
-        if (!ok || !mesh || !inst.visible || mesh->height * inst.scale <= kTraversableHeight)
-          continue;
-        const double d = std::hypot(inst.x - O.start_x, inst.y - O.start_y);
-        const double reach = mesh->collision_radius * inst.scale + kVehicleHalfWidth;
-        if (std::isfinite(d) && d >= O.safety_radius && d < reach)
-          p.add(ip.substr(0, ip.size() - 1),
-                "the start pose is inside this " + layout.mesh_name + " (distance " +
-                    Problems::num(d) + " m < " + Problems::num(reach) + " m)");
-      }
+    return;
+  }
+  for (size_t i = 0; i < spec.layouts.size(); ++i) {
+    const auto& layout = spec.layouts[i];
+    const std::string lp = "structural.layouts[" + std::to_string(i) + "]";
+    const MeshInfo* mesh = findMesh(layout.mesh_name);
+    if (!mesh) {
+      std::string names;
+      for (const auto& m : meshCatalogue()) names += (names.empty() ? "" : ", ") + m.name;
+      p.add(lp + ".mesh_name", "= '" + layout.mesh_name + "': unknown mesh (one of " + names + ")");
+    }
+    for (size_t j = 0; j < layout.instances.size(); ++j) {
+      const auto& inst = layout.instances[j];
+      const std::string ip = lp + ".instances[" + std::to_string(j) + "].";
+      bool ok = insideLandscape(p, ip, inst.x, inst.y, size);
+      p.range(ip + "yaw", inst.yaw, schema::kInstanceYaw);
+      p.range(ip + "scale", inst.scale, schema::kInstanceScale);
+      ok = ok && std::isfinite(inst.scale) && inst.scale > 0;
+      if (!ok || !mesh || !inst.visible || mesh->height * inst.scale <= kTraversableHeight) continue;
+      const double d = std::hypot(inst.x - O.start_x, inst.y - O.start_y);
+      const double reach = mesh->collision_radius * inst.scale + kVehicleHalfWidth;
+      if (std::isfinite(d) && d >= O.safety_radius && d < reach)
+        p.add(ip.substr(0, ip.size() - 1), "the start pose is inside this " + layout.mesh_name + " (distance " +
+                                               Problems::num(d) + " m < " + Problems::num(reach) + " m)");
     }
   }
+}
+
+}  // namespace
+
+void validateScene(const SceneSpec& spec) {
+  Problems p;
+  checkLandscape(p, spec.landscape);
+  const double size = std::isfinite(spec.landscape.size) ? spec.landscape.size : 0.0;
+  checkTerrain(p, spec.terrain, size);
+  checkOperationalAndTextural(p, spec.operational, spec.textural, size);
+  checkLayouts(p, spec, size);
   p.raise();
 }
 
