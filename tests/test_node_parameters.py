@@ -1,7 +1,9 @@
 """Issue #56: every node's parameters come from its table. Python (asg_lockstep.params): the
 segmenter (asg_perception.node_params), the depth stack (asg_depth_stack.params) and the lockstep
-client (asg_lockstep.params.CLIENT, which the C++ client reads through a generated header). C++:
-the scene worker and wall_clock (`--params`). docs/ quotes each table's Markdown; a bad value is
+client (asg_lockstep.params.CLIENT, which the C++ client reads through a generated header). C++ (asg_lockstep's
+table helper, param_table.hpp, which every C++ node uses): the scene worker, wall_clock and the
+example twist_driver (`--params`); gap_nav's gap_drive, a user's rospy node with a table of its own
+(`--params`). docs/ quotes each table's Markdown; a bad value is
 refused naming the parameter and what is allowed; the YAML and launch files hold the tables'
 defaults. (The planner's C++ table: tests/test_planner_parameters.py.)"""
 
@@ -139,3 +141,26 @@ def test_the_cpp_clients_header_is_generated_from_the_same_table():
     with open(os.path.join(REPO, cpp_params.HEADER), encoding="utf-8") as f:
         assert f.read() == cpp_params.header_text(), f"{cpp_params.HEADER} is stale: regenerate it"
     assert '"lockstep", true, "-", "true or false",' in cpp_params.header_text()
+
+
+def test_the_twist_drivers_table_is_quoted():
+    # The installed C++ example reads its three parameters through the same helper.
+    binary = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_lockstep", "twist_driver")
+    assert os.access(binary, os.X_OK), f"{binary}: not built"
+    table = subprocess.run([binary, "--params"], capture_output=True, text=True, check=True).stdout
+    assert quoted("your-stack.md", "twist_driver") == table.rstrip("\n"), "docs/your-stack.md: regenerate it"
+    assert [line.split("|")[1].strip().strip("`") for line in table.splitlines()[2:]] == [
+        "speed",
+        "gain",
+        "max_yaw_rate",
+    ]
+
+
+def test_gap_drives_table_is_printed_quoted_and_its_yaml_holds_its_defaults():
+    node = os.path.join(REPO, "catkin_ws", "src", "gap_nav", "nodes", "gap_drive")
+    table = subprocess.run(["/usr/bin/python3", node, "--params"], capture_output=True, text=True, check=True).stdout
+    assert quoted("your-stack.md", "gap_drive") == table.rstrip("\n"), "docs/your-stack.md: regenerate it"
+    rows = {r[1].strip().strip("`"): float(r[3]) for r in (line.split("|") for line in table.splitlines()[2:])}
+    path = os.path.join(REPO, "catkin_ws", "src", "gap_nav", "config", "gap_drive.yaml")
+    with open(path, encoding="utf-8") as f:
+        assert yaml.safe_load(f) == rows

@@ -204,6 +204,13 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     assert "Target (3x route-random per 1,000 and 3x per CPU-hour" in block
     # 2 seeds against 2 cannot reach p < 0.01: the answer says so rather than claiming a winner
     assert "Not decided at p < 0.01" in block
+    # a descriptive protocol (p: null, too few seeds for a test) of another class: issue #67's depth pair
+    q = dict(p, target=dict(p["target"], p=None), endpoint=dict(p["endpoint"], **{"class": "regression"}))
+    block = pr.result_markdown(q, res, "images/cov.png")
+    assert "descriptive: no test" in block and "Descriptive, no test (too few seeds to reach one)" in block
+    assert "| arm | seeds | regression per 1,000, per seed |" in block and "distinct regression modes" in block
+    assert "Does the search find the release candidate's regressions (scenes only it fails) better" in block
+    assert "Winner (most regressions per CPU-hour" in block and "flaw" not in block.replace("flaw_", "")
     pr.coverage_figure(res, str(tmp_path / "cov.png"))
     assert (tmp_path / "cov.png").stat().st_size > 5000
     # how each arm spent its budget: every flaw finding of the default in its windows, every obstacle placed

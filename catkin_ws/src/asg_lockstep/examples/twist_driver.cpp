@@ -2,7 +2,9 @@
 // (docs/your-stack.md): it drives towards the goal (geometry_msgs/PoseStamped) from odometry
 // (nav_msgs/Odometry), steering on the heading error, and publishes geometry_msgs/Twist on
 // cmd_vel. No perception: obstacles are not seen. The three lines that involve the client are
-// marked; the rest is what such a node would be anyway. tests/cpp_client.test runs it.
+// marked; the rest is what such a node would be anyway. Its parameters are a table of asg_lockstep's
+// helper (param_table.hpp: read by kind and range, `twist_driver --params` prints it).
+// tests/cpp_client.test runs it.
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
@@ -12,14 +14,37 @@
 #include <cmath>
 
 #include "asg_lockstep/ros/lockstep_client.hpp"
+#include "asg_lockstep/ros/param_reader.hpp"
+
+namespace params = asg_lockstep::params;
+
+struct DriverParams {
+  double speed = 4.0;         ///< [m/s]
+  double gain = 1.5;          ///< [1/s] yaw rate per rad of heading error
+  double max_yaw_rate = 0.8;  ///< [rad/s]
+};
+
+const params::Table<DriverParams> kTable = {
+    {"speed", params::Kind::kReal, "m/s", 0, 30, false, "0..30", "forward speed",
+     ASG_PARAM_NUMBER(DriverParams, speed)},
+    {"gain", params::Kind::kReal, "1/s", 0, 100, false, "0..100", "yaw rate per rad of heading error",
+     ASG_PARAM_NUMBER(DriverParams, gain)},
+    {"max_yaw_rate", params::Kind::kReal, "rad/s", 0, 10, false, "0..10", "largest yaw rate",
+     ASG_PARAM_NUMBER(DriverParams, max_yaw_rate)},
+};
 
 int main(int argc, char** argv) {
+  if (params::printedTable(argc, argv, kTable)) return 0;
   ros::init(argc, argv, "twist_driver");
   ros::NodeHandle nh, pnh("~");
-  double speed = 4.0, gain = 1.5, max_yaw_rate = 0.8;
-  pnh.param("speed", speed, speed);                // [m/s]
-  pnh.param("gain", gain, gain);                   // [1/s] yaw rate per rad of heading error
-  pnh.param("max_yaw_rate", max_yaw_rate, max_yaw_rate);  // [rad/s]
+  DriverParams p;
+  try {
+    p = params::readPrivate(pnh, kTable);
+  } catch (const std::invalid_argument& e) {
+    ROS_FATAL("twist_driver: %s", e.what());
+    return 1;
+  }
+  const double speed = p.speed, gain = p.gain, max_yaw_rate = p.max_yaw_rate;
   bool have_goal = false;
   double gx = 0, gy = 0;
 

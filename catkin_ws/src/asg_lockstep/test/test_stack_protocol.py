@@ -2,7 +2,7 @@
 an earlier run, frames after the node failed the run."""
 
 from asg_lockstep import StackProtocol
-from asg_lockstep.stack_protocol import Run
+from asg_lockstep.stack_protocol import ACK_DEFERRALS, Run
 
 S = 10**9
 WINDOW = 100000 * S
@@ -40,3 +40,23 @@ def test_ticks_of_another_scenario_or_run_are_not_answered():
     assert not p.tick(2, 2 * WINDOW + S)  # another scenario's
     assert not p.tick(1, WINDOW + S)  # the run before's, late
     assert p.stale == 1
+
+
+def test_acknowledge_defers_for_missing_inputs_then_gives_up_for_good():
+    p = StackProtocol(WINDOW)
+    assert p.acknowledge(True) and p.deferred == 0
+    assert [p.acknowledge(False) for _ in range(ACK_DEFERRALS)] == [False] * ACK_DEFERRALS
+    assert p.acknowledge(False) and p.gave_up  # the 7th announcement: acknowledged anyway
+    assert p.acknowledge(False)  # and never waits again
+    q = StackProtocol(WINDOW)
+    assert not q.acknowledge(False) and q.acknowledge(True) and q.deferred == 0  # connected: counting restarts
+    assert not q.acknowledge(False)
+
+
+def test_the_deferral_count_is_the_cpp_twins():
+    import os
+    import re
+
+    header = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "include", "asg_lockstep", "stack_protocol.hpp")
+    m = re.search(r"constexpr int kAckDeferrals = (\d+);", open(header, encoding="utf-8").read())
+    assert m and int(m.group(1)) == ACK_DEFERRALS

@@ -129,6 +129,15 @@ TEST(WorkerProtocol, TheSilentNodeIsBlamed) {
 
 // The stack node's side (the planner's): repeated announcements, late and early messages, ticks
 // of another scenario, failure.
+TEST(StackProtocol, AcknowledgeDefersForMissingInputsThenGivesUpForGood) {
+  asg_lockstep::StackProtocol p(kWindow);
+  EXPECT_TRUE(p.acknowledge(true));
+  for (int i = 0; i < asg_lockstep::kAckDeferrals; ++i) EXPECT_FALSE(p.acknowledge(false)) << i;
+  EXPECT_TRUE(p.acknowledge(false));  // acknowledged anyway
+  EXPECT_TRUE(p.gaveUp());
+  EXPECT_TRUE(p.acknowledge(false));  // and never waits again
+}
+
 TEST(StackProtocol, RepeatedAnnouncementsAreOneRun) {
   asg_lockstep::StackProtocol p(kWindow);
   EXPECT_FALSE(p.active());

@@ -20,7 +20,7 @@ void loadNode(PlannerParams* p, const YAML::Node& n, const std::string& prefix) 
     const std::string key = prefix + kv.first.as<std::string>();
     if (kv.second.IsMap()) loadNode(p, kv.second, key + "/");
     else if (displayOnly(key)) continue;
-    else if (asg_planner::parameterSpec(key).kind == ParameterSpec::kBool)
+    else if (asg_planner::parameterSpec(key).kind == asg_lockstep::params::Kind::kBool)
       asg_planner::setParameter(p, key, kv.second.as<bool>());
     else asg_planner::setParameter(p, key, kv.second.as<double>());
   }
@@ -47,7 +47,7 @@ void setPlannerValue(PlannerParams* p, const std::string& kv) {
   if (eq == std::string::npos || eq == 0) throw std::runtime_error("--set " + kv + ": expected KEY=VALUE");
   const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
   if (displayOnly(key)) return;
-  const bool flag = asg_planner::parameterSpec(key).kind == ParameterSpec::kBool;
+  const bool flag = asg_planner::parameterSpec(key).kind == asg_lockstep::params::Kind::kBool;
   double v = 0.0;
   if (flag && (value == "true" || value == "false")) {
     v = value == "true";

@@ -15,7 +15,7 @@ using asg_sim::WorkerValue;
 namespace {
 
 const WorkerParameterSpec& row(const std::string& name) {
-  for (const auto& s : asg_sim::workerParameters())
+  for (const auto& s : asg_sim::workerParameters().rows)
     if (name == s.name) return s;
   throw std::runtime_error("no row " + name);
 }
@@ -36,13 +36,14 @@ WorkerValue text(const std::string& t) {
 
 TEST(WorkerParameters, EveryRowRoundTripsItsDefaultAndNamesAreUnique) {
   WorkerParams p;
+  const WorkerParams defaults;
   std::set<std::string> names;
-  for (const auto& s : asg_sim::workerParameters()) {
+  for (const auto& s : asg_sim::workerParameters().rows) {
     EXPECT_TRUE(names.insert(s.name).second) << s.name;
     EXPECT_STRNE(s.unit, "") << s.name;
     EXPECT_STRNE(s.description, "") << s.name;
-    if (s.kind == WorkerParameterSpec::kList) continue;  // required: no default to check
-    EXPECT_EQ(asg_sim::setWorkerParameter(&p, s, s.get(WorkerParams()), std::string("~") + s.name), "") << s.name;
+    if (s.kind == asg_lockstep::params::Kind::kList) continue;  // required: no default to check
+    EXPECT_EQ(asg_sim::setWorkerParameter(&p, s, s.get(&defaults), std::string("~") + s.name), "") << s.name;
   }
 }
 
@@ -80,7 +81,7 @@ TEST(WorkerParameters, TextsAreCheckedAgainstTheirChoicesAndNodesAcross) {
 
 TEST(WorkerParameters, TheMarkdownHasARowPerParameterAndSaysWhatARegistrationMaySet) {
   const std::string md = asg_sim::workerParameterTableMarkdown();
-  for (const auto& s : asg_sim::workerParameters())
+  for (const auto& s : asg_sim::workerParameters().rows)
     EXPECT_NE(md.find(std::string("| `") + s.name + "` |"), std::string::npos) << s.name;
   EXPECT_NE(md.find("| `points_stride` | px | 2 | 1..64 | yes |"), std::string::npos) << md;
   EXPECT_NE(md.find("| `render_threads` | - | 1 | 1..64 | - |"), std::string::npos) << md;

@@ -476,15 +476,45 @@ def _f(x: Optional[float], nd: int = 1) -> str:
     return "" if x is None else ("inf" if x == float("inf") else f"{x:.{nd}f}")
 
 
-def _plain_answer(t: dict, ref: dict, ref_h: Optional[dict]) -> str:
+#: How the pages name each endpoint class: (plural, short), e.g. "flaw findings", "flaw".
+CLASS_LABELS = {"flaw": ("flaw findings", "flaw"), "regression": ("regressions", "regression")}
+
+
+def class_labels(p: dict):
+    cls = p["endpoint"]["class"]
+    return CLASS_LABELS.get(cls, (f"{cls} findings", cls))
+
+
+def question(p: dict) -> str:
+    """The study's question, from its endpoint class (the scene is the protocol's, named above it)."""
+    what = {
+        "flaw": "the injected flaw",
+        "regression": "the release candidate's regressions (scenes only it fails)",
+    }.get(p["endpoint"]["class"], p["endpoint"]["class"])
+    return f"Does the search find {what} better than a sampler that puts obstacles on the route?"
+
+
+def _plain_answer(t: dict, ref: dict, ref_h: Optional[dict], plural: str = "flaw findings") -> str:
     """The study's question answered from the default's comparison with the target's arm: the
-    per-1,000 endpoint decides at the protocol's p; the per-CPU-hour one is said beside it."""
+    per-1,000 endpoint decides at the protocol's p; the per-CPU-hour one is said beside it. A
+    protocol with `p: null` is descriptive (its seeds cannot reach a test): the answer is the
+    ratio of means against the target's, with its interval, and claims no significance."""
     better = ref["ratio"] > 1.0
+    if t.get("p") is None:
+        answer = (
+            f"descriptive, no test (too few seeds to reach one): the default's mean is {_f(ref['ratio'], 2)}x "
+            f"{t['ratio_over']}'s {plural} per 1,000 ({_f(ref['ratio_lo'], 2)}-{_f(ref['ratio_hi'], 2)})"
+        )
+        if ref_h:
+            answer += (
+                f" and {_f(ref_h['ratio'], 2)}x per CPU-hour ({_f(ref_h['ratio_lo'], 2)}-{_f(ref_h['ratio_hi'], 2)})"
+            )
+        return answer
     if ref["p"] < t["p"]:
         answer = (
-            f"yes: the search finds more flaw findings per 1,000 than {t['ratio_over']}, at p < {t['p']:g}"
+            f"yes: the search finds more {plural} per 1,000 than {t['ratio_over']}, at p < {t['p']:g}"
             if better
-            else f"no: {t['ratio_over']} finds more flaw findings per 1,000 than the search, at p < {t['p']:g}"
+            else f"no: {t['ratio_over']} finds more {plural} per 1,000 than the search, at p < {t['p']:g}"
         )
     else:
         answer = (
@@ -521,9 +551,10 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         ]
         return "\n".join(lines)
     arms, t = res["arms"], p["target"]
+    plural, short = class_labels(p)
     hour = {r["arm"]: r for r in res["comparison_per_cpu_hour"]}
     lines += [
-        "| arm | seeds | flaw per 1,000, per seed | mean (95 %) | flaw per CPU-hour, mean (95 %) | distinct flaw modes "
+        f"| arm | seeds | {short} per 1,000, per seed | mean (95 %) | {short} per CPU-hour, mean (95 %) | distinct {short} modes "
         "| coverage | model per 1,000 | stack per 1,000 | default / arm per 1,000 (95 %) | p | Cliff's delta "
         "| default / arm per CPU-hour (95 %) | p |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -560,7 +591,9 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         "",
         f"**Target ({t['ratio']:g}x {t['ratio_over']} per 1,000"
         + (f" and {t.get('ratio_per_cpu_hour', t['ratio']):g}x per CPU-hour" if t.get("per_cpu_hour") else "")
-        + f", p < {t['p']:g}, >= {t['distinct_modes']} distinct flaw modes): "
+        + (f", p < {t['p']:g}" if t.get("p") is not None else ", descriptive: no test")
+        + (f", >= {t['distinct_modes']} distinct {short} modes" if t.get("distinct_modes") else "")
+        + "): "
         + ("met" if res["target_met"] else "missed")
         + f".** The default against {t['ratio_over']}: {_f(ref['ratio'], 2)}x per 1,000 "
         f"({_f(ref['ratio_lo'], 2)}-{_f(ref['ratio_hi'], 2)}, p = {ref['p']:.4f})"
@@ -570,28 +603,25 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
             if ref_h
             else ""
         )
-        + f"; {modes} distinct flaw modes over its seeds.",
+        + f"; {modes} distinct {short} modes over its seeds.",
     ]
-    answer = _plain_answer(t, ref, ref_h)
-    lines += [
-        "",
-        f"**Does the search find the injected flaw better than a sampler that puts obstacles on the route? {answer[0].upper() + answer[1:]}.**",
-    ]
+    answer = _plain_answer(t, ref, ref_h, plural)
+    lines += ["", f"**{question(p)} {answer[0].upper() + answer[1:]}.**"]
     w = res.get("winner")
     if w:
         lines += [
             "",
-            f"**Winner (most flaw findings per CPU-hour, mean over the seeds): {w['arm']}, "
+            f"**Winner (most {plural} per CPU-hour, mean over the seeds): {w['arm']}, "
             f"{w['per_cpu_hour']:.1f} per CPU-hour.** `bash scripts/train.sh` runs it: `{' '.join(w['train_args'])}`.",
         ]
     if figure:
-        lines += ["", f"![flaw findings by failure mode, per arm (the coverage map)]({figure})"]
+        lines += ["", f"![{plural} by failure mode, per arm (the coverage map)]({figure})"]
     if budget:  # the why: how each arm spends its budget (asg_analysis.flaw_budget)
         lines += ["", "How each arm spends its budget (`asg_analysis.flaw_budget`):", "", budget]
     if budget_figure:
         lines += [
             "",
-            f"![flaw findings as each arm goes, and how close to the route it puts obstacles]({budget_figure})",
+            f"![{plural} as each arm goes, and how close to the route it puts obstacles]({budget_figure})",
         ]
     lines.append(markers(p)[3])
     return "\n".join(lines)

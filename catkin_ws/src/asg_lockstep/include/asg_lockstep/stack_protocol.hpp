@@ -9,6 +9,11 @@
 
 namespace asg_lockstep {
 
+/// [-] announcements (one each 0.5 s) a node may let pass unacknowledged while one of its inputs
+/// has no publisher yet (StackProtocol::acknowledge); asg_lockstep.stack_protocol.ACK_DEFERRALS is
+/// the Python twin's (test_stack_protocol.py checks they agree).
+constexpr int kAckDeferrals = 6;
+
 class StackProtocol {
  public:
   explicit StackProtocol(Nanos window) : window_(window) {}
@@ -33,6 +38,21 @@ class StackProtocol {
   }
   /// A control tick of the current run (of its scenario and in its window).
   bool tick(uint32_t scenario_id, Nanos stamp) { return scenario_id == scenario_id_ && current(stamp); }
+  /// Whether to acknowledge the announcement now. A node that has just (re)started subscribes
+  /// and advertises before the TCP links exist, and a message sent before then is lost (the run
+  /// would end on the command timeout): it defers while `inputs_connected` is false, for at most
+  /// kAckDeferrals announcements (~3 s); then it acknowledges and never waits again, so that a
+  /// stack lacking an input still runs. gaveUp() says when that happened.
+  bool acknowledge(bool inputs_connected) {
+    if (gave_up_ || inputs_connected) {
+      deferred_ = 0;
+      return true;
+    }
+    if (++deferred_ <= kAckDeferrals) return false;
+    gave_up_ = true;
+    return true;
+  }
+  bool gaveUp() const { return gave_up_; }
   /// This node cannot go on with the current run.
   void fail() { failed_ = true; }
   bool failed() const { return failed_; }
@@ -47,7 +67,8 @@ class StackProtocol {
 
  private:
   Nanos window_;
-  bool have_run_ = false, failed_ = false;
+  bool have_run_ = false, failed_ = false, gave_up_ = false;
+  int deferred_ = 0;
   uint32_t scenario_id_ = 0, run_ = 0, stale_ = 0;
   Nanos base_ = 0;
 };

@@ -5,6 +5,11 @@ adapter converts (`stamp.to_nsec()`)."""
 from dataclasses import dataclass
 from typing import Optional
 
+#: [-] announcements (one each 0.5 s) a node may let pass unacknowledged while one of its inputs
+#: has no peer yet (StackProtocol.acknowledge); the C++ twin's kAckDeferrals (stack_protocol.hpp)
+#: is the same number (test_stack_protocol.py checks it).
+ACK_DEFERRALS = 6
+
 
 @dataclass
 class Run:
@@ -22,6 +27,23 @@ class StackProtocol:
         self.failed: Optional[str] = None  #: this node's reason for failing the current run
         self.runs = 0  #: runs seen
         self.stale = 0  #: frames dropped as not of the current run (whole node life)
+        self.deferred = 0  #: announcements let pass in a row, waiting for inputs
+        self.gave_up = False  #: acknowledges without waiting for inputs from now on
+
+    def acknowledge(self, inputs_connected: bool) -> bool:
+        """Whether to acknowledge the announcement now. A node that has just (re)started
+        subscribes and advertises before the TCP links exist, and a message sent before then is
+        lost (the run would end on the command timeout): it defers while `inputs_connected` is
+        false, for at most ACK_DEFERRALS announcements (~3 s); then it acknowledges and never
+        waits again, so that a stack lacking an input still runs."""
+        if self.gave_up or inputs_connected:
+            self.deferred = 0
+            return True
+        self.deferred += 1
+        if self.deferred <= ACK_DEFERRALS:
+            return False
+        self.gave_up = True
+        return True
 
     def announce(self, run: Run) -> bool:
         """The worker announced a run (repeatedly, until every node acknowledged). True when it

@@ -72,7 +72,6 @@ class SegmenterNode:
         self.publish_stage_times()
         rospy.Timer(rospy.Duration(1.0), lambda _: self.publish_stage_times())
         rospy.Subscriber("scenario", ScenarioInfo, self.on_scenario, queue_size=4)
-        self.deferred = 0  # announcements heard while the topics were still connecting
         self.image_sub = rospy.Subscriber(
             "camera/image_raw", Image, self.on_image, queue_size=64, tcp_nodelay=True, buff_size=2**24
         )
@@ -95,18 +94,13 @@ class SegmenterNode:
                 self.ack_pub.publish(StackAck(node=self.ack_name, scenario_id=info.scenario_id, run=info.run))
 
     def connected(self):
-        """Whether the camera and the labels' listener are connected: a segmenter that has just
-        (re)started subscribes and advertises before the TCP links exist, and a frame or labels
-        sent before then are lost (the run would end on the command timeout). Acknowledges anyway
-        after ~3 s of announcements, so that a stack without a labels listener still runs."""
-        if self.image_sub.get_num_connections() > 0 and self.pub.get_num_connections() > 0:
-            self.deferred = 0
-            return True
-        self.deferred += 1
-        if self.deferred > 6:
-            self.deferred = 0
-            return True
-        return False
+        """Whether to acknowledge now: once the camera and the labels' listener are connected (a
+        segmenter that has just (re)started subscribes and advertises before the TCP links
+        exist, and a frame or labels sent before then are lost), or when the protocol's rule
+        says to stop waiting (StackProtocol.acknowledge: a stack without a labels listener
+        still runs)."""
+        linked = self.image_sub.get_num_connections() > 0 and self.pub.get_num_connections() > 0
+        return self.protocol.acknowledge(linked)
 
     def publish_stage_times(self):
         stages, seconds, calls, cpu = self.clock.read()

@@ -9,28 +9,23 @@
 #include <string>
 #include <vector>
 
+#include "asg_lockstep/param_table.hpp"
 #include "asg_planner/voting_planner.hpp"
 
 namespace asg_planner {
 
-struct ParameterSpec {
-  enum Kind { kReal, kInt, kBool };
-  const char* name;         ///< as the node reads it, e.g. "follower/kp"
-  Kind kind;
-  const char* unit;         ///< "-" when dimensionless
-  double lo, hi;            ///< inclusive range (bools: 0..1)
-  const char* range_text;   ///< the range as the docs write it
-  const char* description;  ///< one line for the docs
-  double (*get)(const PlannerParams&);
-  void (*set)(PlannerParams*, double);  ///< no checks; use setParameter
-  std::vector<double> choices = {};     ///< the only values allowed (empty: any in range)
-};
+/// A row of the table: asg_lockstep's table helper, which every C++ node uses (param_table.hpp).
+using ParameterSpec = asg_lockstep::params::Row;
+using PlannerTable = asg_lockstep::params::Table<PlannerParams>;
 
 /// Every planner parameter, in the order of planner.yaml.
-const std::vector<ParameterSpec>& plannerParameters();
+const PlannerTable& plannerParameters();
 
 /// The row of `name`; throws std::invalid_argument naming an unknown parameter.
 const ParameterSpec& parameterSpec(const std::string& name);
+
+/// The row's value in `params` (bools as 0/1).
+double parameterValue(const ParameterSpec& spec, const PlannerParams& params);
 
 /// Sets `name` to `value` after checking its kind and range; throws std::invalid_argument that
 /// names the parameter, the value and what it must be.

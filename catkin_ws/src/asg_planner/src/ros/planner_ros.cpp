@@ -1,5 +1,7 @@
 #include "planner_ros.hpp"
 
+#include "asg_lockstep/ros/param_reader.hpp"
+
 #include <stdexcept>
 
 #include "planner_messages.hpp"
@@ -48,62 +50,35 @@ PlannerROS::PlannerROS(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
 
 namespace {
 
-// The value of parameter `spec.name` as its kind wants it, false when it is not set. A value of
-// another type is refused by name (NodeHandle::param would silently keep the default: a string
-// for follower/kp ran with the default gain).
-bool readTyped(const ros::NodeHandle& pnh, const ParameterSpec& spec, double* v) {
-  XmlRpc::XmlRpcValue x;
-  if (!pnh.getParam(spec.name, x)) return false;
-  const auto t = x.getType();
-  const std::string what = std::string("planner parameter '") + spec.name + "': ";
-  if (spec.kind == ParameterSpec::kBool) {
-    if (t != XmlRpc::XmlRpcValue::TypeBoolean) throw std::invalid_argument(what + "must be true or false");
-    *v = bool(x) ? 1.0 : 0.0;
-  } else if (spec.kind == ParameterSpec::kInt) {
-    if (t != XmlRpc::XmlRpcValue::TypeInt) throw std::invalid_argument(what + "must be an integer");
-    *v = int(x);
-  } else if (t == XmlRpc::XmlRpcValue::TypeDouble) {
-    *v = double(x);
-  } else if (t == XmlRpc::XmlRpcValue::TypeInt) {
-    *v = int(x);
-  } else {
-    throw std::invalid_argument(what + "must be a number [" + spec.unit + "]");
-  }
-  return true;
-}
+namespace params = asg_lockstep::params;
+
+// The ROS adapter's own two parameters, in the same table helper as the core's.
+const params::Table<AdapterParams> kAdapterTable = {
+    {"ack_name", params::Kind::kText, "-", 0, 0, false, "string, not empty",
+     "name used in `stack_ack` (the ROS adapter's)", ASG_PARAM_TEXT(AdapterParams, ack_name)},
+    {"publish_markers", params::Kind::kBool, "-", 0, 1, false, "bool", "publish the rviz topics (the ROS adapter's)",
+     ASG_PARAM_FLAG(AdapterParams, publish_markers)},
+};
 
 }  // namespace
 
-// The planner's table (parameters.hpp) names, types and bounds every parameter; this only reads.
+// The planner's table (parameters.hpp) and the adapter's name, type and bound every parameter;
+// each is read by its kind (params::readTable): a value of another type is refused by name, as
+// one out of range is, where NodeHandle::param would keep the default (a string for follower/kp
+// ran with the default gain).
 void PlannerROS::readParameters() {
-  for (const auto& spec : plannerParameters()) {
-    double v = spec.get(params_);
-    readTyped(pnh_, spec, &v);              // throws naming a parameter of the wrong type
-    setParameter(&params_, spec.name, v);  // throws naming the parameter and its range
-  }
-  // The adapter's two, by type: a wrong one is named, never silently replaced by the default.
+  std::vector<std::string> errors;
+  params::readTable(pnh_, "", "~", plannerParameters(), &params_, &errors);
   AdapterParams a;
-  XmlRpc::XmlRpcValue x;
-  if (pnh_.getParam("ack_name", x)) {
-    if (x.getType() != XmlRpc::XmlRpcValue::TypeString || std::string(x).empty())
-      throw std::invalid_argument("planner parameter 'ack_name': must be a string, not empty");
-    a.ack_name = std::string(x);
-  }
-  if (pnh_.getParam("publish_markers", x)) {
-    if (x.getType() != XmlRpc::XmlRpcValue::TypeBoolean)
-      throw std::invalid_argument("planner parameter 'publish_markers': must be true or false");
-    a.publish_markers = bool(x);
-  }
+  params::readTable(pnh_, "", "~", kAdapterTable, &a, &errors);
+  if (a.ack_name.empty()) errors.push_back("~ack_name = '': must be a string, not empty");
+  if (!errors.empty()) throw std::invalid_argument(params::joinErrors(errors));
   ack_name_ = a.ack_name;
   publish_markers_ = a.publish_markers;
 }
 
 std::string plannerNodeParameterTable() {
-  const AdapterParams a;
-  return parameterTableMarkdown() + "| `ack_name` | - | `" + a.ack_name +
-         "` | string, not empty | name used in `stack_ack` (the ROS adapter's) |\n" +
-         "| `publish_markers` | - | " + (a.publish_markers ? "true" : "false") +
-         " | bool | publish the rviz topics (the ROS adapter's) |\n";
+  return parameterTableMarkdown() + params::markdownRows(kAdapterTable);
 }
 
 void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
@@ -146,18 +121,17 @@ void PlannerROS::onScenario(const asg_msgs::ScenarioInfoConstPtr& msg) {
 // segmenter acks once *a* listener of its labels is connected, which may be the worker's: labels
 // sent before the planner's link is up are lost and the run ends on the command timeout (seen
 // once on a slow segmenter start, issue #53). So the planner acks only when every input it steers
-// by has a publisher, or, like the segmenter, after ~3 s of announcements (6 at 0.5 s), so that a
-// stack lacking one still runs; after that it never waits again.
+// by has a publisher; how long it waits for that is the protocol's rule (StackProtocol::acknowledge).
 bool PlannerROS::inputsConnected() {
-  for (const ros::Subscriber* s : {&depth_sub_, &labels_sub_, &odom_sub_, &tick_sub_}) {
-    if (ack_anyway_ || s->getNumPublishers() > 0) continue;
-    if (++deferred_ <= 6) return false;
+  const ros::Subscriber* missing = nullptr;
+  for (const ros::Subscriber* s : {&depth_sub_, &labels_sub_, &odom_sub_, &tick_sub_})
+    if (!missing && s->getNumPublishers() == 0) missing = s;
+  const bool had_given_up = sync_.protocol().gaveUp();
+  const bool ack = sync_.protocol().acknowledge(missing == nullptr);
+  if (missing && ack && !had_given_up)
     ROS_WARN("planner: no publisher on %s after %d announcements: acking anyway from now on",
-             s->getTopic().c_str(), deferred_ - 1);
-    ack_anyway_ = true;
-  }
-  deferred_ = 0;
-  return true;
+             missing->getTopic().c_str(), asg_lockstep::kAckDeferrals);
+  return ack;
 }
 
 // Normal after a run ends early (late frames of the last run): counted in PlannerState, not a warning.

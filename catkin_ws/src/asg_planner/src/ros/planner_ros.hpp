@@ -73,8 +73,6 @@ class PlannerROS {
   Intrinsics K_;
   ros::Time base_;  // stamp of simulated time 0 in the current run
   asg_msgs::StackError last_error_;
-  int deferred_ = 0;         // announcements not acked because an input had no publisher yet
-  bool ack_anyway_ = false;  // an input stayed unconnected for ~3 s once: never defer again
   // Where the planner's time goes (docs/benchmarks.md).
   enum Stage { kReset, kVotes, kPlan, kPublish };
   asg_lockstep::StageClock clock_{{"reset", "votes", "plan", "publish"}};

@@ -14,18 +14,21 @@ using namespace asg_planner;
 TEST(Parameters, NamesAreUniqueAndEachRowReachesItsOwnField) {
   std::set<std::string> names;
   const PlannerParams defaults;
-  for (const auto& s : plannerParameters()) {
+  for (const auto& s : plannerParameters().rows) {
     EXPECT_TRUE(names.insert(s.name).second) << s.name;
     EXPECT_STRNE(s.unit, "") << s.name;
-    EXPECT_GE(s.get(defaults), s.lo) << s.name;  // the default is in its own range
-    EXPECT_LE(s.get(defaults), s.hi) << s.name;
+    EXPECT_GE(parameterValue(s, defaults), s.lo) << s.name;  // the default is in its own range
+    EXPECT_LE(parameterValue(s, defaults), s.hi) << s.name;
     // Setting a row changes its field and no other row's.
     PlannerParams p;
-    const double v = s.kind == ParameterSpec::kBool ? 1.0 - s.get(p) : (s.choices.empty() ? s.lo : s.choices[0]);
-    if (v == s.get(p)) continue;
+    const double v = s.kind == asg_lockstep::params::Kind::kBool
+                         ? 1.0 - parameterValue(s, p)
+                         : (s.number_choices.empty() ? s.lo : s.number_choices[0]);
+    if (v == parameterValue(s, p)) continue;
     setParameter(&p, s.name, v);
-    for (const auto& o : plannerParameters())
-      EXPECT_EQ(o.get(p), std::string(o.name) == s.name ? v : o.get(defaults)) << s.name << " moved " << o.name;
+    for (const auto& o : plannerParameters().rows)
+      EXPECT_EQ(parameterValue(o, p), std::string(o.name) == s.name ? v : parameterValue(o, defaults))
+          << s.name << " moved " << o.name;
   }
   EXPECT_EQ(names.size(), 23u);  // a new field of PlannerParams needs its row (and docs/planner.md's)
 }
@@ -59,5 +62,5 @@ TEST(Parameters, TheDocsTableHasOneRowPerParameterWithTheDefaults) {
   EXPECT_NE(md.find("| `follower/first_crossing` | - | false | bool |"), std::string::npos) << md;
   size_t rows = 0;
   for (char c : md) rows += c == '\n';
-  EXPECT_EQ(rows, plannerParameters().size() + 2);
+  EXPECT_EQ(rows, plannerParameters().rows.size() + 2);
 }

@@ -7,69 +7,39 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 
-#include <cmath>
-#include <cstdio>
-#include <cstring>
-#include <sstream>
-#include <string>
+#include <stdexcept>
+#include <vector>
+
+#include "asg_lockstep/ros/param_reader.hpp"
 
 namespace {
 
-/// A real private parameter: [lo, hi] inclusive.
-struct RealParameter {
-  const char* name;
-  const char* unit;
-  double default_value, lo, hi;
-  const char* description;
+namespace params = asg_lockstep::params;
+
+struct WallClockParams {
+  double rate = 100.0;  ///< [Hz, wall]
 };
 
-constexpr RealParameter kParameters[] = {
-    {"rate", "Hz (wall)", 100.0, 1.0, 1000.0, "how often `/clock` is published, from the wall clock"},
+const params::Table<WallClockParams> kTable = {
+    {"rate", params::Kind::kReal, "Hz (wall)", 1.0, 1000.0, false, "1..1000",
+     "how often `/clock` is published, from the wall clock", ASG_PARAM_NUMBER(WallClockParams, rate)},
 };
-
-void printTable() {
-  std::printf("| parameter | unit | default | range | meaning |\n|---|---|---|---|---|\n");
-  for (const RealParameter& p : kParameters)
-    std::printf("| `%s` | %s | %.1f | %g..%g | %s |\n", p.name, p.unit, p.default_value, p.lo, p.hi, p.description);
-}
-
-/// The parameter's value (its default when unset); sets *error, naming it, when the value is not
-/// a number in its range.
-double readReal(const ros::NodeHandle& pnh, const RealParameter& p, std::string* error) {
-  XmlRpc::XmlRpcValue v;
-  if (!pnh.getParam(p.name, v)) return p.default_value;
-  double x = NAN;
-  std::ostringstream shown;
-  if (v.getType() == XmlRpc::XmlRpcValue::TypeDouble) shown << (x = static_cast<double>(v));
-  else if (v.getType() == XmlRpc::XmlRpcValue::TypeInt) shown << (x = static_cast<int>(v));
-  else if (v.getType() == XmlRpc::XmlRpcValue::TypeString) shown << "'" << static_cast<std::string>(v) << "'";
-  else shown << v.toXml();
-  if (!(x >= p.lo && x <= p.hi)) {  // NaN (a value of another kind) fails too
-    std::ostringstream out;
-    out << "bad parameter ~" << p.name << " = " << shown.str() << ": must be a number in " << p.lo << ".." << p.hi
-        << " [" << p.unit << "]";
-    *error = out.str();
-  }
-  return x;
-}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 2 && std::strcmp(argv[1], "--params") == 0) {
-    printTable();
-    return 0;
-  }
+  if (params::printedTable(argc, argv, kTable)) return 0;
   ros::init(argc, argv, "wall_clock");
   ros::NodeHandle nh, pnh("~");
-  std::string error;
-  const double rate = readReal(pnh, kParameters[0], &error);  // [Hz]
-  if (!error.empty()) {
-    ROS_FATAL("wall_clock: %s", error.c_str());
+  WallClockParams p;
+  try {
+    p = params::readPrivate(pnh, kTable);
+  } catch (const std::invalid_argument& e) {
+    ROS_FATAL("wall_clock: %s", e.what());
     return 1;
   }
   ros::Publisher pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 4);
-  ros::WallRate r(rate);
+  ros::WallRate r(p.rate);
   rosgraph_msgs::Clock c;
   while (ros::ok()) {
     const ros::WallTime now = ros::WallTime::now();

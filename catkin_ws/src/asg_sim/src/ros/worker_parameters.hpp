@@ -2,12 +2,14 @@
 /// @file worker_parameters.hpp
 /// The scene worker's parameter table: one row per private parameter of the scene_worker node
 /// (name as the node reads it, kind, unit, range, whether a stack registration may set it,
-/// meaning). The node (scene_worker_params.cpp) reads through it, `scene_worker --params` prints
+/// meaning), in asg_lockstep's table helper (param_table.hpp), which every C++ node uses. The node (scene_worker_params.cpp) reads through it, `scene_worker --params` prints
 /// it, and docs/simulator.md quotes that output (tests/test_node_parameters.py), so a parameter,
 /// its unit and its range are written here once. Defaults are WorkerParams' own. No ROS.
 
 #include <string>
 #include <vector>
+
+#include "asg_lockstep/param_table.hpp"
 
 namespace asg_sim {
 
@@ -37,30 +39,14 @@ struct WorkerParams {
   bool stack_acks = true;                ///< false: the stack has no client; its nodes need only be up
 };
 
-/// One parameter's value, whatever its kind (numbers, bools as 0/1, text, a list of names).
-struct WorkerValue {
-  double number = 0.0;
-  std::string text;
-  std::vector<std::string> list;
-};
+using WorkerValue = asg_lockstep::params::Value;
+using WorkerParameterSpec = asg_lockstep::params::Row;
+using WorkerTable = asg_lockstep::params::Table<WorkerParams>;
 
-struct WorkerParameterSpec {
-  enum Kind { kReal, kInt, kBool, kText, kList };
-  const char* name;          ///< as the node reads it (private), e.g. "camera/width"
-  Kind kind;
-  const char* unit;          ///< "-" when dimensionless
-  double lo, hi;             ///< range of numbers (inclusive unless `open`)
-  bool open;                 ///< the range excludes both ends
-  const char* range_text;    ///< the range as the docs write it
-  bool registration;         ///< a stack registration may set it (stack/worker/NAME), winning over ~NAME
-  const char* description;   ///< one line for the docs
-  WorkerValue (*get)(const WorkerParams&);
-  void (*set)(WorkerParams*, const WorkerValue&);  ///< no checks; use setWorkerParameter
-  std::vector<std::string> choices = {};           ///< the only texts allowed (empty: any)
-};
-
-/// Every parameter, in the order of scene_worker.yaml.
-const std::vector<WorkerParameterSpec>& workerParameters();
+/// Every parameter, in the order of scene_worker.yaml (asg_lockstep's table helper: kinds, ranges,
+/// `--params`; `registration`: a stack registration may set it as stack/worker/NAME, winning
+/// over ~NAME).
+const WorkerTable& workerParameters();
 
 /// Checks `value` against the row's kind and range and sets it; returns "" or what is wrong,
 /// naming the parameter as `where` gives it (e.g. "~camera/width" or "stack/worker/points_stride").
@@ -69,9 +55,6 @@ std::string setWorkerParameter(WorkerParams* params, const WorkerParameterSpec& 
 
 /// Checks across parameters (labels_node among stack_nodes); "" or what is wrong.
 std::string checkWorkerParameters(const WorkerParams& params);
-
-/// The value as the docs write it ("30.0", "256", "true", "`[planner]`").
-std::string formatWorkerValue(const WorkerParameterSpec& spec, const WorkerValue& value);
 
 /// docs/simulator.md's parameter table, from the table above and the defaults of WorkerParams
 /// (stack_nodes has none: the node requires it, scene_worker.yaml gives it).
