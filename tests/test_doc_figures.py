@@ -107,3 +107,30 @@ def test_the_block_of_docs_testing_md_is_in_step_with_the_pages():
     assert (
         doc_figures.main(["--doc", doc, "--check"]) == 0
     ), "docs/testing.md's doc figures block is stale: run python3 scripts/ci/doc_figures.py --doc docs/testing.md"
+
+
+def test_the_rostest_repeat_block_is_the_records():
+    # docs/testing.md's table of the repeated rostests (issue #68 item 4) is generated from the record
+    import subprocess
+
+    r = subprocess.run(
+        [
+            "/usr/bin/python3",
+            os.path.join(REPO, "scripts", "ci", "repeat_summary.py"),
+            os.path.join("results", "flaky", "r6-goalclient-repeat.txt"),
+            "--doc",
+            os.path.join(REPO, "docs", "testing.md"),
+            "--check",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+    )
+    assert r.returncode == 0, r.stderr
+    text = open(os.path.join(REPO, "docs", "testing.md"), encoding="utf-8").read()
+    rows = [
+        ln
+        for ln in text.split("<!-- rostest repeat: begin")[1].split("<!-- rostest repeat: end")[0].splitlines()
+        if ln.startswith("| `")
+    ]
+    assert rows and all(int(r.split("|")[2]) >= 20 for r in rows), "each test ran 20 times in a row"

@@ -162,11 +162,24 @@ int main() {
     )
     exe = tmp_path / "catalogue"
     subprocess.run(
-        ["g++", "-std=c++17", "-O0", f"-I{tmp_path / 'include'}", "-I/usr/include/eigen3", "-o", str(exe),
-         str(tmp_path / "meshes.cpp"), os.path.join(SIM, "src", "core", "terrain.cpp"), str(tmp_path / "main.cpp")],
+        [
+            "g++",
+            "-std=c++17",
+            "-O0",
+            f"-I{tmp_path / 'include'}",
+            "-I/usr/include/eigen3",
+            "-o",
+            str(exe),
+            str(tmp_path / "meshes.cpp"),
+            os.path.join(SIM, "src", "core", "terrain.cpp"),
+            str(tmp_path / "main.cpp"),
+        ],
         check=True,
     )
-    rows = [line.split() for line in subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()]
+    rows = [
+        line.split()
+        for line in subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()
+    ]
     assert [r[0] for r in rows] == sorted(catalogue.MESHES)
     cairn = next(r for r in rows if r[0] == "cairn")
     assert cairn[1:4] == ["0.90", "0.70", "1.00"] and int(cairn[4]) > 0

@@ -57,6 +57,8 @@ def test_the_deferral_count_is_the_cpp_twins():
     import os
     import re
 
-    header = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "include", "asg_lockstep", "stack_protocol.hpp")
+    header = os.path.join(
+        os.path.dirname(os.path.abspath(__file__)), "..", "include", "asg_lockstep", "stack_protocol.hpp"
+    )
     m = re.search(r"constexpr int kAckDeferrals = (\d+);", open(header, encoding="utf-8").read())
     assert m and int(m.group(1)) == ACK_DEFERRALS

@@ -114,25 +114,29 @@ def header_text() -> str:
             f'constexpr Field {name}{{"{key}", {_num(f.lo)}, {_num(f.hi)}, "{unit}", {_num(f.default)}, '
             f"{'true' if f.disable_value is not None else 'false'}}};"
         )
-    out += [""] + key_list_lines() + [
-        "",
-        "// The scene budget.",
-        f"constexpr std::size_t kMaxObstacles = {schema.MAX_OBSTACLES};  ///< [-] obstacle instances, all layouts",
-        f"constexpr double kMaxGroundCellsPerSide = {_num(schema.MAX_GROUND_CELLS_PER_SIDE)};  ///< [-]",
-        f"constexpr std::size_t kMaxHills = {schema.MAX_HILLS};  ///< [-] hills and ditches in one scene",
-        f"constexpr double kMaxAmplitudePerWavelength = {_num(schema.MAX_AMPLITUDE_PER_WAVELENGTH)};  ///< [-]",
-        f"constexpr double kMaxHillHeightPerRadius = {_num(schema.MAX_HILL_HEIGHT_PER_RADIUS)};  ///< [-]",
-        "",
-        "// The vehicle, as the catalogue gives it (asg_scenario/catalogue.py).",
-        f"constexpr double kVehicleHalfWidth = {_num(catalogue.VEHICLE_HALF_WIDTH)};  ///< [m]",
-        f"constexpr double kTraversableHeight = {_num(catalogue.TRAVERSABLE_HEIGHT)};  ///< [m] driven over below it",
-        "",
-        *catalogue_lines(),
-        "",
-        "/// How a run ends (RunScenario.action's constants).",
-        "enum class Termination : int {",
-        "  kNone = -1,",
-    ]
+    out += (
+        [""]
+        + key_list_lines()
+        + [
+            "",
+            "// The scene budget.",
+            f"constexpr std::size_t kMaxObstacles = {schema.MAX_OBSTACLES};  ///< [-] obstacle instances, all layouts",
+            f"constexpr double kMaxGroundCellsPerSide = {_num(schema.MAX_GROUND_CELLS_PER_SIDE)};  ///< [-]",
+            f"constexpr std::size_t kMaxHills = {schema.MAX_HILLS};  ///< [-] hills and ditches in one scene",
+            f"constexpr double kMaxAmplitudePerWavelength = {_num(schema.MAX_AMPLITUDE_PER_WAVELENGTH)};  ///< [-]",
+            f"constexpr double kMaxHillHeightPerRadius = {_num(schema.MAX_HILL_HEIGHT_PER_RADIUS)};  ///< [-]",
+            "",
+            "// The vehicle, as the catalogue gives it (asg_scenario/catalogue.py).",
+            f"constexpr double kVehicleHalfWidth = {_num(catalogue.VEHICLE_HALF_WIDTH)};  ///< [m]",
+            f"constexpr double kTraversableHeight = {_num(catalogue.TRAVERSABLE_HEIGHT)};  ///< [m] driven over below it",
+            "",
+            *catalogue_lines(),
+            "",
+            "/// How a run ends (RunScenario.action's constants).",
+            "enum class Termination : int {",
+            "  kNone = -1,",
+        ]
+    )
     for name, value, doc in schema.TERMINATIONS:
         camel = "k" + "".join(w.capitalize() for w in name.split("_"))
         out.append(f"  {camel} = {value},  ///< {doc}")
