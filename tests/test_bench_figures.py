@@ -194,3 +194,15 @@ def test_the_default_against_bf16_is_said_beside_the_target():
     assert (
         f"the {target:.3f} is against the code before issue #53 on its fp32 path, which was not its default then" in doc
     )
+
+
+def test_the_round_6_refactor_found_the_same_results_before_and_after():
+    # issue #69: one seeded 120-scenario campaign a side; the page lists each side's digest
+    text = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
+    block = text.split("<!-- r6-arch digests: begin -->")[1].split("<!-- r6-arch digests: end -->")[0]
+    digests = {}
+    for side in ("before", "after"):
+        n, d = open(os.path.join(REPO, "results", "bench", f"r6-arch-{side}-1.digest")).read().split()
+        assert f"r6-arch-{side}-1.digest`, {n} results, {d[:8]}" in block
+        digests[side] = (n, d)
+    assert digests["before"] == digests["after"] and digests["after"][0] == "120"
