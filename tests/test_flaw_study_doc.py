@@ -237,3 +237,14 @@ def test_the_version_3_status_block_is_in_step_with_its_exports():
     assert r.returncode == 0, "docs/experiments.md's flaw3 block is stale: rerun `protocol status ... --doc`" + r.stderr
     text = open(DOC, encoding="utf-8").read()
     assert text.index("## The flaw study, version 3") < text.index("## The flaw study (issue #54)")
+
+
+def test_the_v3_pilots_choice_in_the_prose_is_its_record():
+    # issue #67: the pilot's figures that the page quotes are pilot_choice.json's, in its order
+    choice = json.load(open(os.path.join(REPO, "results", "flaw_study3", "pilot_choice.json"), encoding="utf-8"))
+    text = open(DOC, encoding="utf-8").read()
+    quoted = text.split("<!-- pilot choice: begin -->")[1].split("<!-- pilot choice: end -->")[0]
+    want = ", ".join(f"{k} {v:.1f}" for k, v in sorted(choice["searches"].items(), key=lambda kv: -kv[1]))
+    assert quoted == want
+    assert choice["search"] == max(choice["searches"], key=choice["searches"].get)
+    assert f"chose\n`{choice['search']}`" in text
