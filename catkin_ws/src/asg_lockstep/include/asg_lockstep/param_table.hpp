@@ -47,7 +47,6 @@ template <class P>
 struct Table {
   Table(std::initializer_list<Row> r) : rows(r) {}
   std::vector<Row> rows;
-  Value get(const Row& r, const P& p) const { return r.get(&p); }
 };
 
 /// Fixed-point text of a number as the docs write it ("5.0", "3").
