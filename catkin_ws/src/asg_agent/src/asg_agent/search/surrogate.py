@@ -182,12 +182,20 @@ class SurrogateTS(SearchMethod):
         )
         return {"surrogate_noise_sd": float(1.0 / math.sqrt(self.model.alpha_)), "surrogate_n": len(self.rewards)}
 
-    def credit(self, top: int = 10) -> List[tuple]:
-        """The features of largest posterior mean weight: (name, weight), largest first."""
+    def credit(self, top: int = 10, within: Optional[str] = None) -> List[tuple]:
+        """The features of largest posterior mean weight: (name, weight), largest first; `within`
+        a class name keeps that class's cells only.
+
+        Credits compare within a block (one class's place cells, or its shadow cells): in every
+        layout a block's cells sum to the class's obstacle count, so the results fix only the
+        differences inside a block, and the fit puts each block's weights around zero. A cell of
+        one class and a cell of another are not compared by their credits.
+        """
         if self.model is None:
             return []
         names, w = self.features.names(), self.model.coef_
-        return [(names[k], float(w[k])) for k in np.argsort(-w, kind="stable")[:top]]
+        keep = [k for k in np.argsort(-w, kind="stable") if within is None or names[k].startswith(within + " ")]
+        return [(names[k], float(w[k])) for k in keep[:top]]
 
     def config(self):
         return {
