@@ -319,3 +319,22 @@ def test_the_transfer_and_pair_studies_take_the_pilots_arm_to_their_scene():
         assert {c["reward"] for c in cs if c["arm"] == "default"} == {"regression"}
         assert all("exp1-depth-rc" in c["experiment"] for c in cs)
     assert pr.ATTRIBUTION_ROLES["release"] == ("release",)
+
+
+def test_an_adopted_export_says_where_it_came_from():
+    # issue #67: an older study's export adopted by asg_analysis.reuse is listed, with its CPU
+    p = {"budget": 2, "experiment": "experiments/exp1.yaml", "attribution": "three", "workers": 3}
+    c = {"name": "flaw3-route-random-s11", "method": "route-random", "seed": 11, "reward": "proxy", "band": None}
+    settings = {
+        "events": [{"kind": "start", "cpu": "Intel(R) Xeon(R) Processor", "time": 0.0}],
+        "references": {k: {} for k in pr.ATTRIBUTION_ROLES["three"]},
+        "workers": ["a", "b", "c"],
+    }
+    camp = {"method": "route-random", "seed": 11, "settings": json.dumps(settings)}
+    rows = [{"job": 0}, {"job": 1}]
+    assert pr.deviations(p, c, camp, rows) == []
+    camp["adopted"] = {"from": "flaw-route-random-s11.jsonl.gz", "proof": "proof-s11.jsonl.gz", "budget": 60}
+    assert pr.deviations(p, c, camp, rows) == [
+        "flaw3-route-random-s11: adopted from flaw-route-random-s11.jsonl.gz (an older study's run, on"
+        " Intel(R) Xeon(R) Processor; proof-s11.jsonl.gz repeats its first 60 jobs on today's code)"
+    ]

@@ -53,4 +53,5 @@ def test_an_old_export_is_adopted_only_when_todays_run_repeats_it(tmp_path):
     head, rows = reuse._read(str(folder / "flaw3-route-random-s12.jsonl.gz"))
     assert rec["adopted"] == "flaw3-route-random-s12" and head["campaign"]["name"] == "flaw3-route-random-s12"
     assert rows == _rows()
+    assert head["campaign"]["adopted"] == {"from": "old.jsonl.gz", "proof": "proof.jsonl.gz", "budget": 6}
     assert [r["adopted"] for r in json.loads((folder / "reuse.json").read_text())] == [None, "flaw3-route-random-s12"]

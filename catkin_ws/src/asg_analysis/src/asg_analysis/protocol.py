@@ -196,6 +196,14 @@ def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
         out.append(f"{c['name']}: experiment {ran}, the protocol says {want}")
     for e in interruptions(s, rows):
         out.append(f"{c['name']}: {e}")
+    if camp.get("adopted"):  # asg_analysis.reuse adopt: an older study's export, proven on today's code
+        a = camp["adopted"]
+        cpus = sorted({e["cpu"] for e in s.get("events", []) if e.get("cpu")})
+        out.append(
+            f"{c['name']}: adopted from {a['from']} (an older study's run"
+            + (f", on {', '.join(cpus)}" if cpus else "")
+            + f"; {a['proof']} repeats its first {a['budget']} jobs on today's code)"
+        )
     if camp.get("method") != c["method"]:
         out.append(f"{c['name']}: method {camp.get('method')!r}, the protocol says {c['method']!r}")
     if camp.get("seed") != c["seed"]:

@@ -10,7 +10,7 @@ protocol counts and what the search saw, not the wall times, the workers or the 
 
 `check` says whether two exports have the same results over the first `budget` jobs, and where
 they first differ. `adopt` copies an old export into FOLDER as NEW_NAME.jsonl.gz (its campaign
-renamed, every row as it was) only when the proof (a campaign of the same method and seed run on
+renamed and its origin recorded as `campaign.adopted`, every row as it was) only when the proof (a campaign of the same method and seed run on
 today's code) has the same digest as the old export of that seed, and records the adoption in
 FOLDER/reuse.json.
 """
@@ -75,7 +75,9 @@ def adopt(old: str, new_name: str, folder: str, proof: str, budget: int) -> dict
         "first_difference": first_difference(orows, prows, budget),
     }
     if same:
-        camp = dict(oh["campaign"], name=new_name)
+        # where it came from, for the study's deviations (protocol.deviations)
+        adopted = {"from": record["old"], "proof": record["proof"], "budget": budget}
+        camp = dict(oh["campaign"], name=new_name, adopted=adopted)
         out = os.path.join(folder, new_name + ".jsonl.gz")
         with gzip.open(old, "rt", encoding="utf-8") as f:
             lines = f.read().splitlines()[1:]
