@@ -248,3 +248,40 @@ def test_the_v3_pilots_choice_in_the_prose_is_its_record():
     assert quoted == want
     assert choice["search"] == max(choice["searches"], key=choice["searches"].get)
     assert f"chose\n`{choice['search']}`" in text
+
+
+def test_the_v3_pilots_learned_sentence_is_what_its_exports_say():
+    # issue #67: recomputed here from the exports, apart from asg_analysis.learned: the share of
+    # barberries within 2 m of the straight start-goal line among the obstacles proposed, and of
+    # barberries among the obstacles flaw collisions hit, in each half of the 250-scenario budget
+    import math
+
+    start, goal = (20.0, 20.0), (80.0, 80.0)  # scenarios/exp1.yaml's operational start and goal
+    length = math.hypot(goal[0] - start[0], goal[1] - start[1])
+    ux, uy = (goal[0] - start[0]) / length, (goal[1] - start[1]) / length
+    near = {"early": [0, 0], "late": [0, 0]}
+    hit = {"early": [0, 0], "late": [0, 0]}
+    for seed in (20, 21):
+        path = os.path.join(REPO, "results", "flaw_study3", f"flaw3-pilot-surrogate-wide-s{seed}.jsonl.gz")
+        with gzip.open(path, "rt", encoding="utf-8") as f:
+            f.readline()
+            rows = [json.loads(line) for line in f]
+        for r in rows:
+            if "job" not in r or r["job"] >= 250:
+                continue
+            half = "early" if r["job"] < 125 else "late"
+            for (x, y), mesh in zip(r["positions"], r["meshes"]):
+                near[half][1] += 1
+                near[half][0] += mesh == "barberry" and abs(-(x - start[0]) * uy + (y - start[1]) * ux) < 2.0
+            k = r.get("collision_with")
+            if r.get("attribution") == "flaw" and isinstance(k, int):
+                hit[half][1] += 1
+                hit[half][0] += r["meshes"][k] == "barberry"
+    pct = {f"{g}_{h}": f"{100 * c[h][0] / c[h][1]:.1f} %" for g, c in (("near", near), ("hit", hit)) for h in c}
+    text = " ".join(open(DOC, encoding="utf-8").read().split())
+    assert (
+        f"barberries within 2 m of the route were {pct['near_early']} of the obstacles it proposed early and "
+        f"{pct['near_late']} late, and barberries were {pct['hit_early']} of the obstacles its flaw collisions "
+        f"hit early and {pct['hit_late']} late"
+    ) in text
+    assert os.path.isfile(os.path.join(REPO, "docs", "images", "flaw3_pilot_learned.png"))

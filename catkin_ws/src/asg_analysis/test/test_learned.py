@@ -55,3 +55,18 @@ def test_an_obstacle_in_anothers_shadow_is_shaded():
     pos[0], pos[4] = (50.0, 30.0), (50.0 + 3.0 * np.cos(np.radians(330)), 30.0 + 3.0 * np.sin(np.radians(330)))
     attrs = learned.obstacle_attributes(camp, {"positions": pos, "meshes": MESHES})
     assert attrs[4]["shaded"] == "shaded" and attrs[0]["shaded"] == "lit" and attrs[1]["shaded"] == "lit"
+
+
+def test_the_figure_draws_the_shares(tmp_path):
+    camp = {"experiment": "exp1"}
+    rows = [_row(j, on_route=(j >= 10 and j % 2 == 0), flaw=(j >= 10 and j % 2 == 0)) for j in range(20)]
+    res = learned.shares([(camp, rows)], budget=20)
+    out = tmp_path / "learned.png"
+    drawn = learned.figure(res, str(out))
+    assert out.stat().st_size > 10_000
+    values = list(res["shares"]["class, beside"])
+    k = values.index("juniper, 0-2 m")
+    bars = [g for g, _ in learned.FIGURE_BARS]
+    assert drawn["class, beside"][bars.index("proposed_late")][k] == 100 * 5 / 80
+    assert drawn["class, beside"][bars.index("hit_late")][k] == 100.0
+    assert set(drawn) == {"class, beside", "along", "shaded"}

@@ -14,7 +14,7 @@ the scene says of each obstacle, computed here apart from any search method's ow
   class's share among the obstacles of any layout is fixed; where each class stands is not).
 
     python3 -m asg_analysis.learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
-        [--budget 250] [--target flaw] [--json out.json] [--markdown]
+        [--budget 250] [--target flaw] [--json out.json] [--markdown] [--figure out.png]
 
 Each campaign is split at half its budget (jobs below budget / 2: early; the rest: late); the
 shares pool the campaigns given.
@@ -134,6 +134,60 @@ def markdown(res: dict) -> str:
     return "\n".join(lines)
 
 
+#: the figure's bars: (share, label), one colour each
+FIGURE_BARS = (
+    ("proposed_early", "proposed, early"),
+    ("proposed_late", "proposed, late"),
+    ("findings_late", "in {t} findings, late"),
+    ("hit_late", "hit by a {t} collision, late"),
+)
+FIGURE_PANELS = ("class, beside", "along", "shaded")
+
+
+def figure(res: dict, out: str) -> Dict[str, List[List[float]]]:
+    """One panel of grouped bars per attribute of FIGURE_PANELS: each value's share among the
+    obstacles proposed early and late and among those of late findings and late hits. A search
+    that learns moves its late proposals towards what its findings hold. Returns the bar heights
+    drawn, {panel: [[height per value] per bar]} (a share with no obstacle counted is 0)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = res["target"]
+    panels = [k for k in FIGURE_PANELS if res["shares"].get(k)]
+    widths = [max(2, len(res["shares"][k])) for k in panels]
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(2.0 + 0.55 * sum(widths), 4.2), gridspec_kw={"width_ratios": widths}
+    )
+    axes = np.atleast_1d(axes)
+    drawn = {}
+    for ax, key in zip(axes, panels):
+        values = list(res["shares"][key])
+        x = np.arange(len(values))
+        w = 0.8 / len(FIGURE_BARS)
+        drawn[key] = []
+        for i, (g, label) in enumerate(FIGURE_BARS):
+            h = [100 * (res["shares"][key][v][g] or 0.0) for v in values]
+            drawn[key].append(h)
+            ax.bar(x + (i - (len(FIGURE_BARS) - 1) / 2) * w, h, w, label=label.format(t=t))
+        ax.set_xticks(x, values, rotation=60, ha="right", fontsize=8)
+        ax.set_title(key, fontsize=10)
+        ax.set_ylabel("share of obstacles [%]")
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].legend(fontsize=8, loc="upper left")
+    n = res["n"]
+    fig.suptitle(
+        f"What the search learned: obstacles proposed ({n['proposed_early']:,} early, {n['proposed_late']:,} late) "
+        f"against those of its {t} findings (early: jobs below {res['budget'] // 2})",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return drawn
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="learned", description=__doc__.split("\n\n")[0])
     ap.add_argument("folder", help="the exports' folder")
@@ -142,6 +196,7 @@ def main(argv=None) -> int:
     ap.add_argument("--target", default="flaw", help="the attribution class of a finding (flaw; regression)")
     ap.add_argument("--json", default="")
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--figure", default="", help="a PNG of the shares (class and band, quarter, shade)")
     a = ap.parse_args(argv)
     from asg_agent.records.export import read_export
 
@@ -159,6 +214,8 @@ def main(argv=None) -> int:
         with open(a.json, "w") as f:
             json.dump(res, f, indent=1, sort_keys=True)
             f.write("\n")
+    if a.figure:
+        figure(res, a.figure)
     print(markdown(res) if a.markdown else res)
     return 0
 
