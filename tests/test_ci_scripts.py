@@ -1,6 +1,7 @@
 """The CI helpers of scripts/ci: what the test console shows (issue #38: expected errors of the
 fault-injection tests out of it, every failure in it) and the closing summary."""
 
+import json
 import os
 import subprocess
 import sys
@@ -94,6 +95,25 @@ def test_the_summary_lists_the_slowest_test_files(tmp_path):
         "      40.5 s  asg_agent: test.test_campaign",
         "       2.0 s  asg_agent: test.test_td3",
     ]
+    rec = json.loads((tmp_path / "times.json").read_text())  # every file's time, for a later comparison
+    assert rec["files"] == {
+        "rosunit-suite.xml": 95.2,
+        "asg_agent: test.test_campaign": 40.5,
+        "asg_agent: test.test_td3": 2.0,
+    }
+    assert rec["cores"] >= 1 and "cpu" in rec
+    # two runs compared file by file: the files both ran, and those only one ran
+    other = dict(rec, files={"rosunit-suite.xml": 80.0, "asg_agent: test.test_campaign": 50.0, "new.xml": 9.0})
+    (tmp_path / "other.json").write_text(json.dumps(other))
+    cmp = subprocess.run(
+        [sys.executable, os.path.join(REPO, "scripts", "ci", "summarize_tests.py"), "--compare"]
+        + [str(tmp_path / "times.json"), str(tmp_path / "other.json")],
+        capture_output=True,
+        text=True,
+    )
+    assert cmp.returncode == 0, cmp.stderr
+    assert "files in both: 2, 135.7 s before, 130.0 s after (0.96x)" in cmp.stdout
+    assert "only before: 1 file, 2.0 s; only after: 1 file, 9.0 s" in cmp.stdout
 
 
 def test_an_error_outside_any_test_case_is_a_failure(tmp_path):

@@ -2,7 +2,9 @@
 """Count test cases in the JUnit XML files under a folder; print one line per failure with the last
 lines of its message, the slowest test files with their time (so that the suite's time stays
 visible, issue #56), and the closing 'N passed, N failed, N skipped' line. Exit 1 on any failure or
-error, or if nothing ran.
+error, or if nothing ran. Every file's time [s] also goes to FOLDER/times.json, with the CPU's name
+and core count, so that two runs on one CPU class can be compared file by file (issue #69):
+`summarize_tests.py --compare BEFORE/times.json AFTER/times.json`.
 
 A suite's own errors and failures count too: a Python test whose setUpClass raises is written by
 rosunit as <testsuite errors="1" tests="0"> with no test case, and would otherwise vanish."""
@@ -53,6 +55,22 @@ def slowest(times, top=15):
     return lines
 
 
+def write_times(root, times):
+    """FOLDER/times.json: {cpu, cores, files: {test file: seconds}}."""
+    import json
+
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            cpu = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), "")
+    except OSError:
+        pass
+    record = {"cpu": cpu, "cores": os.cpu_count(), "files": {k: round(v, 1) for k, v in sorted(times.items())}}
+    with open(os.path.join(root, "times.json"), "w", encoding="utf-8") as f:
+        json.dump(record, f, indent=1, sort_keys=True)
+        f.write("\n")
+
+
 def main(root):
     passed, failed, skipped, bad_files = 0, [], 0, []
     times = {}
@@ -95,9 +113,38 @@ def main(root):
     total_failed = len(failed) + len(bad_files)
     if times:
         print("\n".join(slowest(times)))
+        write_times(root, times)
     print(f"tests: {passed} passed, {total_failed} failed, {skipped} skipped")
     return 1 if total_failed or passed == 0 else 0
 
 
+def compare(before_path, after_path):
+    """Two times.json files, file by file: the files both ran, and those only one of them ran."""
+    import json
+
+    before, after = (json.load(open(p, encoding="utf-8")) for p in (before_path, after_path))
+    a, b = before["files"], after["files"]
+    both = sorted(set(a) & set(b))
+    ta, tb = sum(a[k] for k in both), sum(b[k] for k in both)
+    print(
+        f"before: {before.get('cpu', '?')}, {before.get('cores', '?')} cores; after: {after.get('cpu', '?')}, {after.get('cores', '?')} cores"
+    )
+    print(f"files in both: {len(both)}, {ta:.1f} s before, {tb:.1f} s after ({tb / ta if ta else float('nan'):.2f}x)")
+    only_a, only_b = sorted(set(a) - set(b)), sorted(set(b) - set(a))
+
+    def files(n):
+        return f"{n} file" + ("" if n == 1 else "s")
+
+    print(
+        f"only before: {files(len(only_a))}, {sum(a[k] for k in only_a):.1f} s; "
+        f"only after: {files(len(only_b))}, {sum(b[k] for k in only_b):.1f} s"
+    )
+    for k in sorted(both, key=lambda k: -abs(b[k] - a[k]))[:15]:
+        print(f"  {a[k]:8.1f} s -> {b[k]:8.1f} s  {k}")
+    return 0
+
+
 if __name__ == "__main__":
+    if len(sys.argv) == 4 and sys.argv[1] == "--compare":
+        sys.exit(compare(sys.argv[2], sys.argv[3]))
     sys.exit(main(sys.argv[1]))
