@@ -118,6 +118,7 @@ def test_the_rostest_repeat_block_is_the_records():
             "/usr/bin/python3",
             os.path.join(REPO, "scripts", "ci", "repeat_summary.py"),
             os.path.join("results", "flaky", "r6-goalclient-repeat.txt"),
+            os.path.join("results", "flaky", "r6-campaign-faults-repeat.txt"),
             "--doc",
             os.path.join(REPO, "docs", "testing.md"),
             "--check",

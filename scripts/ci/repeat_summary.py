@@ -3,7 +3,10 @@
 `<!-- rostest repeat: begin -->` and `<!-- rostest repeat: end -->`: per test, runs, passed, the
 median and largest wall time and the median load average at the start of a run.
 
-    python3 scripts/ci/repeat_summary.py results/flaky/r6-goalclient-repeat.txt [--doc docs/testing.md [--check]]
+    python3 scripts/ci/repeat_summary.py RECORD [RECORD ...] [--doc docs/testing.md [--check]]
+
+Several records make one block: each record's own line (what loaded the machine, the CPU, the
+commit), then one table of every test.
 """
 
 import argparse
@@ -39,9 +42,16 @@ def read(path):
     return head, rows
 
 
-def markdown(path):
-    head, rows = read(path)
-    out = [BEGIN, f"`{path}`: {head[0].split(': ', 1)[1]}. {head[1]}.", ""]
+def markdown(paths):
+    if isinstance(paths, str):
+        paths = [paths]
+    out = [BEGIN]
+    rows = []
+    for path in paths:
+        head, mine = read(path)
+        out.append(f"`{path}`: {head[0].split(': ', 1)[1]}. {head[1]}.")
+        out.append("")
+        rows += mine
     out += [
         "| test | runs in a row | passed | wall s, median (max) | load average at start, median |",
         "|---|---|---|---|---|",
@@ -60,7 +70,7 @@ def markdown(path):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("record")
+    ap.add_argument("record", nargs="+")
     ap.add_argument("--doc", help="rewrite the block in this page")
     ap.add_argument("--check", action="store_true", help="with --doc: exit 1 when the block is stale")
     a = ap.parse_args(argv)
