@@ -206,3 +206,21 @@ def test_the_round_6_refactor_found_the_same_results_before_and_after():
         assert f"r6-arch-{side}-1.digest`, {n} results, {d[:8]}" in block
         digests[side] = (n, d)
     assert digests["before"] == digests["after"] and digests["after"][0] == "120"
+
+
+def test_a_seeded_campaign_gives_one_digest_on_the_xeon_and_the_epyc():
+    # issue #68 item 5: with the agent's OpenBLAS kernel pinned, the seeded 120-scenario campaign gives
+    # on the AMX Xeon the digest it gave on the AVX2-only EPYC; before the pin the Xeon gave another
+    text = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
+    block = text.split("<!-- r6-xeon digests: begin -->")[1].split("<!-- r6-xeon digests: end -->")[0]
+    seen = {}
+    for name in ("r6-xeon-before-1", "r6-xeon-after-1", "r6-arch-after-1"):
+        n, d = open(os.path.join(REPO, "results", "bench", f"{name}.digest")).read().split()
+        assert f"{name}.digest`, {n} results, {d[:8]}" in block
+        with open(os.path.join(REPO, "results", "bench", f"{name}.json"), encoding="utf-8") as f:
+            seen[name] = (n, d, json.load(f)["machine"]["cpu"])
+    assert len({(n, d) for n, d, _ in seen.values()}) == 1 and seen["r6-arch-after-1"][0] == "120"
+    assert seen["r6-xeon-after-1"][2].startswith("Intel") and seen["r6-arch-after-1"][2].startswith("AMD")
+    old = open(os.path.join(REPO, "results", "bench", "r5-arch-after-1.digest")).read().split()[1]
+    assert old != seen["r6-xeon-after-1"][1]
+    assert f"Before the pin the Xeon gave {old[:8]} for this campaign" in " ".join(text.split())

@@ -204,6 +204,8 @@ def deviations(p: dict, c: dict, camp: dict, rows: List[dict]) -> List[str]:
             + (f", on {', '.join(cpus)}" if cpus else "")
             + f"; {a['proof']} repeats its first {a['budget']} jobs on today's code)"
         )
+        for where in a.get("shared", []):  # what its own study's machine log said of it
+            out.append(f"{c['name']}: shared the machine in its older study ({where})")
     if camp.get("method") != c["method"]:
         out.append(f"{c['name']}: method {camp.get('method')!r}, the protocol says {c['method']!r}")
     if camp.get("seed") != c["seed"]:
@@ -730,17 +732,19 @@ def shared_machine(folder: str, names) -> Dict[str, List[str]]:
     interval: start, end, what ran beside, the campaigns it overlapped; a line starting with `#` is
     a comment) that
     name the campaign (issue #67: a campaign that ran beside another job is a deviation)."""
-    out = {n: [] for n in names}
+    return {n: [f"shared the machine (machine.log line {k})" for k in log_lines(folder, n)] for n in names}
+
+
+def log_lines(folder: str, name: str) -> List[int]:
+    """The numbers of FOLDER/machine.log's lines (not its `#` comments) that name campaign `name`
+    (a whole name: `flaw-x-s1` is not named by `flaw-x-s10`); [] without a log."""
     path = os.path.join(folder, "machine.log")
     if not os.path.isfile(path):
-        return out
+        return []
     with open(path, encoding="utf-8") as f:
         lines = ["" if ln.lstrip().startswith("#") else ln.strip() for ln in f]
-    for k, line in enumerate(lines, 1):
-        for n in out:
-            if re.search(rf"(?<![\w-]){re.escape(n)}(?![\w-])", line):
-                out[n].append(f"shared the machine (machine.log line {k})")
-    return out
+    pattern = re.compile(rf"(?<![\w-]){re.escape(name)}(?![\w-])")
+    return [k for k, line in enumerate(lines, 1) if pattern.search(line)]
 
 
 def status_markdown(st: dict, study: str = "flaw") -> str:

@@ -10,7 +10,8 @@ protocol counts and what the search saw, not the wall times, the workers or the 
 
 `check` says whether two exports have the same results over the first `budget` jobs, and where
 they first differ. `adopt` copies an old export into FOLDER as NEW_NAME.jsonl.gz (its campaign
-renamed and its origin recorded as `campaign.adopted`, every row as it was) only when the proof (a campaign of the same method and seed run on
+renamed and its origin recorded as `campaign.adopted`, with the lines of the old study's machine.log
+that list it as sharing the machine, every row as it was) only when the proof (a campaign of the same method and seed run on
 today's code) has the same digest as the old export of that seed, and records the adoption in
 FOLDER/reuse.json.
 """
@@ -61,6 +62,18 @@ def first_difference(a: List[dict], b: List[dict], budget: Optional[int] = None)
     return None
 
 
+def _shared_in_its_study(old: str, name: str) -> List[str]:
+    """The lines of the old export's own study log (machine.log beside it) that list its campaign as
+    sharing the machine, each as 'FOLDER/machine.log line K' (FOLDER relative to the repository)."""
+    from asg_agent.paths import REPO
+    from asg_analysis.protocol import log_lines
+
+    folder = os.path.dirname(os.path.abspath(old))
+    rel = os.path.relpath(folder, REPO)
+    where = os.path.basename(folder) if rel.startswith("..") else rel
+    return [f"{where}/machine.log line {k}" for k in log_lines(folder, name)]
+
+
 def adopt(old: str, new_name: str, folder: str, proof: str, budget: int) -> dict:
     """Copies `old` into `folder` as `new_name` if `proof` repeats its results; the record."""
     (oh, orows), (_, prows) = _read(old), _read(proof)
@@ -77,6 +90,9 @@ def adopt(old: str, new_name: str, folder: str, proof: str, budget: int) -> dict
     if same:
         # where it came from, for the study's deviations (protocol.deviations)
         adopted = {"from": record["old"], "proof": record["proof"], "budget": budget}
+        shared = _shared_in_its_study(old, oh["campaign"]["name"])
+        if shared:  # a deviation of the old run that the adoption carries with it (protocol.deviations)
+            adopted["shared"] = shared
         camp = dict(oh["campaign"], name=new_name, adopted=adopted)
         out = os.path.join(folder, new_name + ".jsonl.gz")
         with gzip.open(old, "rt", encoding="utf-8") as f:
