@@ -285,3 +285,54 @@ def test_the_v3_pilots_learned_sentence_is_what_its_exports_say():
         f"hit early and {pct['hit_late']} late"
     ) in text
     assert os.path.isfile(os.path.join(REPO, "docs", "images", "flaw3_pilot_learned.png"))
+
+
+def test_what_the_default_learned_in_its_confirmatory_seeds_is_what_its_exports_say():
+    # issue #67: recomputed here from the exports, apart from asg_analysis.learning_curve and
+    # .learned: flaw findings in the first and last 30 jobs (mean over seeds 10-14) of the default
+    # and of route-random; barberries within 2 m of the straight start-goal line among the default's
+    # proposed obstacles, and barberries among the obstacles its flaw collisions hit, before and after job 30
+    import math
+
+    start, goal = (20.0, 20.0), (80.0, 80.0)  # scenarios/exp1.yaml's operational start and goal
+    length = math.hypot(goal[0] - start[0], goal[1] - start[1])
+    ux, uy = (goal[0] - start[0]) / length, (goal[1] - start[1]) / length
+    first_last = {}
+    near = {"early": [0, 0], "late": [0, 0]}
+    hit = {"early": [0, 0], "late": [0, 0]}
+    for arm in ("default", "route-random"):
+        firsts, lasts = [], []
+        for seed in range(10, 15):
+            path = os.path.join(REPO, "results", "flaw_study3", f"flaw3-{arm}-s{seed}.jsonl.gz")
+            with gzip.open(path, "rt", encoding="utf-8") as f:
+                f.readline()
+                rows = [r for r in map(json.loads, f) if "job" in r and r["job"] < 300]
+            assert len({r["job"] for r in rows}) == 300, path
+            firsts.append(sum(r.get("attribution") == "flaw" for r in rows if r["job"] < 30))
+            lasts.append(sum(r.get("attribution") == "flaw" for r in rows if r["job"] >= 270))
+            for r in rows if arm == "default" else []:
+                part = "early" if r["job"] < 30 else "late"
+                for (x, y), mesh in zip(r["positions"], r["meshes"]):
+                    near[part][1] += 1
+                    near[part][0] += mesh == "barberry" and abs(-(x - start[0]) * uy + (y - start[1]) * ux) < 2.0
+                k = r.get("collision_with")
+                if r.get("attribution") == "flaw" and isinstance(k, int):
+                    hit[part][1] += 1
+                    hit[part][0] += r["meshes"][k] == "barberry"
+        first_last[arm] = (sum(firsts) / 5, sum(lasts) / 5)
+    d, rr = first_last["default"], first_last["route-random"]
+    text = " ".join(open(DOC, encoding="utf-8").read().split())
+    said = (
+        f"the default found {d[0]:.1f} in its first block (jobs 0-29) and {d[1]:.1f} in its last (jobs 270-299); "
+        f"route-random, which learns nothing, found {rr[0]:.1f} and {rr[1]:.1f}."
+    )
+    assert said in text, said
+    said = (
+        f"Barberries within 2 m of the route were {100 * near['early'][0] / near['early'][1]:.1f} % of the obstacles "
+        f"the default proposed in jobs 0-29 and {100 * near['late'][0] / near['late'][1]:.1f} % after; barberries "
+        f"were {hit['early'][0]} of the {hit['early'][1]} obstacles its early flaw collisions hit and "
+        f"{100 * hit['late'][0] / hit['late'][1]:.1f} % of the {hit['late'][1]} after."
+    )
+    assert said in text, said
+    for png in ("flaw3_learning_curve.png", "flaw3_default_learned.png"):
+        assert os.path.isfile(os.path.join(REPO, "docs", "images", png))

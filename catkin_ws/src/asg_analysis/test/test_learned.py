@@ -70,3 +70,20 @@ def test_the_figure_draws_the_shares(tmp_path):
     assert drawn["class, beside"][bars.index("proposed_late")][k] == 100 * 5 / 80
     assert drawn["class, beside"][bars.index("hit_late")][k] == 100.0
     assert set(drawn) == {"class, beside", "along", "shaded"}
+
+
+def test_early_can_end_where_a_search_stops_sampling_uniformly():
+    # --split: early is the jobs below the split, not half the budget
+    camp = {"experiment": "exp1"}
+    rows = [_row(j, on_route=j >= 4, flaw=j >= 4) for j in range(20)]
+    half = learned.shares([(camp, rows)], budget=20)
+    split = learned.shares([(camp, rows)], budget=20, split=4)
+    s = split["shares"]["class, beside"]["juniper, 0-2 m"]
+    assert s["proposed_early"] == 0.0 and s["proposed_late"] == 16 / 128
+    assert half["shares"]["class, beside"]["juniper, 0-2 m"]["proposed_early"] == 6 / 80
+    assert split["n"]["proposed_early"] == 32 and "jobs below 4 of the budget of 20" in learned.markdown(split)
+    assert "jobs below half the budget of 20" in learned.markdown(half)
+    import pytest
+
+    with pytest.raises(ValueError, match="split 20"):
+        learned.shares([(camp, rows)], budget=20, split=20)

@@ -16,8 +16,8 @@ the scene says of each obstacle, computed here apart from any search method's ow
     python3 -m asg_analysis.learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
         [--budget 250] [--target flaw] [--json out.json] [--markdown] [--figure out.png]
 
-Each campaign is split at half its budget (jobs below budget / 2: early; the rest: late); the
-shares pool the campaigns given.
+Each campaign is split at half its budget (jobs below budget / 2: early; the rest: late), or at
+`--split N` (e.g. where a search's uniform start ends); the shares pool the campaigns given.
 """
 
 import argparse
@@ -67,16 +67,20 @@ def obstacle_attributes(campaign: dict, row: dict) -> List[Dict[str, str]]:
     return out
 
 
-def shares(campaigns: List[tuple], budget: int, target: str = "flaw") -> dict:
+def shares(campaigns: List[tuple], budget: int, target: str = "flaw", split: int = 0) -> dict:
     """{attribute: {value: {proposed_early, proposed_late, findings_early, findings_late,
-    hit_early, hit_late}}} over (campaign, rows) pairs, with the obstacle counts under `n`."""
+    hit_early, hit_late}}} over (campaign, rows) pairs, with the obstacle counts under `n`; early
+    are the jobs below `split` (0: half the budget)."""
+    split = split or budget / 2
+    if not 0 < split < budget:
+        raise ValueError(f"learned: the split {split} must lie inside the budget {budget}")
     counts: Dict[str, Dict[str, Dict[str, int]]] = {}
     n = {k: 0 for k in ("proposed_early", "proposed_late", "findings_early", "findings_late", "hit_early", "hit_late")}
     for camp, rows in campaigns:
         for r in rows:
             if r["job"] >= budget or not r.get("positions"):
                 continue
-            half = "early" if r["job"] < budget / 2 else "late"
+            half = "early" if r["job"] < split else "late"
             attrs = obstacle_attributes(camp, r)
             groups = [f"proposed_{half}"] + ([f"findings_{half}"] if r.get("attribution") == target else [])
             for g in groups:
@@ -96,7 +100,7 @@ def shares(campaigns: List[tuple], budget: int, target: str = "flaw") -> dict:
         }
         for key, values in counts.items()
     }
-    return {"shares": table, "n": n, "target": target, "budget": budget}
+    return {"shares": table, "n": n, "target": target, "budget": budget, "split": split}
 
 
 def _order(value: str):
@@ -105,6 +109,12 @@ def _order(value: str):
 
     m = re.search(r"(>= )?(\d+(\.\d+)?)(-\d+(\.\d+)?)? m$", value)
     return (value[: m.start()] if m else value, float(m.group(2)) if m else 0.0)
+
+
+def _split(res: dict) -> str:
+    """Where early ends, in words."""
+    s = res.get("split", res["budget"] / 2)
+    return f"half the budget of {res['budget']}" if s == res["budget"] / 2 else f"{s:g} of the budget of {res['budget']}"
 
 
 def _pct(x) -> str:
@@ -129,7 +139,7 @@ def markdown(res: dict) -> str:
         "",
         f"Obstacles counted: proposed {n['proposed_early']:,} early, {n['proposed_late']:,} late; in {t} findings "
         f"{n['findings_early']:,} and {n['findings_late']:,}; hit by a {t} collision {n['hit_early']} and "
-        f"{n['hit_late']} (early: jobs below half the budget of {res['budget']}).",
+        f"{n['hit_late']} (early: jobs below {_split(res)}).",
     ]
     return "\n".join(lines)
 
@@ -179,7 +189,7 @@ def figure(res: dict, out: str) -> Dict[str, List[List[float]]]:
     n = res["n"]
     fig.suptitle(
         f"What the search learned: obstacles proposed ({n['proposed_early']:,} early, {n['proposed_late']:,} late) "
-        f"against those of its {t} findings (early: jobs below {res['budget'] // 2})",
+        f"against those of its {t} findings (early: jobs below {_split(res)})",
         fontsize=10,
     )
     fig.tight_layout()
@@ -197,6 +207,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default="")
     ap.add_argument("--markdown", action="store_true")
     ap.add_argument("--figure", default="", help="a PNG of the shares (class and band, quarter, shade)")
+    ap.add_argument("--split", type=int, default=0, help="[scenarios] early: the jobs below this (default: half the budget)")
     a = ap.parse_args(argv)
     from asg_agent.records.export import read_export
 
@@ -207,7 +218,11 @@ def main(argv=None) -> int:
             print(f"learned: no export {path}", file=sys.stderr)
             return 2
         camps.append(read_export(path))
-    res = shares(camps, a.budget, a.target)
+    try:
+        res = shares(camps, a.budget, a.target, a.split)
+    except ValueError as e:
+        print(str(e), file=sys.stderr)
+        return 2
     if a.json:
         import json
 
