@@ -81,5 +81,7 @@ def test_an_adopted_export_carries_its_own_studys_sharing_of_the_machine(tmp_pat
     head10, _ = reuse._read(str(study / "x-s10.jsonl.gz"))
     assert "shared" not in head10["campaign"]["adopted"]  # s1 is not s10, and no line names s10
     c = {"name": "flaw3-route-random-s13", "method": "route-random", "seed": 13, "reward": "proxy", "band": None}
-    devs = protocol.deviations({"budget": 6, "experiment": "x", "attribution": "three", "workers": 3}, c, head["campaign"], [])
+    devs = protocol.deviations(
+        {"budget": 6, "experiment": "x", "attribution": "three", "workers": 3}, c, head["campaign"], []
+    )
     assert "flaw3-route-random-s13: shared the machine in its older study (old/machine.log line 2)" in devs

@@ -114,7 +114,9 @@ def _order(value: str):
 def _split(res: dict) -> str:
     """Where early ends, in words."""
     s = res.get("split", res["budget"] / 2)
-    return f"half the budget of {res['budget']}" if s == res["budget"] / 2 else f"{s:g} of the budget of {res['budget']}"
+    return (
+        f"half the budget of {res['budget']}" if s == res["budget"] / 2 else f"{s:g} of the budget of {res['budget']}"
+    )
 
 
 def _pct(x) -> str:
@@ -207,7 +209,9 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default="")
     ap.add_argument("--markdown", action="store_true")
     ap.add_argument("--figure", default="", help="a PNG of the shares (class and band, quarter, shade)")
-    ap.add_argument("--split", type=int, default=0, help="[scenarios] early: the jobs below this (default: half the budget)")
+    ap.add_argument(
+        "--split", type=int, default=0, help="[scenarios] early: the jobs below this (default: half the budget)"
+    )
     a = ap.parse_args(argv)
     from asg_agent.records.export import read_export
 
@@ -223,16 +227,9 @@ def main(argv=None) -> int:
     except ValueError as e:
         print(str(e), file=sys.stderr)
         return 2
-    if a.json:
-        import json
+    from asg_analysis.files import report
 
-        with open(a.json, "w") as f:
-            json.dump(res, f, indent=1, sort_keys=True)
-            f.write("\n")
-    if a.figure:
-        figure(res, a.figure)
-    print(markdown(res) if a.markdown else res)
-    return 0
+    return report(res, a.json, figure, a.figure, markdown, a.markdown)
 
 
 if __name__ == "__main__":

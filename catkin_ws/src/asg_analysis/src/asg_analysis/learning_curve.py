@@ -114,16 +114,9 @@ def main(argv=None) -> int:
     except (OSError, ValueError, KeyError) as e:
         print(str(e), file=sys.stderr)
         return 2
-    if a.json:
-        import json
+    from asg_analysis.files import report
 
-        with open(a.json, "w") as f:
-            json.dump(res, f, indent=1, sort_keys=True)
-            f.write("\n")
-    if a.figure:
-        figure(res, a.figure)
-    print(markdown(res) if a.markdown else res)
-    return 0
+    return report(res, a.json, figure, a.figure, markdown, a.markdown)
 
 
 if __name__ == "__main__":
