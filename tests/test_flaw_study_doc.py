@@ -336,3 +336,56 @@ def test_what_the_default_learned_in_its_confirmatory_seeds_is_what_its_exports_
     assert said in text, said
     for png in ("flaw3_learning_curve.png", "flaw3_default_learned.png"):
         assert os.path.isfile(os.path.join(REPO, "docs", "images", png))
+
+
+def test_the_per_cpu_hour_sensitivity_to_the_machines_is_what_the_exports_say():
+    # issue #67: the same work on two machines (identical results digests) gives each machine's
+    # factor to round 5's Xeon; the default's and route-random's flaw findings per CPU-hour in
+    # those units, their means, ratio and exact two-sided Mann-Whitney p, recomputed here
+    import itertools
+
+    def read(folder, name):
+        with gzip.open(os.path.join(REPO, "results", folder, f"{name}.jsonl.gz"), "rt", encoding="utf-8") as f:
+            camp = json.loads(f.readline())["campaign"]
+            rows = [r for r in map(json.loads, f) if "job" in r and r["job"] < 300]
+        events = json.loads(camp["settings"])["events"]
+        return sum(e["cpu_s"] for e in events if e.get("kind") == "cpu") / 3600.0, rows
+
+    x_now, x_r5 = read("flaw_study3", "flaw3-map-elites-s10")[0], read("flaw_study", "flaw-map-elites-s10")[0]
+    e_now, e_r5 = read("flaw_study3", "flaw3-route-random-s10")[0], read("flaw_study", "flaw-route-random-s10")[0]
+    fx, fe = x_r5 / x_now, e_r5 / e_now
+    scale = {"default": [fe, fe, fx, fx, fx], "route-random": [fe, 1.0, 1.0, 1.0, 1.0]}
+    per = {}
+    for arm, factors in scale.items():
+        per[arm] = []
+        for seed, k in zip(range(10, 15), factors):
+            hours, rows = read("flaw_study3", f"flaw3-{arm}-s{seed}")
+            per[arm].append(sum(r.get("attribution") == "flaw" for r in rows) / (hours * k))
+    a, b = per["default"], per["route-random"]
+    both = a + b
+
+    def u(x, y):
+        return sum((p > q) + 0.5 * (p == q) for p in x for q in y)
+
+    seen = abs(u(a, b) - 12.5)
+    splits = list(itertools.combinations(range(10), 5))
+    p = sum(
+        abs(u([both[i] for i in s], [both[i] for i in range(10) if i not in s]) - 12.5) >= seen - 1e-12 for s in splits
+    ) / len(splits)
+    text = " ".join(open(DOC, encoding="utf-8").read().split())
+    said = (
+        f"in {x_now:.2f} CPU-hours against {x_r5:.2f} on round 5's Xeon (a factor of {fx:.2f}), and the AVX2-only "
+        f"EPYC did route-random-s10's in {e_now:.2f} against {e_r5:.2f} ({fe:.2f})"
+    )
+    assert said in text, said
+
+    def listed(v):
+        return ", ".join(f"{x:.1f}" for x in v[:-1]) + f" and {v[-1]:.1f}"
+
+    said = (
+        f"the default's flaw findings per CPU-hour are {listed(a)} (mean {sum(a) / 5:.1f}) against route-random's "
+        f"{listed(b)} (mean {sum(b) / 5:.1f}): {sum(a) / sum(b):.2f}x, every default seed above every route-random "
+        f"seed (exact p = {p:.4f})"
+    )
+    assert said in text, said
+    assert min(a) > max(b)
