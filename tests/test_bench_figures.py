@@ -224,3 +224,27 @@ def test_a_seeded_campaign_gives_one_digest_on_the_xeon_and_the_epyc():
     old = open(os.path.join(REPO, "results", "bench", "r5-arch-after-1.digest")).read().split()[1]
     assert old != seen["r6-xeon-after-1"][1]
     assert f"Before the pin the Xeon gave {old[:8]} for this campaign" in " ".join(text.split())
+
+
+def test_the_whole_stacks_seeded_campaign_is_the_same_on_the_xeon_and_the_epyc():
+    # issue #68 item 5: flaw3-default-s10 on the AVX2-only EPYC and again on the AMX Xeon: the same
+    # results (positions, termination, proxy, obstacle hit, attribution) job by job, recomputed here
+    import gzip
+
+    def read(path):
+        with gzip.open(os.path.join(REPO, path), "rt", encoding="utf-8") as f:
+            camp = json.loads(f.readline())["campaign"]
+            rows = {r["job"]: r for r in map(json.loads, f) if "job" in r}
+        cpus = {e.get("cpu") for e in json.loads(camp["settings"])["events"] if e.get("cpu")}
+        return cpus, rows
+
+    epyc, a = read("results/flaw_study3/flaw3-default-s10.jsonl.gz")
+    xeon, b = read("results/flaw_study3/cpu_check/flaw3-xeon-default-s10.jsonl.gz")
+    assert epyc == {"AMD EPYC"} and len(xeon) == 1 and next(iter(xeon)).startswith("Intel")
+    assert sorted(a) == sorted(b) == list(range(300))
+    keys = ("positions", "termination", "collision_with", "attribution", "meshes")
+    for j in range(300):
+        assert [a[j][k] for k in keys] == [b[j][k] for k in keys], j
+        assert abs(a[j]["proxy"] - b[j]["proxy"]) < 1e-9, j
+    text = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read().split())
+    assert "the same results digest over its 300 jobs, ecc502be" in text

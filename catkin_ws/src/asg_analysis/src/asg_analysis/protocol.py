@@ -540,6 +540,26 @@ def _plain_answer(t: dict, ref: dict, ref_h: Optional[dict], plural: str = "flaw
     return answer
 
 
+def _who_runs(args: List[str]) -> str:
+    """Whether `bash scripts/train.sh` runs the winner as it is (launch/train.launch's defaults are
+    its arguments) or only with them, in words."""
+    try:
+        with open(os.path.join(REPO, "launch", "train.launch"), encoding="utf-8") as f:
+            default = dict(re.findall(r'<arg name="(\w+)" default="([^"]*)"', f.read()))
+    except OSError:  # an install space without the repository's launch folder
+        default = {}
+    given = dict(a.split(":=", 1) for a in args)
+    same = (
+        default.get("method") == given.get("method")
+        and default.get("reward") == given.get("reward", "proxy")
+        and default.get("experiment", "").endswith(os.path.basename(given.get("experiment", "")))
+        and default.get("route_band", "") == given.get("route_band", "")
+    )
+    if same:
+        return f"`bash scripts/train.sh` runs it: `{' '.join(args)}`."
+    return f"Not yet `bash scripts/train.sh`'s default; it runs with `bash scripts/train.sh 150 {' '.join(args)}`."
+
+
 def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budget_figure: str = "") -> str:
     """The study's answer as a generated block: the comparison table (per arm: flaw findings per
     1,000 and per CPU-hour with 95 % bootstrap intervals, distinct flaw modes, model and stack
@@ -622,7 +642,7 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         lines += [
             "",
             f"**Winner (most {plural} per CPU-hour, mean over the seeds): {w['arm']}, "
-            f"{w['per_cpu_hour']:.1f} per CPU-hour.** `bash scripts/train.sh` runs it: `{' '.join(w['train_args'])}`.",
+            f"{w['per_cpu_hour']:.1f} per CPU-hour.** " + _who_runs(w["train_args"]),
         ]
     if figure:
         lines += ["", f"![{plural} by failure mode, per arm (the coverage map)]({figure})"]
@@ -878,6 +898,8 @@ def report_analysis(p: dict, args, res: dict) -> int:
         rel = os.path.relpath(figure, os.path.dirname(os.path.abspath(args.doc)))
         complete = res["complete"] >= res["campaigns"]
         budget, budget_png = "", os.path.join(os.path.dirname(figure), "flaw_study_budget.png")
+        if os.path.basename(figure).endswith("coverage.png") and os.path.basename(figure) != "flaw_study_coverage.png":
+            budget_png = figure[: -len("coverage.png")] + "budget.png"  # a study of its own: its own pair of figures
         if complete:
             from asg_analysis import flaw_budget
 
