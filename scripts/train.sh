@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The main job: a short campaign of the adversarial scene generator (train.launch's default: the
-# flaw study's winner, MAP-Elites in Exp. 1's route-relative action space; issue #54) on the
+# flaw study v3's winner, surrogate-ts in Exp. 1's route-wide action space on the flaw reward;
+# issue #67) on the
 # paper's Exp. 1 with the flawed U-Net in the loop, two scene workers on this machine. Installs what is
 # missing and builds first; prints a progress bar, then the summary and where the store is.
 #   bash scripts/train.sh [SCENARIOS] [extra launch args, e.g. method:=random seed:=1 resume:=true]

@@ -50,7 +50,7 @@ def test_train_launch_starts_n_workers_and_the_campaign():
     assert "/campaign" in nodes
     args = roslaunch("--args", "/campaign", path, "workers:=3")
     # Issue #36: three-stack attribution by default, the unflawed U-Net on worker_3, ground truth on worker_4
-    assert "--workers 3" in args and "--reward proxy" in args
+    assert "--workers 3" in args and "--reward auto" in args
     assert "--reference full=1 --reference ground_truth=1 --full-model full" in args
     import yaml
 

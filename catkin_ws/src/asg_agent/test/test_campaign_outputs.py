@@ -301,3 +301,17 @@ def test_the_store_and_the_export_hold_repository_relative_paths(tmp_path):
     assert heads["other"]["experiment_file"] == "experiments/exp1.yaml"  # another checkout's
     with gzip.open(tmp_path / "new.jsonl.gz", "rt") as f:
         assert json.loads(f.readline())["campaign"]["settings"] == store.campaign("new")["settings"]
+
+
+def test_reward_auto_stands_for_what_the_references_can_see_and_is_stored_resolved():
+    """train.launch's default (issue #67): --reward auto is flaw with the unflawed stack's re-runs,
+    regression with a release's, and the paper's proxy with none or ground truth alone; the
+    parsed options (and so the store's record of the campaign) name the resolved reward."""
+    from asg_agent.cli.campaign import parse
+    from asg_agent.scoring import rewards
+
+    assert rewards.for_roles(["full", "ground_truth"]) == "flaw"
+    assert rewards.for_roles(["release"]) == "regression"
+    assert rewards.for_roles(["ground_truth"]) == "proxy" and rewards.for_roles([]) == "proxy"
+    assert parse([EXP, "--fake-workers", "2", "--reward", "auto"]).reward == "proxy"
+    assert rewards.AUTO not in rewards.REWARDS  # a name for a choice, never a reward of its own

@@ -26,6 +26,7 @@ import yaml
 
 from asg_agent.paths import REPO
 from asg_agent.scoring import attribution as attr
+from asg_agent.scoring import rewards as reward_registry
 
 REQUIRED = ("name", "version", "experiment", "budget", "workers", "attribution", "endpoint", "pilot", "arms", "target")
 
@@ -549,15 +550,18 @@ def _who_runs(args: List[str]) -> str:
     except OSError:  # an install space without the repository's launch folder
         default = {}
     given = dict(a.split(":=", 1) for a in args)
+    reward = default.get("reward")
+    if reward == reward_registry.AUTO:  # what `auto` stands for under the launch file's default attribution
+        reward = reward_registry.for_roles(ATTRIBUTION_ROLES.get(default.get("attribution", ""), ()))
     same = (
         default.get("method") == given.get("method")
-        and default.get("reward") == given.get("reward", "proxy")
+        and reward == given.get("reward", "proxy")
         and default.get("experiment", "").endswith(os.path.basename(given.get("experiment", "")))
         and default.get("route_band", "") == given.get("route_band", "")
     )
     if same:
         return f"`bash scripts/train.sh` runs it: `{' '.join(args)}`."
-    return f"Not yet `bash scripts/train.sh`'s default; it runs with `bash scripts/train.sh 150 {' '.join(args)}`."
+    return f"Not `bash scripts/train.sh`'s default; it runs with `bash scripts/train.sh 150 {' '.join(args)}`."
 
 
 def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budget_figure: str = "") -> str:

@@ -26,6 +26,7 @@ from asg_agent.campaign.policy import CampaignError, campaign_settings, referenc
 from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collector  # noqa: E402
 from asg_agent.cli.signals import stop_on_signals  # noqa: E402
 from asg_agent.scoring import attribution as attr  # noqa: E402
+from asg_agent.scoring import rewards  # noqa: E402
 from asg_agent.records.experiment import ExperimentError, load_experiment  # noqa: E402
 from asg_agent.search.methods import METHODS, make_method  # noqa: E402
 from asg_agent.records.store import Store, StoreError, checkpoint_path  # noqa: E402
@@ -141,8 +142,9 @@ def _run_options(p):
     p.add_argument(
         "--reward",
         default="proxy",
-        choices=REWARDS,
-        help="what the search maximises: the stack under test's proxy (the paper), "
+        choices=REWARDS + (rewards.AUTO,),
+        help="what the search maximises: auto (the one the references can see: flaw with --reference "
+        "full=..., regression with --reference release=..., else proxy; train.launch's default), the stack under test's proxy (the paper), "
         "proxy - reference proxy (differential; needs --reference-workers), the proxy plus "
         "--collision-bonus when the stack under test collided and the reference reached the goal (collision), "
         "the proxy plus a dense term for how close the vehicle came to an obstacle (clearance) or how soon it "
@@ -185,6 +187,8 @@ def _check(p, a):
     """Options that do not fit together: p.error naming them."""
     if a.scenarios < 1:
         p.error("--scenarios must be >= 1")
+    if a.reward == rewards.AUTO:  # stored as what it stands for: the campaign's record names its reward
+        a.reward = rewards.for_roles([r.partition("=")[0] for r in a.reference])
     if a.reward == "regret" and not (any(r.startswith("full=") for r in a.reference) and a.candidates == "all"):
         p.error("--reward regret needs --reference full=WORKERS (and ground_truth) with --candidates all")
     if a.reward == "flaw" and not any(r.startswith("full=") for r in a.reference):

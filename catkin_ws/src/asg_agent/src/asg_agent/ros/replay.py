@@ -363,6 +363,12 @@ def run_replay(a, request, row, settings) -> int:
 
     init_node("replay", anonymous=True, disable_signals=True)
     worker = "/" + a.worker.strip("/")
+    client = GoalClient(worker + "/run_scenario", RunScenarioAction)
+    if not client.wait_for_server(rospy.Duration(90)):
+        print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
+        return 2
+    # the worker's stack is read once its server answers: a worker launched just before the replay
+    # (replay_findings.sh) has not set its parameters until then
     if settings and not a.force:
         problems = stack_mismatch(worker, settings)
         if problems:
@@ -373,10 +379,6 @@ def run_replay(a, request, row, settings) -> int:
                 file=sys.stderr,
             )
             return 2
-    client = GoalClient(worker + "/run_scenario", RunScenarioAction)
-    if not client.wait_for_server(rospy.Duration(90)):
-        print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
-        return 2
     bag = None
     if a.bag:
         topics = [f"{worker}/{t.strip('/')}" for t in BAG_TOPICS + list(getattr(a, "record", []) or [])]

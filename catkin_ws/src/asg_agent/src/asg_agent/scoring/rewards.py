@@ -261,3 +261,20 @@ def _registry() -> Dict[str, Reward]:
 #: every reward by name, in the order the campaign's --reward lists them
 REGISTRY: Dict[str, Reward] = _registry()
 REWARDS = tuple(REGISTRY)
+
+#: `--reward auto`: the reward the attribution in use can see (train.launch's default, issue #67)
+AUTO = "auto"
+
+
+def for_roles(roles: Sequence[str]) -> str:
+    """The reward `auto` stands for, given the roles of the campaign's references: `flaw` with the
+    unflawed stack's re-runs (three-stack attribution; the flaw study v3's winner), `regression`
+    with a release's (a stack pair), else the paper's `proxy` (no reference, or ground truth
+    alone, which classes no flaw)."""
+    from asg_agent.scoring import attribution as attr
+
+    if attr.FULL in roles:
+        return "flaw"
+    if attr.RELEASE in roles:
+        return "regression"
+    return "proxy"
