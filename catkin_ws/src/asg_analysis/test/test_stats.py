@@ -1,5 +1,7 @@
 """asg_analysis.stats: intervals, exact tests and rates over seeds."""
 
+import math
+
 import pytest
 
 from asg_analysis import stats
@@ -15,6 +17,9 @@ def test_statistics_over_seeds():
     assert stats.mann_whitney([1, 2, 3], [1, 2, 3])["p"] == pytest.approx(1.0)
     ratio, rlo, rhi = stats.ratio_ci([6, 6, 6, 6], [2, 2, 2, 2])
     assert (ratio, rlo, rhi) == (3.0, 3.0, 3.0)
+    # No finding on either side (the first depth pair): undefined, never inf, and no target is met on it.
+    assert all(math.isnan(x) for x in stats.ratio_ci([0, 0, 0], [0, 0, 0]))
+    assert stats.ratio_ci([1, 0, 0], [0, 0, 0])[0] == math.inf
     rows = stats.compare({"td3": [6, 7, 8], "random": [1, 2, 3], "route": [5, 6, 7]}, "td3")
     assert [r["arm"] for r in rows] == ["td3", "random", "route"]
     assert rows[0]["p"] is None and rows[1]["ratio"] == pytest.approx(3.5) and rows[1]["effect"] == 1.0

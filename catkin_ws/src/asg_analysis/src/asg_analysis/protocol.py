@@ -706,15 +706,18 @@ def coverage_figure(res: dict, out: str) -> None:
     plt.close(fig)
 
 
-def status(p: dict, folder: str) -> dict:
+def status(p: dict, folder: str, choice_path: str = "") -> dict:
     """Every campaign of the protocol so far, each with its endpoint (first `budget` scenarios),
-    cost and interruptions; nothing compared (that waits for complete stages)."""
+    cost and interruptions; nothing compared (that waits for complete stages). The confirmatory
+    campaigns are those of the pilot's choice, `choice_path` (default FOLDER/pilot_choice.json);
+    the endpoint's class is counted under the `flaw` keys, whatever the class (a stack pair's
+    regressions), beside the other classes of the attribution."""
     from asg_agent.records import failure_modes as fm
     from asg_agent.records.export import read_export
     from asg_analysis.stack_study import exact_interval
 
     cs = campaigns(p, "pilot")
-    choice_path = os.path.join(folder, "pilot_choice.json")
+    choice_path = choice_path or os.path.join(folder, "pilot_choice.json")
     if os.path.isfile(choice_path):
         with open(choice_path) as f:
             cs += campaigns(p, "confirmatory", json.load(f))
@@ -728,7 +731,8 @@ def status(p: dict, folder: str) -> dict:
         camp, rows = read_export(path)
         settings = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp["settings"]
         keep = [r for r in rows if r["job"] < c["budget"]]
-        count = {k: sum(r.get("attribution") == k for r in keep) for k in ("flaw", "model", "stack")}
+        cls = p["endpoint"]["class"]
+        count = {k: sum(r.get("attribution") == (cls if k == "flaw" else k) for r in keep) for k in OTHER_CLASSES}
         lo, hi = exact_interval(count["flaw"], len(keep)) if keep else (0.0, 0.0)
         hours = cpu_hours(settings, rows, c["budget"])
         cpus = sorted({e.get("cpu", "") for e in settings.get("events", []) if e.get("cpu")})
@@ -740,7 +744,7 @@ def status(p: dict, folder: str) -> dict:
             **count,
             flaw_per_1000=1000.0 * count["flaw"] / max(1, len(keep)),
             flaw_interval=[1000.0 * lo, 1000.0 * hi],
-            modes=fm.distinct(fm.modes_of(camp, keep, lambda r: r.get("attribution") == "flaw")),
+            modes=fm.distinct(fm.modes_of(camp, keep, lambda r: r.get("attribution") == cls)),
             cpu_hours=hours,
             cpu_measured=measured_cpu_hours(settings) is not None,
             flaw_per_cpu_hour=count["flaw"] / hours if hours else None,
@@ -771,11 +775,15 @@ def log_lines(folder: str, name: str) -> List[int]:
     return [k for k, line in enumerate(lines, 1) if pattern.search(line)]
 
 
-def status_markdown(st: dict, study: str = "flaw") -> str:
+#: the status table's class columns: the endpoint's class (counted as `flaw`), then the others
+OTHER_CLASSES = ("flaw", "model", "stack")
+
+
+def status_markdown(st: dict, study: str = "flaw", cls: str = "flaw") -> str:
     lines = [
         markers({"name": study})[0],
-        "| campaign | arm | seed | scenarios | flaw per 1,000 (95 % exact) | flaw | model | stack | distinct flaw modes "
-        "| CPU-hours | flaw per CPU-hour | CPU | deviations |",
+        f"| campaign | arm | seed | scenarios | {cls} per 1,000 (95 % exact) | {cls} | model | stack | distinct {cls} modes "
+        f"| CPU-hours | {cls} per CPU-hour | CPU | deviations |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, c in st.items():
@@ -818,6 +826,7 @@ def main(argv=None) -> int:
     t.add_argument("folder")
     t.add_argument("--doc", default="")
     t.add_argument("--check", action="store_true", help="only say whether the doc's block is stale (exit 1)")
+    t.add_argument("--choice", default="", help="the pilot's choice (default: FOLDER/pilot_choice.json)")
     n = sub.add_parser("analyse")
     n.add_argument("protocol")
     n.add_argument("folder")
@@ -830,6 +839,12 @@ def main(argv=None) -> int:
     )
     n.add_argument("--check", action="store_true", help="with --doc: only say whether the block is stale (exit 1)")
     n.add_argument("--interim", action="store_true", help="print the comparison before every campaign is in")
+    n.add_argument(
+        "--choice",
+        default="",
+        help="the pilot's choice the plan was made with (default: FOLDER/pilot_choice.json; "
+        "a study with no pilot of its own names another's, as `plan --choice` did)",
+    )
     args = ap.parse_args(argv)
     try:
         p = load(args.protocol)
@@ -841,7 +856,7 @@ def main(argv=None) -> int:
             sys.stdout.write(plan_lines(campaigns(p, args.stage, choice)))
             return 0
         if args.cmd == "status":
-            block = status_markdown(status(p, args.folder), p["name"])
+            block = status_markdown(status(p, args.folder, args.choice), p["name"], class_labels(p)[1])
             if not args.doc:
                 print(block)
                 return 0
@@ -860,7 +875,7 @@ def main(argv=None) -> int:
             band = f", route band {ch['band_m']:g} m" if ch.get("band_m") is not None else ""
             print(f"pilot choice: {what}reward {ch['reward']}{band} ({out})")
             return 0
-        with open(os.path.join(args.folder, "pilot_choice.json")) as f:
+        with open(args.choice or os.path.join(args.folder, "pilot_choice.json")) as f:
             choice = json.load(f)
         res = analyse(p, args.folder, choice)
     except (ProtocolError, OSError, ValueError, KeyError) as e:
@@ -891,7 +906,9 @@ def report_analysis(p: dict, args, res: dict) -> int:
         )
     if res["winner"]:
         w = res["winner"]
-        print(f"winner: {w['arm']} ({w['per_cpu_hour']:.1f} flaw findings per CPU-hour): {' '.join(w['train_args'])}")
+        print(
+            f"winner: {w['arm']} ({w['per_cpu_hour']:.1f} {class_labels(p)[0]} per CPU-hour): {' '.join(w['train_args'])}"
+        )
     if args.json:
         with open(args.json, "w") as f:
             json.dump(res, f, indent=1, sort_keys=True, default=str)

@@ -108,7 +108,10 @@ def seeds_per_arm(a: Sequence[float], b: Sequence[float], alpha: float = 0.05, p
 def ratio_ci(
     a: Sequence[float], b: Sequence[float], level: float = LEVEL, n: int = RESAMPLES, seed: int = 0
 ) -> Tuple[float, float, float]:
-    """(mean(a) / mean(b), lo, hi); inf where b's resampled mean is 0."""
+    """(mean(a) / mean(b), lo, hi); inf where b's resampled mean is 0; all three nan where neither
+    side found any (the ratio is undefined, and no target on it is met)."""
+    if not np.any(a) and not np.any(b):
+        return float("nan"), float("nan"), float("nan")
     a, b = np.asarray(a, float), np.asarray(b, float)
     rng = np.random.default_rng(seed)
     ma = a[rng.integers(0, a.size, size=(n, a.size))].mean(axis=1)
