@@ -31,20 +31,21 @@ def offsets(campaign: dict, row: dict) -> np.ndarray:
     return np.abs((p - f.start) @ f.normal)
 
 
-def arm_budget(campaigns: Dict[int, tuple], budget: int) -> dict:
-    """{curve: flaw findings per 1,000 per window (mean over seeds), placed: every obstacle's
-    |offset|, hit: the |offset| of the obstacle each flaw collision hit, candidates: share re-run,
-    near: share of obstacles within NEAR of the route} over the seeds {seed: (campaign, rows)}."""
+def arm_budget(campaigns: Dict[int, tuple], budget: int, cls: str = "flaw") -> dict:
+    """{curve: findings of class `cls` (flaw, or a stack pair's regression) per 1,000 per window
+    (mean over seeds), placed: every obstacle's |offset|, hit: the |offset| of the obstacle each
+    such collision hit, candidates: share re-run, near: share of obstacles within NEAR of the
+    route} over the seeds {seed: (campaign, rows)}."""
     curves, placed, hit, cand = [], [], [], []
     for camp, rows in campaigns.values():
         rows = sorted((r for r in rows if r["job"] < budget), key=lambda r: r["job"])
-        flaw = np.array([r.get("attribution") == "flaw" for r in rows], float)
+        flaw = np.array([r.get("attribution") == cls for r in rows], float)
         curves.append([1000.0 * flaw[i : i + WINDOW].mean() for i in range(0, len(rows), WINDOW)])
         cand.append(np.mean([r.get("attribution") not in (None, "", "not_candidate") for r in rows]))
         for r in rows:
             d = offsets(camp, r)
             placed.append(d)
-            if r.get("attribution") == "flaw" and r.get("collision_with") is not None:
+            if r.get("attribution") == cls and r.get("collision_with") is not None:
                 hit.append(d[r["collision_with"]])
     placed = np.concatenate(placed) if placed else np.zeros(0)
     n = min(len(c) for c in curves)
@@ -57,8 +58,9 @@ def arm_budget(campaigns: Dict[int, tuple], budget: int) -> dict:
     }
 
 
-def read(folder: str, budget: int = 300, prefix: str = "flaw") -> Dict[str, dict]:
-    """Every complete confirmatory export of the study in `folder` (PREFIX-ARM-sSEED), by arm."""
+def read(folder: str, budget: int = 300, prefix: str = "flaw", cls: str = "flaw") -> Dict[str, dict]:
+    """Every complete confirmatory export of the study in `folder` (PREFIX-ARM-sSEED), by arm,
+    counting the endpoint's class `cls`."""
     from asg_agent.records.export import read_export
 
     arms: Dict[str, Dict[int, tuple]] = {}
@@ -69,13 +71,14 @@ def read(folder: str, budget: int = 300, prefix: str = "flaw") -> Dict[str, dict
         camp, rows = read_export(os.path.join(folder, name))
         if len({r["job"] for r in rows if r["job"] < budget}) >= budget:
             arms.setdefault(m.group(1), {})[int(m.group(2))] = (camp, rows)
-    return {arm: dict(arm_budget(seeds, budget), seeds=len(seeds)) for arm, seeds in arms.items()}
+    return {arm: dict(arm_budget(seeds, budget, cls), seeds=len(seeds), cls=cls) for arm, seeds in arms.items()}
 
 
 def markdown(res: Dict[str, dict], order: List[str]) -> str:
+    cls = next((r.get("cls", "flaw") for r in res.values()), "flaw")
     lines = [
-        f"| arm | seeds | flaw per 1,000 by {WINDOW}-scenario window (mean over seeds) | obstacles within {NEAR:g} m "
-        "of the route | median offset of obstacles placed / of those a flaw collision hit [m] | candidates re-run |",
+        f"| arm | seeds | {cls} per 1,000 by {WINDOW}-scenario window (mean over seeds) | obstacles within {NEAR:g} m "
+        f"of the route | median offset of obstacles placed / of those a {cls} collision hit [m] | candidates re-run |",
         "|---|---|---|---|---|---|",
     ]
     for arm in [a for a in order if a in res]:
@@ -95,12 +98,13 @@ def figure(res: Dict[str, dict], order: List[str], out: str) -> None:
     import matplotlib.pyplot as plt
 
     arms = [a for a in order if a in res]
+    cls = next((res[a].get("cls", "flaw") for a in arms), "flaw")
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.6))
     for arm in arms:
         c = res[arm]["curve"]
         a1.plot(np.arange(len(c)) * WINDOW + WINDOW / 2, c, marker="o", label=arm)
     a1.set_xlabel("scenarios spent")
-    a1.set_ylabel(f"flaw findings per 1,000 ({WINDOW}-scenario windows)")
+    a1.set_ylabel(f"{cls} findings per 1,000 ({WINDOW}-scenario windows)")
     a1.grid(alpha=0.3)
     a1.legend(fontsize=7)
     x = np.linspace(0.0, 20.0, 201)
@@ -110,7 +114,7 @@ def figure(res: Dict[str, dict], order: List[str], out: str) -> None:
         a2.plot(x, np.searchsorted(placed, x, side="right") / max(1, placed.size), color=color, label=f"{arm}: placed")
         if hit.size:
             a2.plot(
-                x, np.searchsorted(hit, x, side="right") / hit.size, color=color, ls="--", label=f"{arm}: hit (flaw)"
+                x, np.searchsorted(hit, x, side="right") / hit.size, color=color, ls="--", label=f"{arm}: hit ({cls})"
             )
     a2.set_xlabel("|offset| from the start-goal line [m]")
     a2.set_ylabel("share of obstacles within it")
@@ -119,8 +123,8 @@ def figure(res: Dict[str, dict], order: List[str], out: str) -> None:
     a2.grid(alpha=0.3)
     a2.legend(fontsize=6)
     fig.suptitle(
-        "How each arm spends its budget: flaw findings as it goes (left); how close to the route it puts "
-        "obstacles, all of them and those a flaw collision hit (right)",
+        f"How each arm spends its budget: {cls} findings as it goes (left); how close to the route it puts "
+        f"obstacles, all of them and those a {cls} collision hit (right)",
         fontsize=9,
     )
     fig.tight_layout()

@@ -412,8 +412,7 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
             },
             "cpu_hours": hours,
             "per_seed": {s: per_seed(r, budget, cls) for s, r in sorted(seeds.items())},
-            "model": {s: per_seed(r, budget, "model") for s, r in sorted(seeds.items())},
-            "stack": {s: per_seed(r, budget, "stack") for s, r in sorted(seeds.items())},
+            **{k: {s: per_seed(r, budget, k) for s, r in sorted(seeds.items())} for k in other_classes(cls)},
             "distinct_modes": fm.distinct(modes),
             "coverage": fm.coverage(modes, meshes) if meshes else 0.0,
         }
@@ -443,7 +442,8 @@ def analyse(p: dict, folder: str, choice: dict) -> dict:
         )
     complete = sum(t["complete"] for t in table.values())
     winner = None
-    if rows_hour and complete == len(cs):  # the protocol's rule: most flaw findings per CPU-hour, mean over the seeds
+    if rows_hour and complete == len(cs) and any(r["mean"] > 0 for r in rows_hour):
+        # the protocol's rule: most findings per CPU-hour, mean over the seeds (none when no arm found any)
         order = list(p["arms"])
         best = max(rows_hour, key=lambda r: (r["mean"], -order.index(r["arm"])))
         winner = {"arm": best["arm"], "per_cpu_hour": best["mean"], "train_args": table[best["arm"]]["train_args"]}
@@ -484,7 +484,22 @@ BEGIN, END, RESULT_BEGIN, RESULT_END = markers({"name": "flaw"})
 
 
 def _f(x: Optional[float], nd: int = 1) -> str:
-    return "" if x is None else ("inf" if x == float("inf") else f"{x:.{nd}f}")
+    if x is None:
+        return ""
+    if x != x:  # nan: a ratio of two arms that found none
+        return "undefined"
+    return "inf" if x == float("inf") else f"{x:.{nd}f}"
+
+
+def _x(ratio: float) -> str:
+    """A ratio of means in prose: "1.60x", or "undefined" where neither arm found any."""
+    return _f(ratio, 2) + ("" if ratio != ratio else "x")
+
+
+def other_classes(cls: str):
+    """The attribution's classes shown beside the endpoint's: model and stack findings beside flaw
+    findings (three-stack attribution), shared failures beside regressions (a stack pair)."""
+    return {"regression": ("shared",)}.get(cls, ("model", "stack"))
 
 
 #: How the pages name each endpoint class: (plural, short), e.g. "flaw findings", "flaw".
@@ -511,15 +526,18 @@ def _plain_answer(t: dict, ref: dict, ref_h: Optional[dict], plural: str = "flaw
     protocol with `p: null` is descriptive (its seeds cannot reach a test): the answer is the
     ratio of means against the target's, with its interval, and claims no significance."""
     better = ref["ratio"] > 1.0
+    if ref["ratio"] != ref["ratio"]:  # nan: neither arm found one
+        return (
+            f"no: neither the search nor {t['ratio_over']} found any {plural}, so the search had no signal "
+            "to learn from and the ratio is undefined"
+        )
     if t.get("p") is None:
         answer = (
-            f"descriptive, no test (too few seeds to reach one): the default's mean is {_f(ref['ratio'], 2)}x "
+            f"descriptive, no test (too few seeds to reach one): the default's mean is {_x(ref['ratio'])} "
             f"{t['ratio_over']}'s {plural} per 1,000 ({_f(ref['ratio_lo'], 2)}-{_f(ref['ratio_hi'], 2)})"
         )
         if ref_h:
-            answer += (
-                f" and {_f(ref_h['ratio'], 2)}x per CPU-hour ({_f(ref_h['ratio_lo'], 2)}-{_f(ref_h['ratio_hi'], 2)})"
-            )
+            answer += f" and {_x(ref_h['ratio'])} per CPU-hour ({_f(ref_h['ratio_lo'], 2)}-{_f(ref_h['ratio_hi'], 2)})"
         return answer
     if ref["p"] < t["p"]:
         answer = (
@@ -587,11 +605,13 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
     arms, t = res["arms"], p["target"]
     plural, short = class_labels(p)
     hour = {r["arm"]: r for r in res["comparison_per_cpu_hour"]}
+    others = [k for k in other_classes(p["endpoint"]["class"]) if all(k in a for a in arms.values())]  # as analysed
     lines += [
         f"| arm | seeds | {short} per 1,000, per seed | mean (95 %) | {short} per CPU-hour, mean (95 %) | distinct {short} modes "
-        "| coverage | model per 1,000 | stack per 1,000 | default / arm per 1,000 (95 %) | p | Cliff's delta "
-        "| default / arm per CPU-hour (95 %) | p |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| coverage | "
+        + "".join(f"{k} per 1,000 | " for k in others)
+        + "default / arm per 1,000 (95 %) | p | Cliff's delta | default / arm per CPU-hour (95 %) | p |",
+        "|---" * (12 + len(others)) + "|",
     ]
     import numpy as np
 
@@ -611,8 +631,9 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         lines.append(
             f"| {r['arm']} | {r['seeds']} | {per} | {r['mean']:.1f} ({r['lo']:.1f}-{r['hi']:.1f}) | "
             + (f"{h['mean']:.1f} ({h['lo']:.1f}-{h['hi']:.1f})" if h else "")
-            + f" | {a['distinct_modes']} | {100 * a['coverage']:.0f} % | {np.mean(list(a['model'].values())):.1f} "
-            f"| {np.mean(list(a['stack'].values())):.1f} {vs}"
+            + f" | {a['distinct_modes']} | {100 * a['coverage']:.0f} % | "
+            + "".join(f"{np.mean(list(a[k].values())):.1f} | " for k in others)
+            + vs[2:]
         )
     ref, ref_h = next(r for r in res["comparison"] if r["arm"] == t["ratio_over"]), hour.get(t["ratio_over"])
     modes = arms["default"]["distinct_modes"]
@@ -629,10 +650,10 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         + (f", >= {t['distinct_modes']} distinct {short} modes" if t.get("distinct_modes") else "")
         + "): "
         + ("met" if res["target_met"] else "missed")
-        + f".** The default against {t['ratio_over']}: {_f(ref['ratio'], 2)}x per 1,000 "
+        + f".** The default against {t['ratio_over']}: {_x(ref['ratio'])} per 1,000 "
         f"({_f(ref['ratio_lo'], 2)}-{_f(ref['ratio_hi'], 2)}, p = {ref['p']:.4f})"
         + (
-            f", {_f(ref_h['ratio'], 2)}x per CPU-hour ({_f(ref_h['ratio_lo'], 2)}-{_f(ref_h['ratio_hi'], 2)}, "
+            f", {_x(ref_h['ratio'])} per CPU-hour ({_f(ref_h['ratio_lo'], 2)}-{_f(ref_h['ratio_hi'], 2)}, "
             f"p = {ref_h['p']:.4f})"
             if ref_h
             else ""
@@ -835,7 +856,8 @@ def main(argv=None) -> int:
     n.add_argument(
         "--figure",
         default="",
-        help="the coverage map's PNG (default: docs/images/flaw_study_coverage.png beside --doc)",
+        help="the coverage map's PNG (default: images/NAME_coverage.png beside --doc, NAME the protocol's; "
+        "round 5's: images/flaw_study_coverage.png)",
     )
     n.add_argument("--check", action="store_true", help="with --doc: only say whether the block is stale (exit 1)")
     n.add_argument("--interim", action="store_true", help="print the comparison before every campaign is in")
@@ -914,7 +936,11 @@ def report_analysis(p: dict, args, res: dict) -> int:
             json.dump(res, f, indent=1, sort_keys=True, default=str)
     if args.doc:
         figure = args.figure or os.path.join(
-            os.path.dirname(os.path.abspath(args.doc)), "images", "flaw_study_coverage.png"
+            os.path.dirname(os.path.abspath(args.doc)),
+            "images",
+            "flaw_study_coverage.png"
+            if p["name"] == "flaw"
+            else f"{p['name']}_coverage.png",  # round 5's kept its name
         )
         rel = os.path.relpath(figure, os.path.dirname(os.path.abspath(args.doc)))
         complete = res["complete"] >= res["campaigns"]
@@ -924,7 +950,7 @@ def report_analysis(p: dict, args, res: dict) -> int:
         if complete:
             from asg_analysis import flaw_budget
 
-            spent = flaw_budget.read(args.folder, p["budget"], p["name"])
+            spent = flaw_budget.read(args.folder, p["budget"], p["name"], p["endpoint"]["class"])
             budget = flaw_budget.markdown(spent, list(p["arms"]))
             if not args.check:
                 coverage_figure(res, figure)

@@ -4,6 +4,8 @@ markers (issue #54: every flaw finding of the default's first confirmatory seed 
 No ROS.
 
     python3 -m asg_analysis.replays results/flaw_study [--doc docs/experiments.md]
+
+Each study folder has its own block in the page, its markers naming the folder (markers()).
 """
 
 import argparse
@@ -14,8 +16,21 @@ import re
 import sys
 from typing import List
 
-BEGIN = "<!-- replays: begin (generated from results/flaw_study/replays/; tests/test_flaw_study_doc.py) -->"
-END = "<!-- replays: end -->"
+
+def markers(folder: str):
+    """(begin, end) of FOLDER's replays block: round 5's study (results/flaw_study) keeps the
+    markers it always had; another study's name its folder."""
+    name = os.path.relpath(os.path.abspath(folder), REPO) if os.path.isabs(folder) else os.path.normpath(folder)
+    if name == os.path.join("results", "flaw_study"):
+        return (
+            "<!-- replays: begin (generated from results/flaw_study/replays/; tests/test_flaw_study_doc.py) -->",
+            "<!-- replays: end -->",
+        )
+    return (f"<!-- replays of {name}: begin (generated from {name}/replays/) -->", f"<!-- replays of {name}: end -->")
+
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), *[".."] * 5))
+BEGIN, END = markers(os.path.join("results", "flaw_study"))
 
 
 def read(folder: str) -> List[dict]:
@@ -40,14 +55,15 @@ def markdown(records: List[dict]) -> str:
     return "\n".join(rows)
 
 
-def write_doc(doc: str, table: str) -> None:
+def write_doc(doc: str, table: str, folder: str = os.path.join("results", "flaw_study")) -> None:
+    begin, end = markers(folder)
     with open(doc, encoding="utf-8") as f:
         text = f.read()
-    pattern = re.escape(BEGIN) + r"\n.*?\n" + re.escape(END)
+    pattern = re.escape(begin) + r"\n(?:.*?\n)?" + re.escape(end)  # an empty block too
     if not re.search(pattern, text, re.S):
-        raise ValueError(f"{doc}: no replays block ({BEGIN} ... {END})")
+        raise ValueError(f"{doc}: no replays block ({begin} ... {end})")
     with open(doc, "w", encoding="utf-8") as f:
-        f.write(re.sub(pattern, lambda _: f"{BEGIN}\n{table}\n{END}", text, flags=re.S))
+        f.write(re.sub(pattern, lambda _: f"{begin}\n{table}\n{end}", text, flags=re.S))
 
 
 def main(argv=None) -> int:
@@ -58,7 +74,7 @@ def main(argv=None) -> int:
     table = markdown(read(a.folder))
     if a.doc:
         try:
-            write_doc(a.doc, table)
+            write_doc(a.doc, table, a.folder)
         except (OSError, ValueError) as e:
             print(f"replays: {e}", file=sys.stderr)
             return 2
