@@ -200,3 +200,35 @@ def test_worker_launch_takes_the_worker_defaults_from_the_yaml():
     # and the stack's client alike
     assert params["/worker_0/stack/mode"] == "free"
     assert yaml.safe_load(roslaunch("--dump-params", path))["/worker_0/stack/mode"] == "lockstep"
+
+
+def test_each_depth_registration_loads_its_own_parameters_through_worker_launch():
+    # issue #67: worker.launch passed its default depth_config to every registration it includes
+    # (pass_all_args), so depth_rc and the other release candidates ran the release's parameters,
+    # and the stack pairs compared depth with itself. Each registration's own file must arrive.
+    import yaml
+
+    config = os.path.join(REPO, "catkin_ws", "src", "asg_depth_stack", "config")
+    pairs = {"depth": "depth_stack.yaml", "depth_rc": "depth_stack_rc.yaml", "depth_rc4": "depth_stack_rc4.yaml"}
+    loaded = {}
+    for stack, name in pairs.items():
+        params = yaml.safe_load(
+            roslaunch("--dump-params", os.path.join(REPO, "launch", "worker.launch"), f"stack:={stack}")
+        )
+        want = yaml.safe_load(open(os.path.join(config, name)))
+        got = {
+            k: {key.rsplit("/", 1)[1]: v for key, v in params.items() if key.startswith(f"/worker_0/depth_stack/{k}/")}
+            for k in ("arcs", "grid")
+        }
+        assert got == {k: want[k] for k in ("arcs", "grid")}, stack
+        loaded[stack] = got
+    assert loaded["depth_rc"]["arcs"]["clearance"] != loaded["depth"]["arcs"]["clearance"]
+    assert loaded["depth_rc4"]["grid"]["step_height"] != loaded["depth"]["grid"]["step_height"]
+    # a depth_config given to worker.launch still replaces the registration's own
+    other = os.path.join(config, "depth_stack_rc.yaml")
+    params = yaml.safe_load(
+        roslaunch(
+            "--dump-params", os.path.join(REPO, "launch", "worker.launch"), "stack:=depth", f"depth_config:={other}"
+        )
+    )
+    assert params["/worker_0/depth_stack/arcs/clearance"] == loaded["depth_rc"]["arcs"]["clearance"]

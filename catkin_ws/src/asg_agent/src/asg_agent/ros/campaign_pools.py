@@ -5,6 +5,7 @@ import sys
 import time
 
 from asg_agent.campaign.policy import CampaignError
+from asg_agent.scoring import attribution as attr
 
 
 def make_pools(a, exp, workers, roles):
@@ -74,6 +75,17 @@ def check_stacks(exp, settings: dict, workers, roles):
         if any(v != seen[workers[0]] for v in seen.values()):
             wrong.append(f"the workers' {exp.stack} stacks differ in their identity parameters: {seen}")
         settings["identity"] = seen[workers[0]]
+        release = roles.get(attr.RELEASE)
+        if release:  # the release's identity too (issue #67): a pair that runs one set of parameters twice shows here
+            ref = settings["references"][attr.RELEASE]
+            ref["identity"] = identity_values(release[0])
+            same = [k for k, v in settings["identity"].items() if ref["identity"].get(k) == v]
+            if same and len(same) == len(settings["identity"]):
+                print(
+                    f"campaign: {exp.stack} and its release {ref.get('stack')} run the same identity parameters "
+                    f"({', '.join(same)}): unless their code differs, every scene will be 'shared' or 'pass'",
+                    file=sys.stderr,
+                )
     for role, ws in roles.items():
         wrong += [m for w in ws for m in stack_mismatch(w, settings["references"][role])]
     groups = [(settings, workers)] + [(settings["references"][r], ws) for r, ws in roles.items()]
