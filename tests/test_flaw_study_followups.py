@@ -5,7 +5,6 @@ reads the exports (gzip JSON lines) itself and recomputes the numbers the prose 
 
 import gzip
 import json
-import math
 import os
 import re
 import subprocess
@@ -102,7 +101,7 @@ def test_the_transfer_blocks_and_sentence_are_what_the_exports_say():
     assert f"of its {flaw_total['default']} flaw findings are one mode" in prose()
 
 
-def test_the_first_depth_pair_found_nothing_because_its_candidate_cannot_touch_what_it_keeps_clear_of():
+def test_the_first_depth_pair_found_nothing_because_its_candidate_ran_the_releases_parameters():
     folder = os.path.join(REPO, "results", "regression_depth")
     in_step(
         "analyse",
@@ -113,29 +112,27 @@ def test_the_first_depth_pair_found_nothing_because_its_candidate_cannot_touch_w
         "--doc",
         DOC,
     )
+    cfg = os.path.join(REPO, "catkin_ws", "src", "asg_depth_stack", "config")
+    release = yaml.safe_load(open(os.path.join(cfg, "depth_stack.yaml")))["arcs"]
+    candidate = yaml.safe_load(open(os.path.join(cfg, "depth_stack_rc.yaml")))["arcs"]
+    assert candidate["clearance"] != release["clearance"]
     names = sorted(n for n in os.listdir(folder) if n.endswith(".jsonl.gz"))
     assert len(names) == 6
     for n in names:
-        _, rows = read(os.path.join(folder, n))
+        camp, rows = read(os.path.join(folder, n))
         assert len(rows) == 200, n
         assert not any(r.get("attribution") == "regression" for r in rows), n
         assert not any(r["termination"] == "COLLISION" for r in rows), n
-    # the geometry the page gives: clearance = the vehicle's half-width + a cell's half-diagonal
-    cfg = os.path.join(REPO, "catkin_ws", "src", "asg_depth_stack", "config")
-    rc = yaml.safe_load(open(os.path.join(cfg, "depth_stack_rc.yaml")))
-    schema = open(os.path.join(REPO, "catkin_ws", "src", "asg_sim", "include", "asg_sim", "scene_schema.hpp")).read()
-    half_width = float(re.search(r"kVehicleHalfWidth = ([0-9.]+)", schema).group(1))
-    half_diagonal = rc["grid"]["cell"] * math.sqrt(2) / 2
-    assert (half_width, rc["grid"]["cell"]) == (0.75, 0.5)
-    assert abs(rc["arcs"]["clearance"] - (half_width + half_diagonal)) < 0.01
-    rc2 = yaml.safe_load(open(os.path.join(cfg, "depth_stack_rc2.yaml")))
-    assert rc2["arcs"]["clearance"] < half_width + half_diagonal  # the second candidate can touch
-    assert "Neither arm found a regression, nor any collision, in 1,200 scenarios" in prose()
-    # the generated answer says so too: an undefined ratio, no winner, shared failures beside regressions
-    block = (
-        prose()
-        .split("<!-- depth-pair study result: begin (generated) -->")[1]
-        .split("<!-- depth-pair study result: end -->")[0]
+        # what the campaign recorded of the stack under test: the release's arcs, not depth_rc's
+        settings = json.loads(camp["settings"])
+        assert settings["stack"] == "depth_rc" and settings["identity"]["depth_stack/arcs"] == release, n
+    said = (
+        "give `depth_rc` an arc clearance of "
+        f"{release['clearance']:g} m, the release's, not {candidate['clearance']:g} m"
     )
+    assert "Neither arm found a regression, nor any collision, in 1,200 scenarios" in prose() and said in prose()
+    # the generated answer says so too: an undefined ratio, no winner, shared failures beside regressions
+    block = prose().split("<!-- depth-pair study result: begin (generated) -->")[1]
+    block = block.split("<!-- depth-pair study result: end -->")[0]
     assert "No: neither the search nor route-random found any regressions" in block
     assert "| shared per 1,000 |" in block and "Winner" not in block and "inf" not in block
