@@ -136,3 +136,40 @@ def test_the_first_depth_pair_found_nothing_because_its_candidate_ran_the_releas
     block = block.split("<!-- depth-pair study result: end -->")[0]
     assert "No: neither the search nor route-random found any regressions" in block
     assert "| shared per 1,000 |" in block and "Winner" not in block and "inf" not in block
+
+
+def test_the_depth_rc4_pair_is_what_its_exports_say():
+    folder = os.path.join(REPO, "results", "regression_depth_rc4")
+    proto = os.path.join(REPO, "experiments", "protocol-regression-depth-rc4.yaml")
+    in_step("status", proto, folder, "--choice", CHOICE, "--doc", DOC)
+    in_step("analyse", proto, folder, "--choice", CHOICE, "--doc", DOC)
+    # the candidate pilot before and after the launch fix: the same line, the candidate's step as recorded
+    before, rows_before = read(
+        os.path.join(folder, "before_the_fix", "depth-pair4-candidate-route-random-s91.jsonl.gz")
+    )
+    after, rows_after = read(os.path.join(folder, "depth-pair4-candidate-route-random-s91.jsonl.gz"))
+    step = [json.loads(c["settings"])["identity"]["depth_stack/grid"]["step_height"] for c in (before, after)]
+    assert step == [0.4, 2.0]
+    found = [sum(r.get("attribution") == "regression" for r in rows) for rows in (rows_before, rows_after)]
+    assert found == [0, 20] and 2 <= found[1] <= 24  # the protocol's rule: between 2 and 24 of 40
+    per_1000, windows, hits = {}, {}, set()
+    for arm in ("default", "route-random"):
+        for seed in (49, 50, 51):
+            camp, rows = read(os.path.join(folder, f"depth-pair4-{arm}-s{seed}.jsonl.gz"))
+            rows = sorted((r for r in rows if r["job"] < 200), key=lambda r: r["job"])
+            assert len(rows) == 200
+            reg = [r.get("attribution") == "regression" for r in rows]
+            per_1000.setdefault(arm, []).append(1000.0 * sum(reg) / 200)
+            windows.setdefault(arm, []).append([1000.0 * sum(reg[i : i + 50]) / 50 for i in range(0, 200, 50)])
+            hits |= {r["meshes"][r["collision_with"]] for r in rows if r.get("attribution") == "regression"}
+    d, rr = per_1000["default"], per_1000["route-random"]
+    assert min(d) > max(rr) and hits == {"barberry"}
+    mean_windows = [sum(w[k] for w in windows["default"]) / 3 for k in range(4)]
+    said = (
+        f"The default found {d[0]:.0f}, {d[1]:.0f} and {d[2]:.0f} regressions per 1,000 against route-random's "
+        f"{rr[0]:.0f}, {rr[1]:.0f} and {rr[2]:.0f}: every default seed above every route-random seed, "
+        f"{sum(d) / sum(rr):.2f}x the mean per 1,000"
+    )
+    assert said in prose(), said
+    assert f"it found {mean_windows[0]:.0f} per 1,000" in prose()
+    assert f"the default found {min(mean_windows[1:]):.0f}-{max(mean_windows[1:]):.0f}" in prose()

@@ -753,7 +753,8 @@ def status(p: dict, folder: str, choice_path: str = "") -> dict:
         settings = json.loads(camp["settings"]) if isinstance(camp.get("settings"), str) else camp["settings"]
         keep = [r for r in rows if r["job"] < c["budget"]]
         cls = p["endpoint"]["class"]
-        count = {k: sum(r.get("attribution") == (cls if k == "flaw" else k) for r in keep) for k in OTHER_CLASSES}
+        others = other_classes(cls)
+        count = {k: sum(r.get("attribution") == (cls if k == "flaw" else k) for r in keep) for k in ("flaw",) + others}
         lo, hi = exact_interval(count["flaw"], len(keep)) if keep else (0.0, 0.0)
         hours = cpu_hours(settings, rows, c["budget"])
         cpus = sorted({e.get("cpu", "") for e in settings.get("events", []) if e.get("cpu")})
@@ -762,6 +763,7 @@ def status(p: dict, folder: str, choice_path: str = "") -> dict:
             seed=c["seed"],
             budget=c["budget"],
             scenarios=len(keep),
+            others=list(others),
             **count,
             flaw_per_1000=1000.0 * count["flaw"] / max(1, len(keep)),
             flaw_interval=[1000.0 * lo, 1000.0 * hi],
@@ -796,28 +798,29 @@ def log_lines(folder: str, name: str) -> List[int]:
     return [k for k, line in enumerate(lines, 1) if pattern.search(line)]
 
 
-#: the status table's class columns: the endpoint's class (counted as `flaw`), then the others
-OTHER_CLASSES = ("flaw", "model", "stack")
-
-
 def status_markdown(st: dict, study: str = "flaw", cls: str = "flaw") -> str:
+    """The status block: a row a campaign, the endpoint's class (counted under `flaw`) and the
+    attribution's other classes (other_classes) beside it."""
+    others = next((c["others"] for c in st.values() if c.get("others")), ["model", "stack"])
     lines = [
         markers({"name": study})[0],
-        f"| campaign | arm | seed | scenarios | {cls} per 1,000 (95 % exact) | {cls} | model | stack | distinct {cls} modes "
-        f"| CPU-hours | {cls} per CPU-hour | CPU | deviations |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        f"| campaign | arm | seed | scenarios | {cls} per 1,000 (95 % exact) | {cls} | "
+        + "".join(f"{k} | " for k in others)
+        + f"distinct {cls} modes | CPU-hours | {cls} per CPU-hour | CPU | deviations |",
+        "|---" * (11 + len(others)) + "|",
     ]
     for name, c in st.items():
         if not c["scenarios"]:
-            lines.append(f"| {name} | {c['arm']} | {c['seed']} | 0 of {c['budget']} | | | | | | | | | |")
+            lines.append(f"| {name} | {c['arm']} | {c['seed']} | 0 of {c['budget']} |" + " |" * (7 + len(others)))
             continue
         done = c["scenarios"] >= c["budget"]
         lo, hi = c["flaw_interval"]
         per_h = "" if c["flaw_per_cpu_hour"] is None else f"{c['flaw_per_cpu_hour']:.1f}"
         lines.append(
             f"| {name} | {c['arm']} | {c['seed']} | {c['scenarios']}{'' if done else ' of ' + str(c['budget'])} | "
-            f"{c['flaw_per_1000']:.1f} ({lo:.1f}-{hi:.1f}) | {c['flaw']} | {c['model']} | {c['stack']} | "
-            f"{c['modes']} | {c['cpu_hours']:.2f}{'' if c.get('cpu_measured') else ' †'} | {per_h} | {c['cpu']} | {'; '.join(c['deviations']) or 'none'} |"
+            f"{c['flaw_per_1000']:.1f} ({lo:.1f}-{hi:.1f}) | {c['flaw']} | "
+            + "".join(f"{c[k]} | " for k in others)
+            + f"{c['modes']} | {c['cpu_hours']:.2f}{'' if c.get('cpu_measured') else ' †'} | {per_h} | {c['cpu']} | {'; '.join(c['deviations']) or 'none'} |"
         )
     done = sum(c["scenarios"] >= c["budget"] for c in st.values())
     lines += ["", f"{done} of {len(st)} campaigns complete."]

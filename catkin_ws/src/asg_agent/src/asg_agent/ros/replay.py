@@ -351,6 +351,20 @@ def bring_up_worker(stack: dict, port: int):
     return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=os.setsid)
 
 
+def _runs_campaigns_stack(worker: str, settings: dict) -> bool:
+    """Whether `worker` runs the campaign's stack, saying why not. Read once its server answers: a
+    worker launched just before the replay (replay_findings.sh) has not set its parameters until then."""
+    problems = stack_mismatch(worker, settings)
+    if problems:
+        print(
+            "replay: the worker's stack is not the campaign's: "
+            + "; ".join(problems)
+            + " (launch worker.launch with the campaign's perception and model, or --force)",
+            file=sys.stderr,
+        )
+    return not problems
+
+
 def run_replay(a, request, row, settings) -> int:
     import rospy
     from asg_msgs.msg import RunScenarioAction
@@ -367,18 +381,8 @@ def run_replay(a, request, row, settings) -> int:
     if not client.wait_for_server(rospy.Duration(90)):
         print(f"replay: no scene worker at {worker}/run_scenario", file=sys.stderr)
         return 2
-    # the worker's stack is read once its server answers: a worker launched just before the replay
-    # (replay_findings.sh) has not set its parameters until then
-    if settings and not a.force:
-        problems = stack_mismatch(worker, settings)
-        if problems:
-            print(
-                "replay: the worker's stack is not the campaign's: "
-                + "; ".join(problems)
-                + " (launch worker.launch with the campaign's perception and model, or --force)",
-                file=sys.stderr,
-            )
-            return 2
+    if settings and not a.force and not _runs_campaigns_stack(worker, settings):
+        return 2
     bag = None
     if a.bag:
         topics = [f"{worker}/{t.strip('/')}" for t in BAG_TOPICS + list(getattr(a, "record", []) or [])]
