@@ -2,8 +2,8 @@
 NodeHandle::param kept the default silently when a value had another type (a string for
 follower/kp ran with the default gain); every C++ node now reads its table through asg_lockstep's
 helper (param_table.hpp, ros/param_reader.hpp), by kind, and refuses to start, naming the
-parameter: the planner (shown in full below), the scene worker, wall_clock and the example
-twist_driver."""
+parameter: the planner (shown in full below), the scene worker (its table, and a registration's
+stack/ keys), wall_clock and the example twist_driver."""
 
 import os
 import subprocess
@@ -74,6 +74,29 @@ def test_every_other_cpp_node_refuses_a_wrongly_typed_parameter_by_name(tmp_path
             subprocess.run(["rosparam", "set", f"/{exe}_t/{name}", value], env=env, check=True)
             r = subprocess.run([binary, f"__name:={exe}_t"], env=env, capture_output=True, text=True, timeout=60)
             assert r.returncode != 0 and want in r.stdout + r.stderr, (exe, r.stdout[-500:], r.stderr[-500:])
+    finally:
+        core.terminate()
+        core.wait(timeout=20)
+
+
+def test_the_scene_worker_refuses_a_wrongly_typed_registration_key_by_name(tmp_path):
+    """A stack registration's own keys (stack/mode, command, sim_time, acks, nodes) are read by
+    kind too: a string for sim_time was taken as false, an integer for acks as true."""
+    binary = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "scene_worker")
+    assert os.access(binary, os.X_OK), f"{binary}: not built"
+    env = dict(_env(), ROS_LOG_DIR=str(tmp_path))
+    core = _master(env)
+    try:
+        for key, value in (("name", "mine"), ("nodes", "[planner]"), ("mode", "free"), ("sim_time", "sometimes"), ("acks", "1")):
+            subprocess.run(["rosparam", "set", f"/reg/stack/{key}", value], env=env, check=True)
+        r = subprocess.run([binary, "__ns:=/reg", "__name:=scene_worker"], env=env, capture_output=True, text=True, timeout=60)
+        out = r.stdout + r.stderr
+        assert r.returncode != 0, out[-500:]
+        assert "stack/sim_time = 'sometimes': must be true or false" in out, out[-800:]
+        assert "stack/acks = 1: must be true or false" in out, out[-800:]
+        subprocess.run(["rosparam", "set", "/reg/stack/nodes", "planner"], env=env, check=True)
+        r = subprocess.run([binary, "__ns:=/reg", "__name:=scene_worker"], env=env, capture_output=True, text=True, timeout=60)
+        assert "stack/nodes = 'planner': must be a list of node names" in r.stdout + r.stderr, (r.stdout + r.stderr)[-800:]
     finally:
         core.terminate()
         core.wait(timeout=20)

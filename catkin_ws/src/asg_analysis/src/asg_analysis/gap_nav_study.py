@@ -31,8 +31,10 @@ it (method_config.init_random; a disagreement is an error). From the committed e
     python3 -m asg_analysis.gap_nav_study --json results/gap_nav/study.json --doc docs/your-stack.md
     python3 -m asg_analysis.gap_nav_study --doc docs/your-stack.md --check   # exit 1 when stale
 
-The route-random baseline that measures the search's part directly (obstacles uniform within 10 m
-of the route, no learning) is planned in results/gap_nav/plan-route-random.txt, not run.
+- **route-random** (results/gap_nav/plan-route-random.txt, when its exports are in): every
+  obstacle uniform within 10 m of the route, chosen by nothing, over the whole budget; the search's
+  part measured directly: the whole arm and its searched scenarios against it, each with Fisher's
+  exact test of the pooled counts (the plan's primary test: the whole arm against route-random).
 """
 
 import argparse
@@ -55,6 +57,7 @@ FOLDER = os.path.join(REPO, "results", "gap_nav")
 SEEDS = (0, 1, 2)
 SEARCH = [f"exp1-gap-nav-route-map-elites-s{k}" for k in SEEDS]
 RANDOM = [f"exp1-gap-nav-random-s{k}" for k in SEEDS]
+ROUTE_RANDOM = [f"exp1-gap-nav-route-random-s{k}" for k in SEEDS]
 SPREAD = os.path.join(FOLDER, "spread.json")
 RADII = (2.5, 5.0, 10.0)  # [m] the grouping's radii; MODE_RADIUS is the one described in full
 MODE_RADIUS = 5.0
@@ -169,7 +172,29 @@ def reruns(path: str) -> Dict:
     }
 
 
-def study(folder: str = FOLDER, search: Sequence[str] = SEARCH, random: Sequence[str] = RANDOM, spread=SPREAD) -> Dict:
+def route_random_arm(folder: str, names: Sequence[str]):
+    """route-random's pooled and per-seed rates and its failures struck early; None until every
+    one of its exports is in."""
+    if not names or not all(os.path.exists(os.path.join(folder, f"{n}.jsonl.gz")) for n in names):
+        return None
+    pooled, early, seeds = [0, 0], 0, {}
+    for name in names:
+        _, (start, goal), rows = read(folder, name)
+        fails = [r for r in rows if RunOutcome.of(r).fails]
+        pooled[0] += len(fails)
+        pooled[1] += len(rows)
+        early += struck_early(fails, start, goal)
+        seeds[name] = rate(len(fails), len(rows))
+    return {"campaigns": list(names), "pooled": rate(*pooled), "seeds": seeds, "struck_first_25m": early}
+
+
+def study(
+    folder: str = FOLDER,
+    search: Sequence[str] = SEARCH,
+    random: Sequence[str] = RANDOM,
+    spread=SPREAD,
+    route_random: Sequence[str] = ROUTE_RANDOM,
+) -> Dict:
     seeds, warm, searched, early_warm = {}, [0, 0], [0, 0], 0
     for name in search:
         settings, (start, goal), rows = read(folder, name)
@@ -222,6 +247,29 @@ def study(folder: str = FOLDER, search: Sequence[str] = SEARCH, random: Sequence
     r_uniform, r_warm, r_searched = rate(*uniform), rate(*warm), rate(*searched)
     r_arm = rate(warm[0] + searched[0], warm[1] + searched[1])
     failures = r_arm["failures"]
+    route = route_random_arm(folder, route_random)
+    ratio = {
+        "arm_over_uniform": r_arm["per_1000"] / r_uniform["per_1000"],
+        "where_obstacles_may_stand": r_warm["per_1000"] / r_uniform["per_1000"],
+        "search_over_warmup": r_searched["per_1000"] / r_warm["per_1000"],
+        "arm_over_warmup": r_arm["per_1000"] / r_warm["per_1000"],
+    }
+    tests = {
+        "warmup_vs_uniform": fisher(r_warm, r_uniform),
+        "searched_vs_warmup": fisher(r_searched, r_warm),
+    }
+    if route:
+        rr = route["pooled"]
+        ratio.update(
+            arm_over_route_random=r_arm["per_1000"] / rr["per_1000"],
+            searched_over_route_random=r_searched["per_1000"] / rr["per_1000"],
+            route_random_over_uniform=rr["per_1000"] / r_uniform["per_1000"],
+        )
+        tests.update(
+            arm_vs_route_random=fisher(r_arm, rr),
+            searched_vs_route_random=fisher(r_searched, rr),
+            route_random_vs_warmup=fisher(rr, r_warm),
+        )
     return {
         "search": list(search),
         "random": list(random),
@@ -229,16 +277,9 @@ def study(folder: str = FOLDER, search: Sequence[str] = SEARCH, random: Sequence
         "warmup": r_warm,
         "searched": r_searched,
         "arm": r_arm,
-        "ratio": {
-            "arm_over_uniform": r_arm["per_1000"] / r_uniform["per_1000"],
-            "where_obstacles_may_stand": r_warm["per_1000"] / r_uniform["per_1000"],
-            "search_over_warmup": r_searched["per_1000"] / r_warm["per_1000"],
-            "arm_over_warmup": r_arm["per_1000"] / r_warm["per_1000"],
-        },
-        "fisher_p": {
-            "warmup_vs_uniform": fisher(r_warm, r_uniform),
-            "searched_vs_warmup": fisher(r_searched, r_warm),
-        },
+        "route_random": route,
+        "ratio": ratio,
+        "fisher_p": tests,
         "seeds": seeds,
         "mode_radius_m": MODE_RADIUS,
         "first_m": FIRST_M,
@@ -276,12 +317,30 @@ def markdown(s: Dict) -> str:
         f"| exp1-gap-nav-route-map-elites, jobs {k_txt}-{last} | within 10 m of the route | the search "
         f"| {_rate(s['searched'])} |",
         f"| exp1-gap-nav-route-map-elites, every job | within 10 m of the route | both | {_rate(s['arm'])} |",
+    ]
+    route = s.get("route_random")
+    if route:
+        out.append(
+            f"| exp1-gap-nav-route-random, every job | within 10 m of the route | nothing (uniform) "
+            f"| {_rate(route['pooled'])} |"
+        )
+    out += [
         "",
         f"Pooled over seeds {', '.join(str(i) for i in SEEDS)}. The arm's {q['arm_over_uniform']:.1f}x uniform random's "
         f"rate is {q['where_obstacles_may_stand']:.1f}x (the warm-up against uniform random: where obstacles may "
         f"stand) times {q['arm_over_warmup']:.2f}x (the whole arm against its warm-up); the searched scenarios "
         f"alone fail {q['search_over_warmup']:.2f}x as often as the warm-up. Fisher's exact test: warm-up against "
         f"uniform random p = {p['warmup_vs_uniform']:.2g}, searched against warm-up p = {p['searched_vs_warmup']:.2g}.",
+    ]
+    if route:
+        out.append(
+            f"Against route-random (the same place for obstacles, chosen by nothing, every job): the whole arm "
+            f"fails {q['arm_over_route_random']:.2f}x as often (Fisher's exact test p = {p['arm_vs_route_random']:.2g}, "
+            f"the plan's primary test), its searched scenarios {q['searched_over_route_random']:.2f}x "
+            f"(p = {p['searched_vs_route_random']:.2g}); route-random against the warm-up p = "
+            f"{p['route_random_vs_warmup']:.2g}."
+        )
+    out += [
         "",
         "| campaign | failures | warm-up failures | layout groups at "
         + " / ".join(f"{r:g}" for r in RADII)
@@ -302,7 +361,12 @@ def markdown(s: Dict) -> str:
         "",
         f"Struck an obstacle less than {s['first_m']:g} m along the route from the start: {e['arm']} of the "
         f"arm's {e['arm_failures']} failures, {e['warmup']} of its warm-up's {e['warmup_failures']}, {e['uniform']} "
-        f"of uniform random's {e['uniform_failures']}.",
+        f"of uniform random's {e['uniform_failures']}"
+        + (
+            f", {route['struck_first_25m']} of route-random's {route['pooled']['failures']}."
+            if route
+            else "."
+        ),
     ]
     r = s["reruns"]
     if r:

@@ -27,22 +27,33 @@ void SceneWorkerROS::readParameters() {
 // (stack/worker/...), which win over ~ and the YAML.
 void SceneWorkerROS::readRegistration(std::vector<std::string>* errors) {
   auto& p = params_;
-  if (!nh_.getParam("stack/name", p.stack_name)) return;
+  using params::Kind;
+  params::Value v;
+  if (!params::readOne(nh_, "stack/name", Kind::kText, &v, errors)) return;
+  p.stack_name = v.text;
   const std::string where = "stack/ (the registration of stack '" + p.stack_name + "'): ";
   auto check = [&](bool ok, const std::string& what) {
     if (!ok) errors->push_back(where + what);
   };
-  check(nh_.getParam("stack/nodes", p.stack_nodes) && !p.stack_nodes.empty(),
+  // Each key is read as its kind: a string for sim_time, say, is refused by name, not taken as
+  // the default (NodeHandle::param would keep it silently).
+  const size_t before = errors->size();
+  const bool nodes = params::readOne(nh_, "stack/nodes", Kind::kList, &v, errors);
+  if (nodes) p.stack_nodes = v.list;
+  check(errors->size() > before || (nodes && !v.list.empty()),
         "nodes: a list of the stack's node names is required");
   std::string mode = "lockstep";
-  nh_.param("stack/mode", mode, mode);
+  if (params::readOne(nh_, "stack/mode", Kind::kText, &v, errors)) mode = v.text;
   check(mode == "lockstep" || mode == "free", "mode: must be lockstep or free, not '" + mode + "'");
   p.lockstep = mode == "lockstep";
-  nh_.param("stack/command", p.command_interface, std::string("vehicle_command"));
+  p.command_interface = "vehicle_command";
+  if (params::readOne(nh_, "stack/command", Kind::kText, &v, errors)) p.command_interface = v.text;
   check(p.command_interface == "vehicle_command" || p.command_interface == "twist",
         "command: must be vehicle_command or twist, not '" + p.command_interface + "'");
-  nh_.param("stack/sim_time", p.stack_sim_time, false);
-  nh_.param("stack/acks", p.stack_acks, true);
+  p.stack_sim_time = false;
+  if (params::readOne(nh_, "stack/sim_time", Kind::kBool, &v, errors)) p.stack_sim_time = v.number != 0.0;
+  p.stack_acks = true;
+  if (params::readOne(nh_, "stack/acks", Kind::kBool, &v, errors)) p.stack_acks = v.number != 0.0;
   check(p.stack_acks || !p.lockstep,
         "acks: false needs mode: free (in lockstep the stack's client acknowledges and answers each tick)");
   check(!p.stack_sim_time || ros::Time::isSimTime(),

@@ -80,6 +80,18 @@ void readTable(const ros::NodeHandle& nh, const std::string& prefix, const std::
   }
 }
 
+/// Reads the one parameter `name` of `nh` as `kind` into *v, as readTable reads a row: false when
+/// it is unset, or when it holds another type, which goes to *errors naming it.
+inline bool readOne(const ros::NodeHandle& nh, const std::string& name, Kind kind, Value* v,
+                    std::vector<std::string>* errors) {
+  XmlRpc::XmlRpcValue x;
+  if (!nh.getParam(name, x)) return false;
+  const std::string why = fromXmlRpc(x, kind, v);
+  if (why.empty()) return true;
+  errors->push_back(name + " = " + shown(x) + ": must be " + why);
+  return false;
+}
+
 /// "bad parameter: A" or "bad parameters: A; B" ("" when there is none).
 inline std::string joinErrors(const std::vector<std::string>& errors) {
   if (errors.empty()) return "";
