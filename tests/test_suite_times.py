@@ -1,0 +1,56 @@
+"""docs/testing.md's figures of the suite's time, recomputed from the runs recorded in
+results/suite_times/ (issues #56, #69)."""
+
+import json
+import os
+import re
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+TIMES = os.path.join(REPO, "results", "suite_times")
+
+
+def record(name):
+    with open(os.path.join(TIMES, name), encoding="utf-8") as f:
+        return json.load(f)
+
+
+def prose():
+    with open(os.path.join(REPO, "docs", "testing.md"), encoding="utf-8") as f:
+        return " ".join(f.read().split())
+
+
+def wall_s(r):
+    """The whole run's seconds, from the record's own words ("... (1,068 s) ...")."""
+    return int(re.search(r"\(([\d,]+) s\)", r["wall"]).group(1).replace(",", ""))
+
+
+def test_each_recorded_run_is_as_the_page_gives_it():
+    text = prose()
+    for name in sorted(os.listdir(TIMES)):
+        r = record(name)
+        assert r["files"] and r["cores"] == 2 and r["commit"] in name, name
+        assert f"`{name}`" in text, name
+    r = record("r6-cb08c85-epyc-avx2.json")
+    assert f"{len(r['files'])} files, {sum(r['files'].values()) / 60:.1f} min of test files" in text
+
+
+def test_round_6_against_round_5_on_one_cpu_is_what_the_records_say():
+    text = prose()
+    a, b = record("r5-6d798f4-xeon-amx.json"), record("r6-a08b21b-xeon-amx.json")
+    assert (a["cpu"], a["cpu_class"], a["cores"]) == (b["cpu"], b["cpu_class"], b["cores"])
+    for name, r in (("r5-6d798f4-xeon-amx.json", a), ("r6-a08b21b-xeon-amx.json", b)):
+        minutes = sum(r["files"].values()) / 60
+        assert f"`{name}`: {len(r['files'])} files, {minutes:.1f} min of test files, {wall_s(r):,} s in all" in text
+    assert f"That is {wall_s(b) / wall_s(a):.2f}x slower" in text
+    assert f"Where the {wall_s(b) - wall_s(a)} s went" in text
+    both = [k for k in b["files"] if k in a["files"]]
+    assert not [k for k in a["files"] if k not in b["files"]]  # no file of round 5 was dropped
+    new = {k: v for k, v in b["files"].items() if k not in a["files"]}
+    assert f"**New test files: {sum(new.values()):.0f} s.**" in text
+    top = max(new, key=new.get)
+    assert top == "tests: tests.test_your_stack_recipe" and f"`test_your_stack_recipe`, at {new[top]:.0f} s" in text
+    before, after = sum(a["files"][k] for k in both), sum(b["files"][k] for k in both)
+    assert f"**Files that grew: {after - before:.0f} s.**" in text
+    assert f"The {len(both)} files in both runs took {before:,.0f} s before and {after:,.0f} s after" in text
+    grew = b["files"]["asg_tests/rosunit-registered_stacks.xml"] - a["files"]["asg_tests/rosunit-registered_stacks.xml"]
+    assert f"`registered_stacks` grew by {grew:.0f} s" in text
