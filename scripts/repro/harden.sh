@@ -7,9 +7,7 @@
 #   bash scripts/repro/harden.sh [WORK=runs/harden] [ROUND=1]
 # Round 2 and later search the model of the round before first: ASG_HARDEN_FINDINGS names that
 # campaign's export (and ASG_HARDEN_RANDOM a random campaign's, seeds unused so far).
-# ASG_HARDEN_EVAL_ONLY=1 rebuilds only the held-apart figures of the models already made (the
-# held-apart frames, the per-pixel evaluations, the suite), e.g. after the rule that holds a set
-# apart changed (issue #68). Steps whose output exists are skipped, so a stopped run continues. About an hour on 2 idle
+# Steps whose output exists are skipped, so a stopped run continues. About an hour on 2 idle
 # cores (the two trainings, one core each, take most of it). Writes the models to
 # asg_perception/models/flawed_{hf,hr}ROUND.pt and to results/hardening/: evaluation-SET-ROUND.json (per-pixel figures), suite outcomes recorded
 # in the suites (labels flawed-cl, full-cl, hardened-findings-ROUND, hardened-random-ROUND).
@@ -35,45 +33,35 @@ mkdir -p "$WORK" "$OUT"
 harden() { /usr/bin/python3 -m asg_agent.cli.harden frames "$@"; }
 
 log "frame sets in $WORK"
+[ -f "$WORK/findings$ROUND/frames/manifest.csv" ] ||
+  harden --export "$FINDINGS_EXPORT" --classes flaw,model --out "$WORK/findings$ROUND" --frames $FRAMES --seed 0
+SCENES=$(/usr/bin/python3 -c "import json,sys; print(len(json.load(open(sys.argv[1]))['sources']))" \
+  "$WORK/findings$ROUND/hardening.json")
+[ -f "$WORK/random$ROUND/frames/manifest.csv" ] ||
+  harden --export "$RANDOM_EXPORT" --scenes "$SCENES" --out "$WORK/random$ROUND" --frames $FRAMES --seed 0
 [ -f "$WORK/heldout-findings/frames/manifest.csv" ] ||
   harden --export "$HELDOUT_EXPORT" --classes flaw,model --out "$WORK/heldout-findings" --frames 848 --seed 1 \
     --apart-from "$APART" --drop-shared  # held apart from every arm's sources (issue #57)
-cp "$WORK/heldout-findings/hardening.json" "$OUT/heldout-findings.json"  # its scenes, for the tests
-[ -f "$WORK/test/manifest.csv" ] || [ -f "$OUT/evaluation-test-$ROUND.json" ] ||
-  "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/test" --count 600 --seed 3
-if [ -n "${ASG_HARDEN_EVAL_ONLY:-}" ]; then
-  for r in $(seq 1 "$ROUND"); do
-    for tag in hf$r hr$r; do
-      [ -f "$MODELS/flawed_$tag.pt" ] || { log "ASG_HARDEN_EVAL_ONLY: $MODELS/flawed_$tag.pt is not made yet (run without it)"; exit 2; }
-    done
-  done
-else
-  [ -f "$WORK/findings$ROUND/frames/manifest.csv" ] ||
-    harden --export "$FINDINGS_EXPORT" --classes flaw,model --out "$WORK/findings$ROUND" --frames $FRAMES --seed 0
-  SCENES=$(/usr/bin/python3 -c "import json,sys; print(len(json.load(open(sys.argv[1]))['sources']))" \
-    "$WORK/findings$ROUND/hardening.json")
-  [ -f "$WORK/random$ROUND/frames/manifest.csv" ] ||
-    harden --export "$RANDOM_EXPORT" --scenes "$SCENES" --out "$WORK/random$ROUND" --frames $FRAMES --seed 0
-  # the first FRAMES frames of flawed.pt's own training set (scripts/repro/make_models.sh: seed 2, barberries)
-  [ -f "$WORK/rehearsal/manifest.csv" ] ||
-    "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/rehearsal" --count $FRAMES --seed 2 --meshes barberry
+[ -f "$WORK/test/manifest.csv" ] || "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/test" --count 600 --seed 3
+# the first FRAMES frames of flawed.pt's own training set (scripts/repro/make_models.sh: seed 2, barberries)
+[ -f "$WORK/rehearsal/manifest.csv" ] ||
+  "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/rehearsal" --count $FRAMES --seed 2 --meshes barberry
 
-  log "fine-tuning flawed.pt (round 1) or each arm's model of the round before on each frame set ($FRAMES frames and $FRAMES of rehearsal, 4 epochs, Adam 1e-4, one core each)"
-  for arm in findings random; do
-    tag=h${arm:0:1}$ROUND
-    [ -f "$MODELS/flawed_$tag.pt" ] && continue
-    START="$WS/src/asg_perception/models/flawed.pt"
-    [ "$ROUND" = 1 ] || START="$MODELS/flawed_h${arm:0:1}$((ROUND - 1)).pt"  # each arm hardens its own
-    /usr/bin/python3 -m asg_perception.train --data "$WORK/$arm$ROUND/frames,$WORK/rehearsal" --out "$WORK/train_$arm$ROUND" \
-      --init "$START" --epochs 4 --lr 0.0001 --batch-size 16 --threads 1 --seed 0 --resume \
-      > "$WORK/train_$arm$ROUND.log" 2>&1 &
-  done
-  wait
-  for arm in findings random; do
-    tag=h${arm:0:1}$ROUND
-    [ -f "$MODELS/flawed_$tag.pt" ] || cp "$WORK/train_$arm$ROUND/model.pt" "$MODELS/flawed_$tag.pt"
-  done
-fi
+log "fine-tuning flawed.pt (round 1) or each arm's model of the round before on each frame set ($FRAMES frames and $FRAMES of rehearsal, 4 epochs, Adam 1e-4, one core each)"
+for arm in findings random; do
+  tag=h${arm:0:1}$ROUND
+  [ -f "$MODELS/flawed_$tag.pt" ] && continue
+  START="$WS/src/asg_perception/models/flawed.pt"
+  [ "$ROUND" = 1 ] || START="$MODELS/flawed_h${arm:0:1}$((ROUND - 1)).pt"  # each arm hardens its own
+  /usr/bin/python3 -m asg_perception.train --data "$WORK/$arm$ROUND/frames,$WORK/rehearsal" --out "$WORK/train_$arm$ROUND" \
+    --init "$START" --epochs 4 --lr 0.0001 --batch-size 16 --threads 1 --seed 0 --resume \
+    > "$WORK/train_$arm$ROUND.log" 2>&1 &
+done
+wait
+for arm in findings random; do
+  tag=h${arm:0:1}$ROUND
+  [ -f "$MODELS/flawed_$tag.pt" ] || cp "$WORK/train_$arm$ROUND/model.pt" "$MODELS/flawed_$tag.pt"
+done
 
 log "per-pixel figures on the held-apart sets"
 ARMS=("flawed=$MODELS/flawed.pt" "full=$MODELS/full.pt")

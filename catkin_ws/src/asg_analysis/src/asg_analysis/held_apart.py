@@ -3,10 +3,13 @@ the scenes of `heldout-findings` (the per-pixel frame set) and `suite-r4pilot` t
 source of either round's arms holds within the augmentation's radius, the default tolerance of
 `asg_agent.campaign.overlap` (`Perturbation.shift_m`: every training frame is rendered in copies
 of its scene with each obstacle shifted up to that far along x and along y), and what the page's
-held-apart figures become without them where the committed results allow it: the suite's
-outcomes are recorded per scenario; the per-pixel evaluation files pool the frames.
+held-apart figures become without them: the suite's outcomes are recorded per scenario; the
+per-pixel evaluation files pool the frames, so the frame set is rendered again as it was built and
+evaluated with and without the twins' frames (scripts/repro/heldout_twins.sh writes
+results/hardening/twins/; the block shows those columns once they are there).
 
     python3 -m asg_analysis.held_apart [results/hardening] [--doc docs/design-loop.md] [--check]
+    python3 -m asg_analysis.held_apart --frames-without-twins SET/frames OUT   # a dataset without them
 
 `--doc` rewrites the page's `<!-- twins:begin -->` block; `--check` exits 1 when it is not in
 step (tests/test_held_apart.py checks it too, with code of its own).
@@ -29,6 +32,8 @@ SUITE = "suite-r4pilot"
 BEGIN = "<!-- twins:begin (python3 -m asg_analysis.held_apart --doc docs/design-loop.md; tests/test_held_apart.py) -->"
 END = "<!-- twins:end -->"
 #: what rebuilds the sets at the radius (scripts/repro/harden.sh skips an output that exists)
+TWINS = "twins"  # results/hardening/twins: the set rendered again, evaluated with and without the twins
+RERENDERED, LEFT_OUT = "rerendered", "twins-left-out"
 REBUILD = (
     "rm -r runs/harden/heldout-findings results/hardening/suite-r4pilot "
     "results/hardening/evaluation-heldout-findings-[12].json && bash scripts/repro/harden.sh"
@@ -98,6 +103,7 @@ def measure(folder: str = HARD, tol_m: float = None) -> dict:
         entries = yaml.safe_load(f)["scenarios"]
     kept = [e for e in entries if (e["campaign"], int(e["job"])) not in set(gone)]
     return {
+        "pixels": pixels(folder),
         "tol_m": tol,
         "training": [os.path.basename(s).replace(".jsonl.gz", "") for s in sources],
         "twins": sorted(twins.values(), key=lambda t: (_job(t["scene"]), t["training"])),
@@ -114,6 +120,59 @@ def measure(folder: str = HARD, tol_m: float = None) -> dict:
             "passed_without": {arm: list(without.get(arm, (0, 0))) for arm in committed},
         },
     }
+
+
+def _figures(path: str) -> Dict[str, list]:
+    """{arm: [obstacle IoU, shadow false-obstacle rate]} and the frame count of an evaluation file."""
+    with open(path, encoding="utf-8") as f:
+        e = json.load(f)
+    arms = {a: [r["iou"]["non_traversable"], r["shadow_false_obstacle_rate"]] for a, r in e["results"].items()}
+    return {"frames": int(e["frames"]), "arms": arms}
+
+
+def pixels(folder: str = HARD):
+    """The per-pixel columns of the frame set as committed (its last round's evaluation, which
+    holds every arm), rendered again as built, and without the twins' frames; None until
+    scripts/repro/heldout_twins.sh has written them."""
+    import glob
+
+    again = {k: os.path.join(folder, TWINS, f"evaluation-{SET}-{k}.json") for k in (RERENDERED, LEFT_OUT)}
+    if not all(os.path.exists(p) for p in again.values()):
+        return None
+    rounds = sorted(glob.glob(os.path.join(folder, f"evaluation-{SET}-*.json")), key=lambda p: int(p[:-5].rsplit("-", 1)[1]))
+    out = {"committed": _figures(rounds[-1]), **{k: _figures(p) for k, p in again.items()}}
+    with open(os.path.join(folder, TWINS, f"{SET}.json"), encoding="utf-8") as f:
+        made_again = json.load(f)
+    with open(os.path.join(folder, f"{SET}.json"), encoding="utf-8") as f:
+        made = json.load(f)
+    out["same_set"] = all(made_again[k] == made[k] for k in ("sources", "frames", "seed", "perturbation"))
+    return out
+
+
+def without_twins(frames: str, out: str, folder: str = HARD) -> int:
+    """Writes OUT/manifest.csv: the frames of a rendering of the frame set (SET/frames, beside its
+    poses.csv) whose scene is not a twin at the radius, and OUT/images, a link to its images;
+    returns how many frames it left out."""
+    import csv
+
+    gone = {_job(t["scene"]) for t in measure(folder)["twins"] if SET in t["sets"]}
+    names = {f"-{c}-job{j}-" for c, j in gone}
+    with open(os.path.join(frames, "..", "poses.csv"), newline="", encoding="utf-8") as f:
+        scenes = [r["scenario"] for r in csv.DictReader(f)]
+    with open(os.path.join(frames, "manifest.csv"), newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    if len(scenes) != len(rows):
+        raise ValueError(f"{frames}: {len(rows)} frames against {len(scenes)} poses")
+    keep = [r for r, sc in zip(rows, scenes) if not any(n in os.path.basename(sc) for n in names)]
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "manifest.csv"), "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(keep)
+    link = os.path.join(out, "images")
+    if not os.path.islink(link):
+        os.symlink(os.path.relpath(os.path.join(frames, "images"), out), link)
+    return len(rows) - len(keep)
 
 
 def _arms(result: dict) -> List[str]:
@@ -146,9 +205,15 @@ def markdown(result: dict) -> str:
     lines += [
         "",
         f"Left out: `{SET}` keeps {hs['kept']} of its {hs['scenes']} scenes ({hs['frames_kept']} of its "
-        f"{hs['frames']} frames); its per-pixel columns cannot be recomputed from the committed evaluation "
-        "files, which pool the frames (no per-scene or per-frame counts). "
-        f"`{SUITE}` keeps {sum(su['kept_classes'].values())} of its {su['scenes']} findings ({kept}); "
+        f"{hs['frames']} frames); "
+        + (
+            "its per-pixel columns, from the set rendered again as it was built and evaluated with and without "
+            "the twins' frames, are below. "
+            if result.get("pixels")
+            else "its per-pixel columns cannot be recomputed from the committed evaluation "
+            "files, which pool the frames (no per-scene or per-frame counts). "
+        )
+        + f"`{SUITE}` keeps {sum(su['kept_classes'].values())} of its {su['scenes']} findings ({kept}); "
         "its pass counts, from the outcomes recorded per scenario:",
         "",
         f"| arm | {SUITE} passed, as committed | of them twins | {SUITE} passed, twins left out |",
@@ -157,6 +222,23 @@ def markdown(result: dict) -> str:
     for arm in _arms(result):
         (k, n), (k2, n2) = su["passed"][arm], su["passed_without"][arm]
         lines.append(f"| {arm} | {k} / {n} | {k - k2} / {n - n2} | {k2} / {n2} |")
+    px = result.get("pixels")
+    if px:
+        c, a, w = px["committed"], px[RERENDERED], px[LEFT_OUT]
+        lines += [
+            "",
+            f"`{SET}`, per pixel: as committed ({c['frames']} frames), rendered again as built "
+            f"({a['frames']} frames, {'the same scenes, frame count, seed and perturbations' if px['same_set'] else 'NOT the same set'}) "
+            f"and without the twins' frames ({w['frames']}; `bash scripts/repro/heldout_twins.sh`):",
+            "",
+            "| arm | obstacle IoU: committed / again / twins left out | shadow false-obstacle: committed / again / twins left out |",
+            "|---|---|---|",
+        ]
+        for arm in _arms(result):
+            if arm not in c["arms"]:
+                continue
+            cells = [" / ".join(f"{x['arms'][arm][i]:.3f}" for x in (c, a, w)) for i in (0, 1)]
+            lines.append(f"| {arm} | {cells[0]} | {cells[1]} |")
     lines += [
         "",
         f"Rebuild at the radius: `{REBUILD}`, then round 2's `harden.sh runs/harden 2` (section 4); "
@@ -193,8 +275,15 @@ def main(argv=None) -> int:
     ap.add_argument("--doc", help="a Markdown file whose twins block to rewrite")
     ap.add_argument("--check", action="store_true", help="with --doc: exit 1 if its block is not in step")
     ap.add_argument("--json", help="write the figures here")
+    ap.add_argument(
+        "--frames-without-twins", nargs=2, metavar=("FRAMES", "OUT"), help="write a dataset of FRAMES without the twins"
+    )
     a = ap.parse_args(argv)
     try:
+        if a.frames_without_twins:
+            n = without_twins(*a.frames_without_twins, folder=a.folder)
+            print(f"{a.frames_without_twins[1]}: the frames of {a.frames_without_twins[0]} but {n} of the twins'")
+            return 0
         result = measure(a.folder, a.tol_m)
         text = block(result)
         if a.json:

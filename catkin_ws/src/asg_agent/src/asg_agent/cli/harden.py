@@ -28,18 +28,21 @@ from asg_agent.campaign.hardening import (
 )
 
 
-def apart(sources, training: list, what: str, drop: bool):
-    """The sources none of the `training` sources holds (campaign.overlap), and the dropped ones in
-    words; without `drop`, OverlapError naming every shared scene."""
+def apart(sources, training: list, what: str, drop: bool, tol_m=None):
+    """The sources none of the `training` sources holds (campaign.overlap, at `tol_m` [m]; None: its
+    default, the augmentation's radius), and the dropped ones in words; without `drop`,
+    OverlapError naming every shared scene."""
     from asg_agent.campaign import overlap
+
+    tol_m = overlap.TOL_M if tol_m is None else tol_m
 
     scenes = [
         overlap.request_scene(f"{s.origin.get('campaign')} job {s.origin.get('job')}", s.request) for s in sources
     ]
     if not drop:
-        overlap.check_apart(scenes, training, what)
+        overlap.check_apart(scenes, training, what, tol_m)
         return sources, []
-    pairs = [p for src in training for p in overlap.shared(scenes, overlap.scenes_of(src))]
+    pairs = [p for src in training for p in overlap.shared(scenes, overlap.scenes_of(src), tol_m)]
     gone = {p["scene"] for p in pairs}
     keep = [s for s, sc in zip(sources, scenes) if sc[0] not in gone]
     return keep, [f"{p['scene']} = {p['training']}" for p in pairs]
@@ -66,6 +69,13 @@ def main(argv=None) -> int:
         "hold (issue #57: a held-apart set); a shared scene is refused, naming it",
     )
     f.add_argument("--drop-shared", action="store_true", help="with --apart-from: leave shared scenes out")
+    f.add_argument(
+        "--tol-m",
+        type=float,
+        default=None,
+        help="[m] with --apart-from: two scenes are one when every obstacle lies this close along x and y "
+        "(default: the augmentation's radius, campaign.overlap.TOL_M; 0.01 is the same layout)",
+    )
     d = Perturbation()
     for k, v in vars(d).items():
         f.add_argument("--" + k.replace("_", "-"), type=type(v), default=v, help=f"(default {v})")
@@ -84,7 +94,7 @@ def main(argv=None) -> int:
             sources = sources_from_export(a.export, a.scenes, a.seed, classes)
             made_from = {"export": a.export, "scenes": len(sources), "classes": classes}
         if a.apart_from:
-            sources, dropped = apart(sources, [x for x in a.apart_from.split(",") if x], a.out, a.drop_shared)
+            sources, dropped = apart(sources, [x for x in a.apart_from.split(",") if x], a.out, a.drop_shared, a.tol_m)
             made_from.update(apart_from=a.apart_from, dropped_shared=dropped)
             for d in dropped:
                 print(f"left out, in a training source: {d}")
