@@ -310,10 +310,9 @@ def test_the_gap_nav_warm_up_split_is_what_the_exports_say():
     assert f"warm-up against uniform random p = {p_wu:.2g}, searched against warm-up p = {p_sw:.2g}." in block
     prose = " ".join(open(DOC).read().split())
     assert f"MAP-Elites' own warm-up, before it searches, fails {rate['w']:.0f} per 1,000" in prose
-    assert "That 2 rests on the warm-up's 105 scenarios, the first 35 jobs of each seed" in prose
     a_u, w_u, s_w, a_w = (rate[x] / rate[y] for x, y in ("au", "wu", "sw", "aw"))
-    assert f"Of the ratio of {a_u:.0f}, a factor of about {w_u:.0f} is where obstacles may stand" in prose
-    assert f"and about {s_w:.0f} is what the search adds" in prose and round(a_w) == 2
+    assert f"gives about {w_u:.0f} of the ratio of {a_u:.0f} to where obstacles may stand and about" in prose
+    assert f"{s_w:.0f} to the search, on the warm-up's {warm[1]} scenarios" in prose and round(a_w) == 2
 
 
 def test_the_gap_nav_failure_modes_are_what_the_exports_say():
@@ -394,8 +393,8 @@ def test_the_gap_nav_page_drops_its_stronger_sentences():
     ):
         assert old not in prose, old
     assert "so the ratio of 22 above is not the search's alone" in prose
-    assert "route-random (`method:=route-random route_band:=10` on `experiments/exp1-gap-nav.yaml`" in prose
-    assert "For gap_nav it is still to run: its plan is `results/gap_nav/plan-route-random.txt`" in prose
+    assert "(`method:=route-random route_band:=10` on `experiments/exp1-gap-nav.yaml`)" in prose
+    assert "For gap_nav it is still to run" not in prose and "not a search with random" not in prose
 
 
 def test_the_gap_nav_route_random_plan_is_the_random_arm_in_the_route_band():
@@ -414,3 +413,49 @@ def test_the_gap_nav_route_random_plan_is_the_random_arm_in_the_route_band():
         assert (c.scenarios, c.launch) == (rand.scenarios, rand.launch) == (350, "train")
         want = [a.replace("method:=random", "method:=route-random") for a in rand.args] + ["route_band:=10"]
         assert c.args == want
+
+
+GAP_ROUTE_RANDOM = [f"exp1-gap-nav-route-random-s{k}" for k in (0, 1, 2)]
+
+
+def test_the_gap_nav_route_random_arm_is_what_its_exports_say():
+    # Issue #68 item 11: results/gap_nav/plan-route-random.txt, run; its table is the plan's
+    # stack_study command; the counts, ratios and Fisher's tests recomputed with this file's code.
+    import sys
+
+    from scipy.stats import fisher_exact, mannwhitneyu
+
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+    from asg_analysis import stack_study
+
+    s = stack_study.study_seeds(GAP, GAP_SEARCH, GAP_ROUTE_RANDOM)
+    text = open(DOC).read()
+    assert between(text, "gap_nav route-random table").strip() == stack_study.markdown_seeds(s).strip()
+    with open(os.path.join(GAP, "route-random.json")) as f:
+        assert json.load(f) == json.loads(json.dumps(s))
+    per_seed, pooled = [], [0, 0]
+    for name in GAP_ROUTE_RANDOM:
+        settings, rows = gap_export(name)
+        assert sorted(r["job"] for r in rows) == list(range(350)) and settings["total"] == 350
+        assert settings["method_config"]["band"] == 10.0
+        k = sum(map(gap_fails, rows))
+        per_seed.append(k)
+        pooled[0] += k
+        pooled[1] += len(rows)
+    _, warm, searched, seeds = gap_figures()
+    arm = [warm[0] + searched[0], warm[1] + searched[1]]
+    assert (arm, pooled) == ([287, 1050], [54, 1050])
+
+    def p(a, b):
+        return fisher_exact([[a[0], a[1] - a[0]], [b[0], b[1] - b[0]]])[1]
+
+    prose = " ".join(text.split())
+    ratio = (arm[0] / arm[1]) / (pooled[0] / pooled[1])
+    assert f"**The search adds {ratio:.1f}x over route-random.**" in prose
+    assert f"MAP-Elites found {arm[0]} failures in its 1,050 scenarios, and route-random found {pooled[0]}" in prose
+    assert f"the plan's primary test, gives p = {p(arm, pooled):.2g}" in prose
+    assert min(len(v) for v in seeds.values()) > max(per_seed)  # every MAP-Elites seed above every route-random seed
+    mw = mannwhitneyu([len(v) for v in seeds.values()], per_seed, alternative="two-sided", method="exact").pvalue
+    assert f"the Mann-Whitney p is {mw:.1f}" in prose
+    rate_w, rate_r = 1000 * warm[0] / warm[1], 1000 * pooled[0] / pooled[1]
+    assert f"{rate_r:.1f} against {rate_w:.1f} per 1,000, p = {p(pooled, warm):.2g}" in prose

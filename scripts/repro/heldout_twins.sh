@@ -16,7 +16,7 @@ export LP_NUM_THREADS=1
 cd "$REPO"  # relative paths: the records hold no machine's paths
 MODELS=catkin_ws/src/asg_perception/models
 made=results/hardening/heldout-findings.json
-field() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))$2)" "$made"; }
+field() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))$1)" "$made"; }
 mkdir -p "$WORK" "$OUT"
 log "heldout-findings rendered again as built: $(field "['frames']") frames, seed $(field "['seed']")"
 [ -f "$WORK/heldout-findings/frames/manifest.csv" ] ||
