@@ -268,6 +268,7 @@ void SceneWorkerROS::execute(const asg_msgs::RunScenarioGoalConstPtr& goal) {
                                                  : "stack node(s) not up within ") +
                       formatSeconds(params_.ack_timeout) + ": " + missing);
 
+  if (params_.lockstep) recordNodeUris();  // whom to blame if a node dies mid-run
   // The lockstep run loop of the simulator core; this class is its stack side (below).
   run_start_ = std::chrono::steady_clock::now();
   const LoopEnd end = runLoop(runner_.get(), this);

@@ -68,6 +68,12 @@ class SceneWorkerROS : private LoopStack {
   bool waitForNodes(std::string* missing);
   // Lockstep: waits for the command answering `stamp`; false on timeout or preemption.
   bool waitForCommand(const ros::Time& stamp, Command* out, std::string* why);
+  // Each stack node's XML-RPC URI as the master gives it when the run starts, and, on a command
+  // timeout, the first node (the labels node first) that has since died or restarted: its URI
+  // changed or no longer answers ("" when every one is the same process, still answering).
+  void recordNodeUris();
+  std::string goneNode();
+  std::vector<std::pair<std::string, std::string>> node_uris_;  // (node, URI) of the current run
   // The run loop's stack side (LoopStack).
   bool stateEveryTick() const override { return params_.odom_every_tick; }
   void onState(double t) override;

@@ -8,6 +8,14 @@
 
 #include <ros/master.h>
 #include <ros/names.h>
+#include <ros/network.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
 
 #include "scene_worker_ros.hpp"
@@ -130,7 +138,14 @@ bool SceneWorkerROS::waitForCommand(const ros::Time& stamp, Command* out, std::s
       char buf[120];
       std::snprintf(buf, sizeof(buf), " within %.1f s (wall clock); has it died or hung?",
                     params_.command_timeout);
-      *why = protocol_->blame(nanos(stamp)) + buf;
+      const std::string blamed = protocol_->blame(nanos(stamp)) + buf;
+      // A node that died after its last message reached this worker but not the next node of the
+      // stack (a segmenter killed between its two subscribers) would leave the blame on the
+      // wrong node: a node that is no longer the process that acknowledged the run is named first.
+      lock.unlock();
+      const std::string gone = goneNode();
+      lock.lock();
+      *why = gone.empty() ? blamed : gone + "; " + blamed.substr(blamed.find(':') + 2);
       return false;
     }
     cv_.wait_for(lock, std::chrono::milliseconds(50));
@@ -139,4 +154,71 @@ bool SceneWorkerROS::waitForCommand(const ros::Time& stamp, Command* out, std::s
   return true;
 }
 
+namespace {
+
+// The XML-RPC URI the master holds for `node` ("" when it has none).
+std::string lookupNode(const std::string& node) {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  args[1] = node;
+  if (!ros::master::execute("lookupNode", args, result, payload, false)) return "";
+  return payload.getType() == XmlRpc::XmlRpcValue::TypeString ? std::string(payload) : "";
+}
+
+// Whether something still listens at the host and port of `uri`: a TCP connection within 0.5 s.
+// A process that died leaves its port closed (refused at once); a hung one still accepts, so this
+// names only the dead, and cannot itself hang.
+bool listening(const std::string& uri) {
+  std::string host;
+  uint32_t port = 0;
+  if (!ros::network::splitURI(uri, host, port)) return true;  // nothing to say: keep the blame
+  addrinfo hints{}, *found = nullptr;
+  hints.ai_socktype = SOCK_STREAM;
+  if (getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found) != 0 || !found) return true;
+  bool open = false;
+  const int fd = socket(found->ai_family, found->ai_socktype, found->ai_protocol);
+  if (fd >= 0) {
+    fcntl(fd, F_SETFL, fcntl(fd, F_GETFL, 0) | O_NONBLOCK);
+    int rc = connect(fd, found->ai_addr, found->ai_addrlen);
+    if (rc == 0) {
+      open = true;
+    } else if (errno == EINPROGRESS) {
+      pollfd p{fd, POLLOUT, 0};
+      int err = 0;
+      socklen_t len = sizeof(err);
+      open = poll(&p, 1, 500) == 1 && getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) == 0 && err == 0;
+    }
+    close(fd);
+  } else {
+    open = true;
+  }
+  freeaddrinfo(found);
+  return open;
+}
+
+}  // namespace
+
+void SceneWorkerROS::recordNodeUris() {
+  node_uris_.clear();
+  std::vector<std::string> order;
+  if (!params_.labels_node.empty()) order.push_back(params_.labels_node);
+  for (const auto& n : params_.stack_nodes)
+    if (n != params_.labels_node) order.push_back(n);
+  for (const auto& n : order) {
+    const std::string name = ros::names::append(nh_.getNamespace(), n);
+    node_uris_.emplace_back(n, lookupNode(name));
+  }
+}
+
+std::string SceneWorkerROS::goneNode() {
+  for (const auto& [node, uri] : node_uris_) {
+    if (uri.empty()) continue;  // not known at the start: nothing to compare
+    const std::string now = lookupNode(ros::names::append(nh_.getNamespace(), node));
+    if (now != uri) return node + ": restarted or gone during the run (the master's URI for it changed)";
+    if (!listening(uri)) return node + ": died during the run (nothing listens at its XML-RPC port)";
+  }
+  return "";
+}
+
 }  // namespace asg_sim
+
