@@ -134,3 +134,25 @@ def test_an_error_outside_any_test_case_is_a_failure(tmp_path):
     assert "FAILED rosunit-sound_runs.xml::unittest.suite.TestSuite" in res.stdout
     assert "setUpClass" in res.stdout
     assert res.stdout.splitlines()[-1] == "tests: 1 passed, 3 failed, 0 skipped"
+
+
+def test_rostest_repeat_reads_a_failing_summary_through_its_colours(tmp_path):
+    """rostest colours a failing count (ESC[1;31m * FAILURES: 1 ESC[0m); the repeat's record read
+    such a line as '?' (issue #68 item 4's first sound_runs repeat)."""
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    (fake / "rostest").write_text(
+        "#!/bin/bash\n"
+        'printf "SUMMARY\\n\\033[1;31m * RESULT: FAIL\\033[0m\\n * TESTS: 8\\n * ERRORS: 0\\n'
+        '\\033[1;31m * FAILURES: 1\\033[0m\\n"\nexit 1\n'
+    )
+    (fake / "rostest").chmod(0o755)
+    out = tmp_path / "record.txt"
+    script = os.path.join(REPO, "scripts", "repro", "rostest_repeat.sh")
+    env = dict(os.environ, ASG_ROSTEST=str(fake / "rostest"))
+    r = subprocess.run(["bash", script, "2", str(out), "a note", "x.test"], env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-800:]
+    rows = [ln.split() for ln in out.read_text().splitlines() if not ln.startswith("#")]
+    assert [row[:6] for row in rows] == [["x.test", str(k), "FAIL", "8", "1", "0"] for k in (1, 2)]
+    assert (tmp_path / "record-x.test-1.log").exists()  # a failed run's log is kept beside the record
+    assert "x.test: 0 of 2 passed" in r.stdout

@@ -28,12 +28,14 @@ for t in "$@"; do
     start="$(date -u +%H:%M:%S)"
     t0=$(date +%s.%N)
     rc=0
-    rostest asg_tests "$t" > "$LOGS/$t.$k.log" 2>&1 || rc=$?
+    "${ASG_ROSTEST:-rostest}" asg_tests "$t" > "$LOGS/$t.$k.log" 2>&1 || rc=$?  # (ASG_ROSTEST: this script's test)
     wall=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN {print b - a}')
     # rostest's summary: "SUMMARY ... * RESULT: SUCCESS", "* TESTS: 5", "* ERRORS: 0", "* FAILURES: 0"
-    tests="$(sed -n 's/^ \* TESTS: //p' "$LOGS/$t.$k.log" | tail -1)"
-    errors="$(sed -n 's/^ \* ERRORS: //p' "$LOGS/$t.$k.log" | tail -1)"
-    failures="$(sed -n 's/^ \* FAILURES: //p' "$LOGS/$t.$k.log" | tail -1)"
+    # (rostest colours a failing count: its ANSI escapes are taken out first)
+    plain="$(sed 's/\x1b\[[0-9;]*m//g' "$LOGS/$t.$k.log")"
+    tests="$(sed -n 's/^ \* TESTS: //p' <<< "$plain" | tail -1)"
+    errors="$(sed -n 's/^ \* ERRORS: //p' <<< "$plain" | tail -1)"
+    failures="$(sed -n 's/^ \* FAILURES: //p' <<< "$plain" | tail -1)"
     result=PASS
     [ "$rc" -eq 0 ] && [ "${errors:-1}" = 0 ] && [ "${failures:-1}" = 0 ] || result=FAIL
     printf '%s %d %s %s %s %s %.1f %s %s\n' "$t" "$k" "$result" "${tests:-?}" "${failures:-?}" "${errors:-?}" \
