@@ -143,6 +143,7 @@ def test_rostest_repeat_reads_a_failing_summary_through_its_colours(tmp_path):
     fake.mkdir()
     (fake / "rostest").write_text(
         "#!/bin/bash\n"
+        f'echo "Traceback: {REPO}/tests/x_check.py, log in $HOME/.ros/log/x.log"\n'
         'printf "SUMMARY\\n\\033[1;31m * RESULT: FAIL\\033[0m\\n * TESTS: 8\\n * ERRORS: 0\\n'
         '\\033[1;31m * FAILURES: 1\\033[0m\\n"\nexit 1\n'
     )
@@ -154,5 +155,6 @@ def test_rostest_repeat_reads_a_failing_summary_through_its_colours(tmp_path):
     assert r.returncode == 0, r.stderr[-800:]
     rows = [ln.split() for ln in out.read_text().splitlines() if not ln.startswith("#")]
     assert [row[:6] for row in rows] == [["x.test", str(k), "FAIL", "8", "1", "0"] for k in (1, 2)]
-    assert (tmp_path / "record-x.test-1.log").exists()  # a failed run's log is kept beside the record
+    kept = (tmp_path / "record-x.test-1.log").read_text()  # a failed run's log is kept beside the record,
+    assert "Traceback: $REPO/tests/x_check.py, log in $ROS_HOME/log/x.log" in kept  # with no machine's paths
     assert "x.test: 0 of 2 passed" in r.stdout

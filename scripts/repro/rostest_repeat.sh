@@ -40,7 +40,9 @@ for t in "$@"; do
     [ "$rc" -eq 0 ] && [ "${errors:-1}" = 0 ] && [ "${failures:-1}" = 0 ] || result=FAIL
     printf '%s %d %s %s %s %s %.1f %s %s\n' "$t" "$k" "$result" "${tests:-?}" "${failures:-?}" "${errors:-?}" \
         "$wall" "$load" "$start" >> "$OUT"
-    [ "$result" = PASS ] || cp "$LOGS/$t.$k.log" "${OUT%.txt}-$t-$k.log"
+    # a failed run's log is kept beside the record, with the machine's paths made placeholders
+    [ "$result" = PASS ] || sed -e "s|$REPO|\$REPO|g" -e "s|${ROS_HOME:-$HOME/.ros}|\$ROS_HOME|g" \
+      -e "s|$HOME|~|g" "$LOGS/$t.$k.log" > "${OUT%.txt}-$t-$k.log"
     log "$t run $k: $result in ${wall%.*} s (load $load)"
   done
 done

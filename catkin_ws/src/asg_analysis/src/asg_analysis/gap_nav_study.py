@@ -188,6 +188,34 @@ def route_random_arm(folder: str, names: Sequence[str]):
     return {"campaigns": list(names), "pooled": rate(*pooled), "seeds": seeds, "struck_first_25m": early}
 
 
+def comparisons(r_uniform: Dict, r_warm: Dict, r_searched: Dict, r_arm: Dict, route) -> tuple:
+    """The ratios of the pooled rates and Fisher's exact tests between them; with route-random's
+    arm (route_random_arm) the search against it too."""
+    ratio = {
+        "arm_over_uniform": r_arm["per_1000"] / r_uniform["per_1000"],
+        "where_obstacles_may_stand": r_warm["per_1000"] / r_uniform["per_1000"],
+        "search_over_warmup": r_searched["per_1000"] / r_warm["per_1000"],
+        "arm_over_warmup": r_arm["per_1000"] / r_warm["per_1000"],
+    }
+    tests = {
+        "warmup_vs_uniform": fisher(r_warm, r_uniform),
+        "searched_vs_warmup": fisher(r_searched, r_warm),
+    }
+    if route:
+        rr = route["pooled"]
+        ratio.update(
+            arm_over_route_random=r_arm["per_1000"] / rr["per_1000"],
+            searched_over_route_random=r_searched["per_1000"] / rr["per_1000"],
+            route_random_over_uniform=rr["per_1000"] / r_uniform["per_1000"],
+        )
+        tests.update(
+            arm_vs_route_random=fisher(r_arm, rr),
+            searched_vs_route_random=fisher(r_searched, rr),
+            route_random_vs_warmup=fisher(rr, r_warm),
+        )
+    return ratio, tests
+
+
 def study(
     folder: str = FOLDER,
     search: Sequence[str] = SEARCH,
@@ -248,28 +276,7 @@ def study(
     r_arm = rate(warm[0] + searched[0], warm[1] + searched[1])
     failures = r_arm["failures"]
     route = route_random_arm(folder, route_random)
-    ratio = {
-        "arm_over_uniform": r_arm["per_1000"] / r_uniform["per_1000"],
-        "where_obstacles_may_stand": r_warm["per_1000"] / r_uniform["per_1000"],
-        "search_over_warmup": r_searched["per_1000"] / r_warm["per_1000"],
-        "arm_over_warmup": r_arm["per_1000"] / r_warm["per_1000"],
-    }
-    tests = {
-        "warmup_vs_uniform": fisher(r_warm, r_uniform),
-        "searched_vs_warmup": fisher(r_searched, r_warm),
-    }
-    if route:
-        rr = route["pooled"]
-        ratio.update(
-            arm_over_route_random=r_arm["per_1000"] / rr["per_1000"],
-            searched_over_route_random=r_searched["per_1000"] / rr["per_1000"],
-            route_random_over_uniform=rr["per_1000"] / r_uniform["per_1000"],
-        )
-        tests.update(
-            arm_vs_route_random=fisher(r_arm, rr),
-            searched_vs_route_random=fisher(r_searched, rr),
-            route_random_vs_warmup=fisher(rr, r_warm),
-        )
+    ratio, tests = comparisons(r_uniform, r_warm, r_searched, r_arm, route)
     return {
         "search": list(search),
         "random": list(random),
