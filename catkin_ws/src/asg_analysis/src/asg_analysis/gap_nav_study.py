@@ -152,6 +152,42 @@ def struck_early(rows, start, goal) -> int:
     return sum(r["collision_with"] is not None and along(r, start, goal) < FIRST_M for r in rows)
 
 
+def warmup_rerun(folder: str, search: Sequence[str]):
+    """MAP-Elites' warm-up scenarios run again on another machine (results/gap_nav/warmup-rerun/
+    CAMPAIGN.jsonl, `rerun run ... --top 35 --select first`): per seed and pooled, the failures stored
+    and again, the layouts that failed in one run and not the other, and Fisher's exact test of
+    the two pooled counts and McNemar's exact test of the pairs; None until its files are in."""
+    from scipy.stats import binomtest
+
+    paths = [os.path.join(folder, "warmup-rerun", f"{name}.jsonl") for name in search]
+    if not all(os.path.exists(p) for p in paths):
+        return None
+    seeds, stored_n, again_n, n, only_stored, only_again = {}, 0, 0, 0, 0, 0
+    for name, path in zip(search, paths):
+        settings, _, rows = read(folder, name)
+        k = init_random(int(settings.get("total") or len(rows)))
+        stored = {r["job"]: RunOutcome.of(r).fails for r in rows if r["job"] < k}
+        with open(path, encoding="utf-8") as f:
+            again = {r["job"]: RunOutcome.of(r) for r in map(json.loads, f)}
+        if sorted(again) != sorted(stored) or any(o.error for o in again.values()):
+            raise ValueError(f"{path}: not every warm-up job of {name} ran again without an error")
+        a = {j: o.fails for j, o in again.items()}
+        seeds[name] = {"scenarios": len(stored), "stored": sum(stored.values()), "again": sum(a.values())}
+        stored_n, again_n, n = stored_n + sum(stored.values()), again_n + sum(a.values()), n + len(stored)
+        only_stored += sum(stored[j] and not a[j] for j in stored)
+        only_again += sum(a[j] and not stored[j] for j in stored)
+    discordant = only_stored + only_again
+    return {
+        "seeds": seeds,
+        "stored": rate(stored_n, n),
+        "again": rate(again_n, n),
+        "fisher_p": fisher(rate(stored_n, n), rate(again_n, n)),
+        "only_stored": only_stored,
+        "only_again": only_again,
+        "mcnemar_p": float(binomtest(only_stored, discordant).pvalue) if discordant else 1.0,
+    }
+
+
 def reruns(path: str) -> Dict:
     """How many of the repetitions each stored failure of a run_spread file failed again."""
     with open(path, encoding="utf-8") as f:
@@ -285,6 +321,7 @@ def study(
         "searched": r_searched,
         "arm": r_arm,
         "route_random": route,
+        "warmup_rerun": warmup_rerun(folder, search),
         "ratio": ratio,
         "fisher_p": tests,
         "seeds": seeds,
@@ -346,6 +383,15 @@ def markdown(s: Dict) -> str:
             f"the plan's primary test), its searched scenarios {q['searched_over_route_random']:.2f}x "
             f"(p = {p['searched_vs_route_random']:.2g}); route-random against the warm-up p = "
             f"{p['route_random_vs_warmup']:.2g}."
+        )
+    w = s.get("warmup_rerun")
+    if w:
+        a, b = w["stored"], w["again"]
+        out.append(
+            f"The warm-up's {a['scenarios']} scenarios run again on this project's AMX Xeon (`rerun run ... --top 35 "
+            f"--select first`): {b['failures']} failures ({b['per_1000']:.1f} per 1,000) against {a['failures']} stored "
+            f"({a['per_1000']:.1f}), Fisher's exact test p = {w['fisher_p']:.2g}; {w['only_stored']} layouts failed only "
+            f"as stored and {w['only_again']} only again (McNemar's exact test p = {w['mcnemar_p']:.2g})."
         )
     out += [
         "",
