@@ -40,3 +40,26 @@ def test_a_bf16_experiment_without_its_backend_is_refused_naming_unet_backend():
 def test_the_default_experiment_launches_as_it_is():
     r = dump()
     assert "asg_launch_check: 'ok" in r.stdout and "/worker_0/" in r.stdout, r.stdout + r.stderr
+
+
+def test_the_pages_train_launch_commands_pass_the_check():
+    """Each `roslaunch ... train.launch ...` of the README's and docs/' bash blocks, as written
+    ($PWD: the repository; commands with other shell variables left out), passes the launch check:
+    the gap_nav spread command lost it when the default experiment became exp1-route-wide.yaml."""
+    import glob
+    import re
+
+    pages = [os.path.join(REPO, "README.md")] + sorted(glob.glob(os.path.join(REPO, "docs", "*.md")))
+    commands = []
+    for page in pages:
+        for block in re.findall(r"```bash\n(.*?)```", open(page, encoding="utf-8").read(), re.S):
+            for line in block.replace("\\\n", " ").splitlines():
+                if re.search(r"roslaunch (\S+ )?\S*train\.launch", line):
+                    words = line.split("train.launch", 1)[1].split("&")[0].split("#")[0].split()
+                    args = [w.replace("$PWD", REPO) for w in words if ":=" in w]
+                    if not any("$" in a for a in args):
+                        commands.append((os.path.basename(page), args))
+    assert any("stack:=gap_nav" in args for _, args in commands), commands
+    for page, args in commands:
+        r = dump(*args)
+        assert "asg_launch_check: 'ok" in r.stdout, (page, args, (r.stdout + r.stderr)[-800:])

@@ -459,3 +459,33 @@ def test_the_gap_nav_route_random_arm_is_what_its_exports_say():
     assert f"the Mann-Whitney p is {mw:.1f}" in prose
     rate_w, rate_r = 1000 * warm[0] / warm[1], 1000 * pooled[0] / pooled[1]
     assert f"{rate_r:.1f} against {rate_w:.1f} per 1,000, p = {p(pooled, warm):.2g}" in prose
+
+
+def test_the_gap_nav_warm_up_run_again_is_what_its_rows_say():
+    # MAP-Elites' warm-up (the first 35 jobs a seed) run again on the AMX Xeon, where route-random ran
+    from scipy.stats import binomtest, fisher_exact
+
+    _, warm, searched, _ = gap_figures()
+    again, only_stored, only_again = [0, 0], 0, 0
+    for name in GAP_SEARCH:
+        stored = {r["job"]: gap_fails(r) for r in gap_export(name)[1] if r["job"] < 35}
+        with open(os.path.join(GAP, "warmup-rerun", f"{name}.jsonl")) as f:
+            rows = {r["job"]: gap_fails(r) for r in map(json.loads, f)}
+        assert sorted(rows) == sorted(stored) == list(range(35))
+        again[0] += sum(rows.values())
+        again[1] += len(rows)
+        only_stored += sum(stored[j] and not rows[j] for j in rows)
+        only_again += sum(rows[j] and not stored[j] for j in rows)
+    route = [sum(sum(map(gap_fails, gap_export(n)[1])) for n in GAP_ROUTE_RANDOM), 1050]
+
+    def p(a, b):
+        return fisher_exact([[a[0], a[1] - a[0]], [b[0], b[1] - b[0]]])[1]
+
+    prose = " ".join(open(DOC).read().split())
+    assert f"It failed {again[0]} times in its {again[1]} scenarios, against {warm[0]} as stored on the EPYC" in prose
+    mc = binomtest(only_stored, only_stored + only_again).pvalue
+    assert f"(Fisher p = {p(again, warm):.2g}, McNemar p = {mc:.2g})" in prose
+    rate = {k: 1000 * v[0] / v[1] for k, v in dict(a=again, r=route, w=warm).items()}
+    assert f"{rate['a']:.1f} against {rate['r']:.1f} per 1,000, p = {p(again, route):.2g}" in prose
+    arm = 1000 * (warm[0] + searched[0]) / (warm[1] + searched[1])
+    assert f"{arm / rate['a']:.1f}x as often as the warm-up run again on the Xeon, and {arm / rate['w']:.1f}x" in prose

@@ -313,6 +313,9 @@ def study(
     failures = r_arm["failures"]
     route = route_random_arm(folder, route_random)
     ratio, tests = comparisons(r_uniform, r_warm, r_searched, r_arm, route)
+    again = warmup_rerun(folder, search)
+    if again and route:  # on one machine: the warm-up run again against route-random
+        again["again_vs_route_random_p"] = fisher(again["again"], route["pooled"])
     return {
         "search": list(search),
         "random": list(random),
@@ -321,7 +324,7 @@ def study(
         "searched": r_searched,
         "arm": r_arm,
         "route_random": route,
-        "warmup_rerun": warmup_rerun(folder, search),
+        "warmup_rerun": again,
         "ratio": ratio,
         "fisher_p": tests,
         "seeds": seeds,
@@ -391,7 +394,12 @@ def markdown(s: Dict) -> str:
             f"The warm-up's {a['scenarios']} scenarios run again on this project's AMX Xeon (`rerun run ... --top 35 "
             f"--select first`): {b['failures']} failures ({b['per_1000']:.1f} per 1,000) against {a['failures']} stored "
             f"({a['per_1000']:.1f}), Fisher's exact test p = {w['fisher_p']:.2g}; {w['only_stored']} layouts failed only "
-            f"as stored and {w['only_again']} only again (McNemar's exact test p = {w['mcnemar_p']:.2g})."
+            f"as stored and {w['only_again']} only again (McNemar's exact test p = {w['mcnemar_p']:.2g})"
+            + (
+                f"; against route-random, on the same machine, p = {w['again_vs_route_random_p']:.2g}."
+                if "again_vs_route_random_p" in w
+                else "."
+            )
         )
     out += [
         "",
