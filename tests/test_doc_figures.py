@@ -136,12 +136,22 @@ def test_the_rostest_repeat_block_is_the_records():
         if ln.startswith("| `")
     ]
     assert rows and all(int(r.split("|")[2]) >= 20 for r in rows), "each test ran 20 times in a row"
-    assert [r.split("|")[1].strip() for r in rows] == ["`stack_faults.test`", "`campaign_faults.test`", "`sound_runs.test`"]
-    sound = [ln.split() for ln in open(os.path.join(REPO, "results", "flaky", "r6-sound-runs-repeat.txt")) if ln[0] != "#"]
+    assert [r.split("|")[1].strip() for r in rows] == [
+        "`stack_faults.test`",
+        "`campaign_faults.test`",
+        "`sound_runs.test`",
+    ]
+    sound = [
+        ln.split() for ln in open(os.path.join(REPO, "results", "flaky", "r6-sound-runs-repeat.txt")) if ln[0] != "#"
+    ]
     prose = " ".join(text.split())
     import statistics
 
     med = statistics.median(float(r[6]) for r in sound)
     assert f"{sum(r[2] == 'PASS' for r in sound)} of {len(sound)} passed, a median {med:.1f} s a run" in prose
-    first = [ln.split() for ln in open(os.path.join(REPO, "results", "flaky", "r6-sound-runs-repeat-75eba8c.txt")) if ln[0] != "#"]
+    first = [
+        ln.split()
+        for ln in open(os.path.join(REPO, "results", "flaky", "r6-sound-runs-repeat-75eba8c.txt"))
+        if ln[0] != "#"
+    ]
     assert [r[2] for r in first] == ["PASS", "FAIL", "PASS"] and "stopped after 3 runs). In run 2, test_7" in prose

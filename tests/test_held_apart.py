@@ -206,7 +206,9 @@ def test_the_per_pixel_figures_without_the_twins(found):
     def figures(path):
         with open(os.path.join(HARD, path), encoding="utf-8") as f:
             e = json.load(f)
-        return e["frames"], {a: (r["iou"]["non_traversable"], r["shadow_false_obstacle_rate"]) for a, r in e["results"].items()}
+        return e["frames"], {
+            a: (r["iou"]["non_traversable"], r["shadow_false_obstacle_rate"]) for a, r in e["results"].items()
+        }
 
     with open(os.path.join(HARD, "twins", "heldout-findings.json"), encoding="utf-8") as f:
         again_made = json.load(f)

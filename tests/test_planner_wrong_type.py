@@ -87,16 +87,28 @@ def test_the_scene_worker_refuses_a_wrongly_typed_registration_key_by_name(tmp_p
     env = dict(_env(), ROS_LOG_DIR=str(tmp_path))
     core = _master(env)
     try:
-        for key, value in (("name", "mine"), ("nodes", "[planner]"), ("mode", "free"), ("sim_time", "sometimes"), ("acks", "1")):
+        for key, value in (
+            ("name", "mine"),
+            ("nodes", "[planner]"),
+            ("mode", "free"),
+            ("sim_time", "sometimes"),
+            ("acks", "1"),
+        ):
             subprocess.run(["rosparam", "set", f"/reg/stack/{key}", value], env=env, check=True)
-        r = subprocess.run([binary, "__ns:=/reg", "__name:=scene_worker"], env=env, capture_output=True, text=True, timeout=60)
+        r = subprocess.run(
+            [binary, "__ns:=/reg", "__name:=scene_worker"], env=env, capture_output=True, text=True, timeout=60
+        )
         out = r.stdout + r.stderr
         assert r.returncode != 0, out[-500:]
         assert "stack/sim_time = 'sometimes': must be true or false" in out, out[-800:]
         assert "stack/acks = 1: must be true or false" in out, out[-800:]
         subprocess.run(["rosparam", "set", "/reg/stack/nodes", "planner"], env=env, check=True)
-        r = subprocess.run([binary, "__ns:=/reg", "__name:=scene_worker"], env=env, capture_output=True, text=True, timeout=60)
-        assert "stack/nodes = 'planner': must be a list of node names" in r.stdout + r.stderr, (r.stdout + r.stderr)[-800:]
+        r = subprocess.run(
+            [binary, "__ns:=/reg", "__name:=scene_worker"], env=env, capture_output=True, text=True, timeout=60
+        )
+        assert "stack/nodes = 'planner': must be a list of node names" in r.stdout + r.stderr, (r.stdout + r.stderr)[
+            -800:
+        ]
     finally:
         core.terminate()
         core.wait(timeout=20)

@@ -423,11 +423,7 @@ def markdown(s: Dict) -> str:
         f"Struck an obstacle less than {s['first_m']:g} m along the route from the start: {e['arm']} of the "
         f"arm's {e['arm_failures']} failures, {e['warmup']} of its warm-up's {e['warmup_failures']}, {e['uniform']} "
         f"of uniform random's {e['uniform_failures']}"
-        + (
-            f", {route['struck_first_25m']} of route-random's {route['pooled']['failures']}."
-            if route
-            else "."
-        ),
+        + (f", {route['struck_first_25m']} of route-random's {route['pooled']['failures']}." if route else "."),
     ]
     r = s["reruns"]
     if r:

@@ -139,7 +139,9 @@ def pixels(folder: str = HARD):
     again = {k: os.path.join(folder, TWINS, f"evaluation-{SET}-{k}.json") for k in (RERENDERED, LEFT_OUT)}
     if not all(os.path.exists(p) for p in again.values()):
         return None
-    rounds = sorted(glob.glob(os.path.join(folder, f"evaluation-{SET}-*.json")), key=lambda p: int(p[:-5].rsplit("-", 1)[1]))
+    rounds = sorted(
+        glob.glob(os.path.join(folder, f"evaluation-{SET}-*.json")), key=lambda p: int(p[:-5].rsplit("-", 1)[1])
+    )
     out = {"committed": _figures(rounds[-1]), **{k: _figures(p) for k, p in again.items()}}
     with open(os.path.join(folder, TWINS, f"{SET}.json"), encoding="utf-8") as f:
         made_again = json.load(f)
