@@ -23,28 +23,23 @@ log "style: ruff format --check and ruff check (ruff.toml)"
 mkdir -p "$RESULTS/style"
 /usr/bin/python3 "$REPO/scripts/ci/check_style.py" "$REPO" "$RESULTS/style/ruff.xml"
 
-log "gtest + rostest (catkin_make run_tests)"
-export LP_NUM_THREADS=1
-# Test binaries build on both cores; the tests then run one at a time: the end-to-end rostests
-# each run two workers with the U-Net, and side by side they would starve each other.
-(cd "$WS" && catkin_make tests -j2 2>&1 | grep -E 'error|warning' ) || true
-# The console shows each finished test file and every failure; the whole output, with the
-# [ERROR] lines that fault-injection tests cause on purpose, goes to build/run_tests.log.
-(cd "$WS" && catkin_make run_tests -j1 2>&1 | /usr/bin/python3 "$REPO/scripts/ci/console_filter.py" \
-    "$WS/build/run_tests.log") || true
-
+# The install check reconfigures the build folder (another install prefix, then back): it runs
+# before the test binaries are built and the tests read that folder.
 log "catkin_make install (into build/install_check)"
 /usr/bin/python3 "$REPO/scripts/ci/check_install.py" "$WS" "$RESULTS/install/install.xml"
 
-log "pytest (Python cores)"
-for t in "$WS"/src/*/test; do
-  pkg="$(basename "$(dirname "$t")")"
-  ls "$t"/test_*.py >/dev/null 2>&1 || continue
-  /usr/bin/python3 -m pytest -q -p no:cacheprovider --ignore="$t/rostest" \
-      --junitxml="$RESULTS/pytest/$pkg.xml" "$t" || true
-done
+log "building the test binaries"
+export LP_NUM_THREADS=1
+(cd "$WS" && catkin_make tests -j2 2>&1 | grep -E 'error|warning' ) || true
 
-log "pytest (end-to-end tests in tests/: scale-out over two hosts, ...)"
-/usr/bin/python3 -m pytest -q -p no:cacheprovider --junitxml="$RESULTS/pytest/tests.xml" "$REPO"/tests/test_*.py || true
+# gtest, rostest and pytest files side by side, one job a core, longest first by the times of the
+# newest record (issue #69): most of them use one core at a time. The console shows each finished
+# job and the end of a failed one's log; each job's whole output, with the [ERROR] lines that
+# fault-injection tests cause on purpose, is in build/test_logs/. ASG_TEST_JOBS=1 runs them one
+# at a time.
+log "gtest + rostest + pytest, ${ASG_TEST_JOBS:-$(nproc)} side by side (logs in build/test_logs/)"
+rm -rf "$WS/build/test_logs"
+/usr/bin/python3 "$REPO/scripts/ci/run_parallel.py" "$WS" "$REPO" "$RESULTS" "$WS/build/test_logs" \
+    --jobs "${ASG_TEST_JOBS:-$(nproc)}" --estimates "$REPO/results/suite_times/r6-ae5392e-xeon-noamx.json"
 
 /usr/bin/python3 "$REPO/scripts/ci/summarize_tests.py" "$RESULTS"

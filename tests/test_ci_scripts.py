@@ -158,3 +158,72 @@ def test_rostest_repeat_reads_a_failing_summary_through_its_colours(tmp_path):
     kept = (tmp_path / "record-x.test-1.log").read_text()  # a failed run's log is kept beside the record,
     assert "Traceback: $REPO/tests/x_check.py, log in $ROS_HOME/log/x.log" in kept  # with no machine's paths
     assert "x.test: 0 of 2 passed" in r.stdout
+
+
+def parallel():
+    sys.path.insert(0, os.path.join(REPO, "scripts", "ci"))
+    import run_parallel
+
+    return run_parallel
+
+
+def test_the_lanes_take_the_longest_job_first_and_run_side_by_side(tmp_path):
+    rp = parallel()
+    marks = tmp_path / "marks"
+
+    def job(name, seconds, estimate):
+        xml = tmp_path / f"{name}.xml"
+        code = (
+            f"import time; open({str(marks)!r}, 'a').write('start {name}\\n'); time.sleep({seconds}); "
+            f"open({str(xml)!r}, 'w').write('<testsuite/>')"
+        )
+        return rp.Job(name, [sys.executable, "-c", code], str(tmp_path), str(xml), estimate)
+
+    jobs = [job("short", 0.1, 1.0), job("long", 1.0, 9.0), job("mid", 0.5, 5.0)]
+    done = rp.schedule(jobs, 2, str(tmp_path), timeout=60)
+    starts = [ln.split()[1] for ln in marks.read_text().splitlines()]
+    assert set(starts[:2]) == {"long", "mid"} and starts[2] == "short"  # longest estimates first
+    assert sorted(j.name for j in done) == ["long", "mid", "short"] and all(j.rc == 0 for j in done)
+    # side by side: the two lanes took about the long job's time, not the sum of all three
+    assert max(j.seconds for j in done) < sum(j.seconds for j in done)
+
+
+def test_a_job_that_leaves_no_result_is_counted_as_a_failure(tmp_path):
+    rp = parallel()
+    crash = rp.Job(
+        "crash", [sys.executable, "-c", "raise SystemExit(3)"], str(tmp_path), str(tmp_path / "r" / "crash.xml"), 1
+    )
+    hang = rp.Job("hang", ["bash", "-c", "sleep 60 & sleep 60"], str(tmp_path), str(tmp_path / "r" / "hang.xml"), 1)
+    rp.schedule([crash, hang], 2, str(tmp_path), timeout=1.5)
+    assert crash.rc == 3 and hang.rc < 0 and hang.seconds < 30  # the hung job and its child were killed
+    res = summarize(tmp_path / "r")
+    assert res.returncode == 1
+    assert "exited 3 without writing" in res.stdout and "killed after 2 s" in res.stdout
+    assert res.stdout.splitlines()[-1] == "tests: 0 passed, 2 failed, 0 skipped"
+
+
+def test_tests_folder_files_estimated_long_run_alone_and_name_their_results_as_one_folder(tmp_path):
+    rp = parallel()
+    repo, ws = tmp_path / "repo", tmp_path / "ws"
+    (repo / "tests").mkdir(parents=True)
+    (ws / "src" / "pkg" / "test").mkdir(parents=True)
+    (ws / "src" / "pkg" / "test" / "test_a.py").write_text("def test_a():\n    pass\n")
+    for stem in ("test_big", "test_small", "test_new"):
+        (repo / "tests" / f"{stem}.py").write_text(f"def {stem}_case():\n    pass\n\ndef test_it():\n    pass\n")
+    est = {"tests: tests.test_big": 30.0, "tests: tests.test_small": 2.0, "pkg: test.test_a": 4.0}
+    jobs = {j.name: j for j in rp.pytest_jobs(str(ws), str(repo), str(tmp_path / "res"), est)}
+    assert sorted(jobs) == ["pytest/pkg", "pytest/tests", "pytest/tests/test_big"]
+    assert (jobs["pytest/tests/test_big"].estimate, jobs["pytest/tests"].estimate, jobs["pytest/pkg"].estimate) == (
+        30.0,
+        2.0,
+        4.0,
+    )
+    assert jobs["pytest/tests"].cmd[-2:] == [str(repo / "tests" / "test_new.py"), str(repo / "tests" / "test_small.py")]
+    # a part's results count under its folder's name, as when the folder ran whole
+    part = tmp_path / "res" / "pytest" / "tests"
+    part.mkdir(parents=True)
+    (part / "test_big.xml").write_text(
+        '<testsuite><testcase classname="tests.test_big" name="t" time="3"/></testsuite>'
+    )
+    summarize(tmp_path / "res")
+    assert json.loads((tmp_path / "res" / "times.json").read_text())["files"] == {"tests: tests.test_big": 3.0}

@@ -54,3 +54,31 @@ def test_round_6_against_round_5_on_one_cpu_is_what_the_records_say():
     assert f"The {len(both)} files in both runs took {before:,.0f} s before and {after:,.0f} s after" in text
     grew = b["files"]["asg_tests/rosunit-registered_stacks.xml"] - a["files"]["asg_tests/rosunit-registered_stacks.xml"]
     assert f"`registered_stacks` grew by {grew:.0f} s" in text
+
+
+def block():
+    text = open(os.path.join(REPO, "docs", "testing.md"), encoding="utf-8").read()
+    body = text.split("<!-- suite lanes: begin", 1)[1].split("<!-- suite lanes: end -->", 1)[0]
+    return " ".join(body.split("\n", 1)[1].split())
+
+
+def test_the_suite_side_by_side_against_one_at_a_time_and_round_5_on_one_cpu():
+    text = block()
+    r5, one, lanes = (
+        record(n) for n in ("r5-6d798f4-xeon-noamx.json", "r6-ae5392e-xeon-noamx.json", "r6-ae5392e+lanes-xeon-noamx.json")
+    )
+    assert r5["cpu_class"] == one["cpu_class"] == lanes["cpu_class"] and "no amx" in one["cpu_class"]
+    assert set(one["files"]) == set(lanes["files"])  # the same files, one at a time and side by side
+    for name, r in (
+        ("r5-6d798f4-xeon-noamx.json", r5),
+        ("r6-ae5392e-xeon-noamx.json", one),
+        ("r6-ae5392e+lanes-xeon-noamx.json", lanes),
+    ):
+        minutes = sum(r["files"].values()) / 60
+        assert f"`{name}`" in text and f"{len(r['files'])} files, {minutes:.1f} min of test files, {wall_s(r):,} s in all" in text, name
+    assert f"{wall_s(lanes) / wall_s(one):.2f}x the one-at-a-time run" in text
+    both = [k for k in one["files"]]
+    grew = sum(lanes["files"][k] for k in both) / sum(one["files"][k] for k in both)
+    assert f"each file took {grew:.2f}x as long" in text
+    assert f"{wall_s(lanes) / wall_s(r5):.2f}x round 5's end" in text
+    assert f"{wall_s(one) / wall_s(r5):.2f}x before" in text

@@ -37,14 +37,15 @@ def suite_level(path, root, suite):
 
 def file_of(path, root, case):
     """The test file a case belongs to: a pytest case's module (its classname without a test
-    class), otherwise the result file (one per gtest binary or rostest)."""
-    rel = os.path.relpath(path, root)
-    if rel.split(os.sep)[0] == "pytest":
+    class) after its folder's name, otherwise the result file (one per gtest binary or rostest)."""
+    rel = os.path.relpath(path, root).split(os.sep)
+    if rel[0] == "pytest" and len(rel) > 1:
         parts = (case.get("classname") or "").split(".")
         while len(parts) > 1 and parts[-1][:1].isupper():
             parts.pop()
-        return f"{os.path.splitext(os.path.basename(path))[0]}: {'.'.join(parts)}"
-    return rel
+        # pytest/PKG.xml, or pytest/PKG/PART.xml for a folder run in parts (run_parallel.py)
+        return f"{os.path.splitext(rel[1])[0]}: {'.'.join(parts)}"
+    return os.sep.join(rel)
 
 
 def slowest(times, top=15):
