@@ -65,7 +65,8 @@ def block():
 def test_the_suite_side_by_side_against_one_at_a_time_and_round_5_on_one_cpu():
     text = block()
     r5, one, lanes = (
-        record(n) for n in ("r5-6d798f4-xeon-noamx.json", "r6-ae5392e-xeon-noamx.json", "r6-ae5392e+lanes-xeon-noamx.json")
+        record(n)
+        for n in ("r5-6d798f4-xeon-noamx.json", "r6-ae5392e-xeon-noamx.json", "r6-ae5392e+lanes-xeon-noamx.json")
     )
     assert r5["cpu_class"] == one["cpu_class"] == lanes["cpu_class"] and "no amx" in one["cpu_class"]
     assert set(one["files"]) == set(lanes["files"])  # the same files, one at a time and side by side
@@ -75,7 +76,10 @@ def test_the_suite_side_by_side_against_one_at_a_time_and_round_5_on_one_cpu():
         ("r6-ae5392e+lanes-xeon-noamx.json", lanes),
     ):
         minutes = sum(r["files"].values()) / 60
-        assert f"`{name}`" in text and f"{len(r['files'])} files, {minutes:.1f} min of test files, {wall_s(r):,} s in all" in text, name
+        assert (
+            f"`{name}`" in text
+            and f"{len(r['files'])} files, {minutes:.1f} min of test files, {wall_s(r):,} s in all" in text
+        ), name
     assert f"{wall_s(lanes) / wall_s(one):.2f}x the one-at-a-time run" in text
     both = [k for k in one["files"]]
     grew = sum(lanes["files"][k] for k in both) / sum(one["files"][k] for k in both)
