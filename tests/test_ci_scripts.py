@@ -227,3 +227,18 @@ def test_tests_folder_files_estimated_long_run_alone_and_name_their_results_as_o
     )
     summarize(tmp_path / "res")
     assert json.loads((tmp_path / "res" / "times.json").read_text())["files"] == {"tests: tests.test_big": 3.0}
+
+
+def test_a_failed_jobs_console_lines_are_its_failures_not_its_expected_errors(tmp_path, capsys):
+    rp = parallel()
+    xml = tmp_path / "f.xml"
+    code = (
+        "print('[ERROR] [1.0]: scene worker: goal refused on purpose'); "
+        "print('FAILED tests/test_x.py::test_y - AssertionError: 1 != 2'); "
+        f"open({str(xml)!r}, 'w').write('<testsuite/>'); raise SystemExit(1)"
+    )
+    rp.schedule([rp.Job("f", [sys.executable, "-c", code], str(tmp_path), str(xml), 1)], 1, str(tmp_path), 60)
+    out = capsys.readouterr().out
+    assert "FAILED (exit 1;" in out and "    FAILED tests/test_x.py::test_y - AssertionError: 1 != 2" in out
+    assert "goal refused on purpose" not in out
+    assert console_filter.shown("ERROR tests/test_x.py::test_z - RuntimeError")

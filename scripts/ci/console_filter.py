@@ -16,6 +16,7 @@ SHOWN = [
     re.compile(r"^\S+:\d+(:\d+)?: (fatal )?error: "),  # the compiler
     re.compile(r"^make(\[\d+\])?: \*\*\* "),  # the build stopped
     re.compile(r"^ \* (RESULT|TESTS|ERRORS|FAILURES): "),  # a rostest's own summary
+    re.compile(r"^(FAILED|ERROR) \S+::"),  # pytest's short summary of a failed test
 ]
 
 

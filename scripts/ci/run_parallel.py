@@ -22,13 +22,16 @@ import argparse
 import glob
 import json
 import os
-import queue
 import signal
 import subprocess
 import sys
 import threading
+from concurrent.futures import ThreadPoolExecutor
 import time
 from xml.sax.saxutils import escape, quoteattr
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import console_filter  # noqa: E402
 
 SPLIT_S = 10.0  #: [s] a tests/ file estimated at this or more runs as a job of its own
 DEFAULT_S = 5.0  #: [s] the estimate of a job the estimates do not know
@@ -114,32 +117,26 @@ def run(job, logs, timeout):
 
 
 def schedule(jobs, lanes, logs, timeout):
-    """Longest estimate first, onto the first free lane; one console line per finished job."""
-    todo = queue.Queue()
-    for j in sorted(jobs, key=lambda j: -j.estimate):
-        todo.put(j)
+    """Longest estimate first, onto the first free lane; one console line per finished job and,
+    for a failed one, the lines of its log that console_filter shows (its failures, not the
+    [ERROR] lines that fault-injection tests log on purpose)."""
     done, lock = [], threading.Lock()
 
-    def lane():
-        while True:
-            try:
-                job = todo.get_nowait()
-            except queue.Empty:
-                return
-            log = run(job, logs, timeout)
-            with lock:
-                done.append(job)
-                verdict = "ok" if job.rc == 0 else f"FAILED (exit {job.rc}; {log})"
-                print(f"[{len(done):3d}/{len(jobs)}] {job.seconds:7.1f} s  {verdict}  {job.name}", flush=True)
-                if job.rc != 0:
-                    with open(log, encoding="utf-8", errors="replace") as f:
-                        sys.stdout.write("".join("    " + ln for ln in f.readlines()[-15:]))
+    def one(job):
+        log = run(job, logs, timeout)
+        with lock:
+            done.append(job)
+            verdict = "ok" if job.rc == 0 else f"FAILED (exit {job.rc}; {log})"
+            print(f"[{len(done):3d}/{len(jobs)}] {job.seconds:7.1f} s  {verdict}  {job.name}", flush=True)
+            if job.rc != 0:
+                with open(log, encoding="utf-8", errors="replace") as f:
+                    lines = [ln for ln in f if console_filter.shown(ln)] or ["    (nothing the filter shows)\n"]
+                sys.stdout.write("".join("    " + ln for ln in lines[-20:]))
 
-    threads = [threading.Thread(target=lane) for _ in range(lanes)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    # the pool runs its tasks in the order they were submitted
+    with ThreadPoolExecutor(max_workers=lanes) as pool:
+        for f in [pool.submit(one, j) for j in sorted(jobs, key=lambda j: -j.estimate)]:
+            f.result()
     return done
 
 
