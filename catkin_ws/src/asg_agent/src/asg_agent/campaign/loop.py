@@ -32,7 +32,7 @@ from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
 from asg_agent.search.base import SearchMethod
 from asg_agent.records.store import Store, kept_xy, provenance, scenario_row, unpack_trajectory  # noqa: F401 (kept_xy: its old home)
 from asg_agent.scoring import attribution as attr
-from asg_agent.scoring import rewards
+from asg_agent.scoring import places, rewards
 from asg_agent.search.td3 import load_checked, save_atomic
 
 
@@ -42,6 +42,16 @@ REWARDS = rewards.REWARDS
 #: rewards that read a reference run (the search waits for it)
 REFERENCE_REWARDS = tuple(r.name for r in rewards.REGISTRY.values() if r.waits)
 collision_reward = rewards.collision_reward  # its old home
+
+
+def run_place(request: dict, row: dict, xy) -> tuple:
+    """The place (scoring/places.py) of a stored row of `request`: the obstacle it collided with,
+    else where it ended (`xy` [m], its positions)."""
+    from asg_agent.records.export import collision_index
+
+    hit = collision_index(request, row["collision_with"]) if row["termination"] == "COLLISION" else None
+    inst = [(l["mesh_name"], (i["x"], i["y"])) for l in request["structural"]["layouts"] for i in l["instances"]]
+    return places.place([m for m, _ in inst], [p for _, p in inst], hit, xy)
 
 
 @dataclass
@@ -377,6 +387,12 @@ class Campaign:
             else:
                 t0 = time.perf_counter()
                 traj = unpack_trajectory(row["trajectory"])
+                # issue #78: where it happened, and whether it is one of the campaign's findings
+                place = run_place(job.request, row, traj[:, 1:3])
+                finding = float(reward) >= self.rule.finding_at
+                if finding:
+                    tally.finding(self.stats, place)
+                self.method.outcome(job.job, place, finding)
                 next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
                 learnt = self.method.observe(
                     job.job, job.episode, job.step, job.state, job.action, float(reward), next_state, done
@@ -385,7 +401,7 @@ class Campaign:
                 if not done:
                     slot.update(step=job.step + 1, state=next_state)
             if self.scalars:
-                self.scalars(job.job, row, learnt or {})
+                self.scalars(job.job, row, dict(learnt or {}, **tally.found(self.stats)))
             if done:
                 self.episodes_done += 1
                 self._new_episode(job.slot)

@@ -7,12 +7,15 @@ import math
 import time
 
 from asg_agent.scoring import attribution as attr
+from asg_agent.scoring.places import PRIMARY_RADIUS_M, DistinctPlaces
 
 
 def new() -> dict:
     """best/ge3/ge4: the proxy of the stack under test; diff_best/diff_ge1: the differential
     reward (proxy - ground-truth proxy), its largest and how often it reached 1; perception/stack:
-    findings (proxy >= 3) with the reference below 2 / at least 3."""
+    findings (proxy >= 3) with the reference below 2 / at least 3; findings/places: the campaign's
+    findings (its reward's, rewards.Reward.finding_at) and their distinct places at
+    PRIMARY_RADIUS_M (scoring/places.py), counted in job order."""
     return {
         "best": -math.inf,
         "ge3": 0,
@@ -24,7 +27,18 @@ def new() -> dict:
         "perception": 0,
         "stack": 0,
         "classes": attr.count_classes(()),
+        "findings": 0,
+        "places": DistinctPlaces(PRIMARY_RADIUS_M).state_dict(),
     }
+
+
+def finding(stats: dict, place) -> bool:
+    """A finding of the campaign's reward applied, in job order: True when its place is distinct."""
+    seen = DistinctPlaces.from_state(stats["places"])
+    new = seen.add(place)
+    stats["findings"] += 1
+    stats["places"] = seen.state_dict()
+    return new
 
 
 def scenario(stats: dict, terms, label, candidate: bool):
@@ -69,6 +83,11 @@ def from_summary(stats: dict, summary: dict):
     )
 
 
+def found(stats: dict) -> dict:
+    """The running findings and their distinct places (the progress bar's and TensorBoard's)."""
+    return {"findings": stats["findings"], "distinct": len(DistinctPlaces.from_state(stats["places"]))}
+
+
 def status(stats: dict, stored: int, total: int, new_here: int, elapsed: float, roles) -> dict:
     """What the progress bar and summary show: `new_here` scenarios stored in `elapsed` [s]."""
     truth = attr.TRUTH in roles
@@ -76,6 +95,8 @@ def status(stats: dict, stored: int, total: int, new_here: int, elapsed: float, 
         "done": stored,
         "total": total,
         "rate_per_hour": new_here / max(1e-6, elapsed) * 3600,
+        **found(stats),
+        "distinct_radius_m": stats["places"]["radius"],
         "best": stats["best"],
         "ge3": stats["ge3"],
         "ge4": stats["ge4"],

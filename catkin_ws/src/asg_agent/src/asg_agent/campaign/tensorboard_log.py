@@ -4,7 +4,9 @@
     log.scenario(job, row, stats)    # from Campaign's `scalars` hook, in job order
     log.close()
 
-Per scenario (x axis: the job, in the order the search learnt from them): `scenario/proxy`,
+Per scenario (x axis: the job, in the order the search learnt from them): first what the campaign
+searched for, `findings/distinct` (its findings' distinct places at protocol v4's radius,
+scoring/places.py) and `findings/of_reward` (its reward's findings); then `scenario/proxy`,
 `scenario/reward`, `scenario/yaw_term`, `scenario/plr`, `scenario/reference_proxy` (attribution),
 and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/stack`; with named
 reference stacks, `attribution/CLASS` (flaw, model, stack, ..., not_candidate, pending) as each
@@ -13,7 +15,7 @@ candidate's reference runs come in. Per update
 `agent/actor_loss`, `agent/asp_penalty`, `agent/asp_weight`, `agent/per_beta`,
 `agent/actor_saturation`; CMA-ES's `search/cma_sigma` and `search/cma_best`, annealing's
 `search/temperature` and `search/incumbent`, MAP-Elites' `search/qd_cells`,
-`search/qd_coverage` and `search/qd_best`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
+`search/qd_coverage` and `search/qd_best`, novelty-ts's `search/novelty_archive`. Written with tensorboardX (pinned by scripts/common.sh); a resumed
 campaign passes its first job as `purge_step`, so TensorBoard drops what the interrupted run
 wrote past it. View with `tensorboard --logdir results/tensorboard` (the `tensorboard` package,
 which this project does not need).
@@ -40,6 +42,10 @@ AGENT_KEYS = {
     "qd_cells": "search/qd_cells",
     "qd_coverage": "search/qd_coverage",
     "qd_best": "search/qd_best",
+    "novelty_archive": "search/novelty_archive",
+    # the campaign's own running counts (issue #78), passed with the method's figures
+    "findings": "findings/of_reward",
+    "distinct": "findings/distinct",
 }
 
 

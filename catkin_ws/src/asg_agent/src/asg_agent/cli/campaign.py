@@ -7,7 +7,8 @@ Workers are the namespaces /worker_0 .. /worker_{N-1} (or a comma-separated list
 namespaces), started by `roslaunch launch/worker.launch ns:=worker_i ...` on this host or any
 other host of the same ROS master, or by launch/train.launch. `--fake-workers N` runs an
 in-process stand-in instead (no ROS, no simulator: a smoke test of the loop). Prints a progress
-bar and ends with a summary (counts of proxy >= 3 and >= 4, the largest proxy, the top 10).
+bar and ends with a summary: the findings of its reward, their distinct places and the replay
+command of the best of them first (issue #78), then the attribution and the paper's proxy counts.
 """
 
 import argparse
@@ -27,6 +28,7 @@ from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collect
 from asg_agent.cli.signals import stop_on_signals  # noqa: E402
 from asg_agent.scoring import attribution as attr  # noqa: E402
 from asg_agent.scoring import rewards  # noqa: E402
+from asg_agent.scoring.places import PRIMARY_RADIUS_M  # noqa: E402
 from asg_agent.records.experiment import ExperimentError, load_experiment  # noqa: E402
 from asg_agent.search.methods import METHODS, make_method  # noqa: E402
 from asg_agent.records.store import Store, StoreError, checkpoint_path  # noqa: E402
@@ -98,6 +100,13 @@ def _search_options(p):
         type=float,
         default=1.0,
         help="[-] route-random: the share of obstacles placed in the band, the rest anywhere (default 1)",
+    )
+    p.add_argument(
+        "--tabu",
+        type=float,
+        default=PRIMARY_RADIUS_M,
+        help=f"[m] novelty-ts: no proposal puts an obstacle this close to a found failure's place of its "
+        f"class (default {PRIMARY_RADIUS_M:g}, protocol v4's distinct radius)",
     )
 
 
@@ -253,12 +262,48 @@ def stack_line(camp) -> str:
     return line
 
 
+def findings_lines(store, name, top: int = 10) -> list:
+    """The summary's first lines (issue #78): the campaign's findings, their distinct places at
+    each reported radius, by class, and the first finding of each distinct place with its replay
+    command, largest reward first."""
+    from asg_agent.campaign.findings import distinct_summary, findings, finding_rule
+
+    camp = store.campaign(name)
+    settings = json.loads(camp["settings"]) if camp and camp["settings"] else {}
+    rule = finding_rule(settings)
+    d = distinct_summary(findings(store, name))
+    radii = sorted(d["distinct"])
+    primary = d["primary_radius_m"]
+    others = ", ".join(f"{d['distinct'][r]} at {r:g} m" for r in radii if r != primary)
+    lines = [
+        f"\ncampaign {name}: {store.count(name)} scenarios, {d['findings']} findings of the {rule.name} reward "
+        f"(reward >= {rule.finding_at:g}), {d['distinct'][primary]} distinct at {primary:g} m ({others}): "
+        "a finding is distinct when the obstacle it hit (or, without contact, where it ended) lies at "
+        f"least {primary:g} m from every earlier distinct one of its class",
+    ]
+    if d["by_class"]:
+        lines.append("findings by what they hit: " + ", ".join(f"{k} {v}" for k, v in d["by_class"].items()))
+    first = sorted(d["first_at_each_place"], key=lambda f: (-f["reward"], f["job"]))[:top]
+    if first:
+        lines.append(f"best distinct findings (the first at each place; replay: rosrun asg_agent replay STORE {name} JOB):")
+    for f in first:
+        cls, x, y = f["place"]
+        what = f"{cls} at ({x:.1f}, {y:.1f}) m" if cls != "no contact" else f"no contact, ended at ({x:.1f}, {y:.1f}) m"
+        lines.append(
+            f"  job {f['job']:>5}  {f['termination']:<13} {what}"
+            + (f"  {f['attribution']}" if f["attribution"] else "")
+            + f"  reward {f['reward']:.3f}  ->  rosrun asg_agent replay {os.path.abspath(store.path)} {name} {f['job']}"
+        )
+    return lines
+
+
 def print_summary(store, name, out=sys.stdout):
     s = store.summary(name)
+    for line in findings_lines(store, name):
+        print(line, file=out)
     best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
     print(
-        f"\ncampaign {name}: {s['scenarios']} scenarios, proxy >= 3: {s['proxy_ge_3']}, "
-        f">= 4: {s['proxy_ge_4']}, largest proxy {best}",
+        f"the paper's proxy: >= 3 in {s['proxy_ge_3']}, >= 4 in {s['proxy_ge_4']}, largest {best}",
         file=out,
     )
     print("terminations: " + ", ".join(f"{k} {v}" for k, v in sorted(s["terminations"].items())), file=out)
@@ -304,8 +349,10 @@ def print_summary(store, name, out=sys.stdout):
             f"warning: {s['plr_below_0999']} runs reached the goal with PLR < 0.999 (the optimal path overestimated)",
             file=out,
         )
-    print("top 10 (store row id, job, episode.step, proxy = 0.1 vis + yaw term + PLR^2):", file=out)
-    for r in s["top"]:
+    reward = (json.loads(store.campaign(name)["settings"] or "{}") if store.campaign(name) else {}).get("reward")
+    if reward in (None, "proxy"):  # the proxy's top 10 belongs to a search on the proxy
+        print("top 10 (store row id, job, episode.step, proxy = 0.1 vis + yaw term + PLR^2):", file=out)
+    for r in s["top"] if reward in (None, "proxy") else ():
         print(
             f"  id {r['id']:>6}  job {r['job']:>5}  ep {r['episode']}.{r['step']}  proxy {r['proxy']:.3f}  "
             f"(vis {r['vis']:+.2f}, yaw {r['yaw_term']:.3f}, PLR {r['plr']:.3f}, {r['termination']})",
@@ -371,7 +418,10 @@ def make_search(a, exp):
     if a.updates_per_step:
         td3.updates_per_step = a.updates_per_step
     td3.bc_weight = a.bc_weight
-    options = {"band": a.route_band, "share": a.route_share} if a.method == "route-random" else None
+    options = {
+        "route-random": {"band": a.route_band, "share": a.route_share},
+        "novelty-ts": {"tabu_m": a.tabu},
+    }.get(a.method)
     try:
         return make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3, options=options)
     except ValueError as e:
@@ -404,7 +454,8 @@ def progress_bar(a):
         if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
             diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
         bar.set_postfix_str(
-            f"{st['rate_per_hour']:.0f}/h best {best} >=3 {st['ge3']} >=4 {st['ge4']}{diff}"
+            f"findings {st['findings']} distinct {st['distinct']} ({st['distinct_radius_m']:g} m)"
+            f" {st['rate_per_hour']:.0f}/h{diff} best proxy {best} >=3 {st['ge3']}"
             + (f" err {st['errors']}" if st["errors"] else ""),
             refresh=True,
         )

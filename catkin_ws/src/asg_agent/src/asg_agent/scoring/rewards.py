@@ -30,10 +30,13 @@ from typing import Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
+from asg_agent.scoring.attribution import FINDING as PROXY_FINDING  # [-] the paper's finding: proxy >= 3
+
 DENSE_WEIGHT = 2.0  # [-] contact adds this: a collision on a route of PLR about 1 scores about 3
 CLEARANCE_RANGE = 5.0  # [m] clearances at or beyond this add nothing
 TTC_RANGE = 3.0  # [s] times to collision at or beyond this add nothing
 GRADED_CAP = 0.5  # [-] the `flaw` reward's graded part stays below a finding's 1
+CLASS_FINDING = 1.0  # [-] the `flaw` and `regression` rewards of a finding of their class
 PROXY_RANGE = 2.0  # [-] proxy differences beyond this add nothing to the graded part
 NON_CANDIDATE_FLAW = 0.0  # [-] the `flaw` reward of a scenario not re-run on the references
 SAMPLE_EVERY = 6  # [samples] 60 Hz -> 10 Hz
@@ -114,7 +117,7 @@ def flaw_reward(
     `regression` reward of a stack pair is the same with target "regression" and the `release`
     reference's run in place of `full`'s."""
     if cls == target:
-        return 1.0
+        return CLASS_FINDING
     if full_termination != "SUCCESS" or full_proxy is None:
         return 0.0
     dp = min(max(proxy - full_proxy, 0.0), PROXY_RANGE) / PROXY_RANGE
@@ -154,7 +157,9 @@ class Reward:
     candidate's reference runs are in (refs: role -> the stored reference run; cls: attribution's
     class), None to keep `own`'s. `waits`: the search waits for the references of a candidate
     (rewards that read them); `roles`: the reference roles it needs; `any_reference`: it needs one,
-    whichever; `every_scenario`: every scenario must be re-run (candidates 'all')."""
+    whichever; `every_scenario`: every scenario must be re-run (candidates 'all'); `finding_at`: a
+    scenario whose reward is at least this is one of the campaign's findings (issue #78: what its
+    distinct findings count, and what a search that avoids known places is told)."""
 
     name: str
     own: Callable
@@ -163,6 +168,7 @@ class Reward:
     roles: Tuple[str, ...] = ()
     any_reference: bool = False
     every_scenario: bool = False
+    finding_at: float = PROXY_FINDING
 
 
 def _truth_or_release(refs):
@@ -246,6 +252,7 @@ def _registry() -> Dict[str, Reward]:
                 _class_reward("flaw", attr.FULL),
                 waits=True,
                 roles=(attr.FULL,),
+                finding_at=CLASS_FINDING,
             ),
             Reward(
                 "regression",
@@ -253,6 +260,7 @@ def _registry() -> Dict[str, Reward]:
                 _class_reward("regression", attr.RELEASE),
                 waits=True,
                 roles=(attr.RELEASE,),
+                finding_at=CLASS_FINDING,
             ),
         )
     }

@@ -50,6 +50,12 @@ class SearchMethod:
     def observe(self, job, episode, step, state, action, reward: Optional[float], next_state, done: bool) -> Dict:
         return {}
 
+    def outcome(self, job: int, place, finding: bool) -> None:
+        """Told by the campaign just before `observe` of the same job: the run's place
+        (scoring/places.py: the obstacle hit or where the run ended) and whether it is a finding of
+        the campaign's reward (rewards.Reward.finding_at). Methods that avoid places already found
+        keep it; the rest ignore it."""
+
     def config(self) -> dict:
         return {}
 

@@ -18,7 +18,9 @@ straight start-goal route), `annealing` (simulated annealing, a prior method the
 paper names), `cmaes` (CMA-ES from the `cma` package, the black-box optimiser an engineer
 reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `ribs` package's
 grid archive and iso+line emitter, over two behaviour descriptors), and `surrogate-ts` (an online
-surrogate of the reward with credit per obstacle, sampled by Thompson sampling: surrogate.py).
+surrogate of the reward with credit per obstacle, sampled by Thompson sampling: surrogate.py), and
+`novelty-ts` (the same surrogate proposing away from the places of the failures already found:
+novelty.py).
 """
 
 import math
@@ -42,6 +44,7 @@ METHODS = (
     "cmaes",
     "map-elites",
     "surrogate-ts",
+    "novelty-ts",
 )
 
 
@@ -368,7 +371,8 @@ def make_method(
     td3_config: Optional[TD3Config] = None,
     options: Optional[dict] = None,
 ) -> SearchMethod:
-    """The method `name`; `options`: its own settings (route-random: band [m], share [-])."""
+    """The method `name`; `options`: its own settings (route-random: band [m], share [-];
+    novelty-ts: tabu_m [m])."""
     if name == "random":
         return RandomSearch(experiment, seed)
     if name == "route-random":
@@ -383,6 +387,10 @@ def make_method(
         from asg_agent.search.surrogate import SurrogateTS
 
         return SurrogateTS(experiment, seed, init_random=max(1, min(100, budget // 10)))
+    if name == "novelty-ts":
+        from asg_agent.search.novelty import NoveltyTS
+
+        return NoveltyTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
     if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
         return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
     raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")
