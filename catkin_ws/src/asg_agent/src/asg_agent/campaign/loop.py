@@ -150,7 +150,10 @@ class Campaign:
             self.exp.name,
             self.exp.text,
             self.seed,
-            dict(self.settings, total=self.total, slots=self.slots, method_config=self.method.config()),
+            # the reward as it ran (what its findings are: campaign/findings.py)
+            dict(
+                self.settings, total=self.total, slots=self.slots, method_config=self.method.config(), reward=self.reward
+            ),
         )
         self.store.record_event(self.name, dict(provenance(), kind="start", stored=0))
         for s in range(self.slots):

@@ -108,6 +108,11 @@ def _search_options(p):
         help=f"[m] novelty-ts: no proposal puts an obstacle this close to a found failure's place of its "
         f"class (default {PRIMARY_RADIUS_M:g}, protocol v4's distinct radius)",
     )
+    p.add_argument(
+        "--rule",
+        default="",
+        help="rule-sampler: the rule file (JSON; asg_analysis.rules writes them) whose layouts it draws",
+    )
 
 
 def _run_options(p):
@@ -231,9 +236,9 @@ def generator_line(camp) -> str:
     settings = json.loads(camp["settings"]) if camp and camp["settings"] else {}
     # the settings that say what a method samples (route-random's band); a learner's hyperparameters
     # are in the store's settings and docs/agent.md, not in one line
-    config = {k: v for k, v in (settings.get("method_config") or {}).items() if k in ("band", "share")}
+    config = {k: v for k, v in (settings.get("method_config") or {}).items() if k in ("band", "share", "tabu_m")}
     what = ", ".join(
-        f"{k} {v:g}{' m' if k == 'band' else ''}" if isinstance(v, float) else f"{k} {v}"
+        f"{k} {v:g}{' m' if k in ('band', 'tabu_m') else ''}" if isinstance(v, float) else f"{k} {v}"
         for k, v in sorted(config.items())
     )
     exp = settings.get("experiment_repo_file") or settings.get("experiment_file") or camp["experiment"]
@@ -421,6 +426,7 @@ def make_search(a, exp):
     options = {
         "route-random": {"band": a.route_band, "share": a.route_share},
         "novelty-ts": {"tabu_m": a.tabu},
+        "rule-sampler": {"rule_file": a.rule},
     }.get(a.method)
     try:
         return make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3, options=options)

@@ -20,7 +20,8 @@ reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `rib
 grid archive and iso+line emitter, over two behaviour descriptors), and `surrogate-ts` (an online
 surrogate of the reward with credit per obstacle, sampled by Thompson sampling: surrogate.py), and
 `novelty-ts` (the same surrogate proposing away from the places of the failures already found:
-novelty.py).
+novelty.py), and `rule-sampler` (uniform layouts that satisfy a learned rule: the check of a rule on
+fresh samples; rules.py).
 """
 
 import math
@@ -45,6 +46,7 @@ METHODS = (
     "map-elites",
     "surrogate-ts",
     "novelty-ts",
+    "rule-sampler",
 )
 
 
@@ -372,7 +374,7 @@ def make_method(
     options: Optional[dict] = None,
 ) -> SearchMethod:
     """The method `name`; `options`: its own settings (route-random: band [m], share [-];
-    novelty-ts: tabu_m [m])."""
+    novelty-ts: tabu_m [m]; rule-sampler: rule_file)."""
     if name == "random":
         return RandomSearch(experiment, seed)
     if name == "route-random":
@@ -391,6 +393,12 @@ def make_method(
         from asg_agent.search.novelty import NoveltyTS
 
         return NoveltyTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
+    if name == "rule-sampler":
+        from asg_agent.search.rules import RuleSampler, load_rule
+
+        if not (options or {}).get("rule_file"):
+            raise ValueError("rule-sampler: needs a rule file (--rule FILE, train.launch rule:=FILE)")
+        return RuleSampler(experiment, seed, load_rule(options["rule_file"]))
     if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
         return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
     raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")
