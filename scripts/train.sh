@@ -3,7 +3,9 @@
 # flaw study v3's winner, surrogate-ts in Exp. 1's route-wide action space on the flaw reward;
 # issue #67) on the
 # paper's Exp. 1 with the flawed U-Net in the loop, two scene workers on this machine. Installs what is
-# missing and builds first; prints a progress bar, then the summary and where the store is.
+# missing and builds first; prints a progress bar, then the summary (the findings, their distinct
+# places and the replay command of the best), the rules its failures have in common, and where the
+# store is.
 #   bash scripts/train.sh [SCENARIOS] [extra launch args, e.g. method:=random seed:=1 resume:=true]
 # Default 150 scenarios (minutes on a 2-core machine: docs/benchmarks.md, CPU classes). Idempotent: a finished campaign is
 # reported, an unfinished one resumed (resume:=true). ASG_LAUNCH=differential runs
@@ -45,5 +47,11 @@ rc=0
 "${CAMPAIGN[@]}" || rc=$?
 stop_launch
 trap - EXIT
+# the store the campaign wrote (store:= may name another than the default)
+for i in "${!CAMPAIGN[@]}"; do [ "${CAMPAIGN[$i]}" = --store ] && STORE="${CAMPAIGN[$((i + 1))]}"; done
+if [ "$rc" = 0 ]; then
+  # what the campaign's failures have in common (issue #78): rules learnt from its own results
+  /usr/bin/python3 -m asg_analysis.rules learn --store "$STORE" || true
+fi
 log "store: $STORE (docs/agent.md: schema, resume, reading it)"
 exit "$rc"

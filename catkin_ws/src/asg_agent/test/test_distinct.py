@@ -28,7 +28,13 @@ def test_a_place_is_the_obstacle_hit_or_where_a_run_without_contact_ended():
     assert place(meshes, pos, None, [[0, 0], [9, 8]]) == (NO_CONTACT, 9.0, 8.0)
     with pytest.raises(ValueError, match="collision_with 3 names no obstacle of 3"):
         place(meshes, pos, 3, [[0, 0]])
-    row = {"meshes": meshes, "positions": pos, "collision_with": 1, "termination": "COLLISION", "trajectory_xy": [[0, 0]]}
+    row = {
+        "meshes": meshes,
+        "positions": pos,
+        "collision_with": 1,
+        "termination": "COLLISION",
+        "trajectory_xy": [[0, 0]],
+    }
     assert place_of_row(row) == ("b", 3.0, 4.0)
     # a timeout's place is where it ended, whatever an old row says it touched
     assert place_of_row(dict(row, termination="STUCK_TIMEOUT"))[0] == NO_CONTACT

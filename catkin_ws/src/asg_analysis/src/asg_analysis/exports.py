@@ -8,16 +8,16 @@ from typing import List, Optional, Tuple
 
 
 def read_rows(exports: List[str], store: str = "", campaign: str = "") -> Tuple[List[dict], dict]:
-    """(rows, campaign row) of compact exports (of one experiment) or of a store's campaign."""
+    """(rows, campaign row) of compact exports (of one experiment) or of a store's campaign (by
+    default the one that stored a scenario last)."""
     from asg_agent.records.export import export, read_export
 
     if store:
         from asg_agent.records.store import Store
 
-        if not campaign:
-            raise ValueError("--store needs --campaign")
         if not os.path.exists(store):
             raise ValueError(f"store {store}: no such file")
+        campaign = campaign or latest_campaign(store)
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "c.jsonl.gz")
             export(Store(store), campaign, path)
@@ -33,6 +33,22 @@ def read_rows(exports: List[str], store: str = "", campaign: str = "") -> Tuple[
         camp = camp or c
         rows += [dict(x, _campaign=c.get("name", path)) for x in r]
     return rows, camp
+
+
+def latest_campaign(store: str) -> str:
+    """The campaign of the store that stored a scenario last (the one just run)."""
+    import sqlite3
+
+    db = sqlite3.connect(f"file:{store}?mode=ro", uri=True)
+    try:
+        row = db.execute("SELECT campaign FROM scenarios ORDER BY finished DESC LIMIT 1").fetchone()
+    except sqlite3.DatabaseError as e:
+        raise ValueError(f"store {store}: {e}") from None
+    finally:
+        db.close()
+    if row is None:
+        raise ValueError(f"store {store}: holds no scenario")
+    return row[0]
 
 
 def settings_of(camp: dict) -> dict:

@@ -2,7 +2,7 @@
 attributes, learnt from the campaign's own results, and their check on fresh samples. No ROS.
 
     python3 -m asg_analysis.rules learn EXPORT.jsonl.gz [EXPORT ...] [--out rules.json]
-    python3 -m asg_analysis.rules learn --store STORE --campaign NAME [--out rules.json]
+    python3 -m asg_analysis.rules learn --store STORE [--campaign NAME] [--out rules.json]
     python3 -m asg_analysis.rules check rules.json RULE_EXPORT.jsonl.gz [...] --base BASE_EXPORT.jsonl.gz [...]
 
 `learn` fits a shallow decision tree (scikit-learn, depth DEPTH, leaves of at least MIN_LEAF
@@ -96,6 +96,7 @@ def learn(rows: List[dict], experiment, target: Optional[str] = "flaw", depth: i
     keep = ~y | first
     base = float(first.sum() / max(1, keep.sum()))
     out = {
+        "campaigns": sorted({r.get("_campaign", "") for r in rows}),
         "scenarios": len(rows),
         "findings": int(y.sum()),
         "distinct": int(first.sum()),
@@ -124,8 +125,10 @@ def learn(rows: List[dict], experiment, target: Optional[str] = "flaw", depth: i
                 "lift": precision / base,
                 "share_of_distinct": hits / int(first.sum()),
                 "share_of_findings": int((inside & y).sum()) / int(y.sum()),
-                "example": {"campaign": rows[int(np.flatnonzero(inside & first)[0])].get("_campaign", ""),
-                            "job": int(rows[int(np.flatnonzero(inside & first)[0])]["job"])},
+                "example": {
+                    "campaign": rows[int(np.flatnonzero(inside & first)[0])].get("_campaign", ""),
+                    "job": int(rows[int(np.flatnonzero(inside & first)[0])]["job"]),
+                },
             }
         )
     out["rules"].sort(key=lambda r: (-r["precision"], -r["distinct"]))
@@ -184,7 +187,7 @@ def lines(result: Dict, top: int = 5) -> List[str]:
     """What a user reads of learnt rules."""
     what = result["target"] or "failure"
     out = [
-        f"rules ({what} findings: {result['findings']} in {result['scenarios']} scenarios, {result['distinct']} "
+        f"rules of {', '.join(result.get('campaigns') or ['the campaign'])} ({what} findings: {result['findings']} in {result['scenarios']} scenarios, {result['distinct']} "
         f"distinct; base rate {result['base_rate']:.3f} of distinct findings among the scenarios without a "
         f"repeated one; a rule is a leaf of a depth-{DEPTH} tree with at least {LIFT:g}x that rate and "
         f"{MIN_DISTINCT} distinct findings, learnt from this campaign: it holds only once checked on fresh "
@@ -208,7 +211,9 @@ def main(argv=None) -> int:
     le = sub.add_parser("learn", help="rules from a campaign's results")
     le.add_argument("exports", nargs="*", help="compact exports (.jsonl.gz) of one experiment")
     le.add_argument("--store", default="", help="a campaign store instead of exports")
-    le.add_argument("--campaign", default="", help="the store's campaign")
+    le.add_argument(
+        "--campaign", default="", help="the store's campaign (default: the one that stored a scenario last)"
+    )
     le.add_argument("--target", default="auto", help="flaw, regression, failure, or auto (the campaign's reward)")
     le.add_argument("--out", default="", help="write the rules here (JSON)")
     ch = sub.add_parser("check", help="a rule on fresh samples against the base rate")

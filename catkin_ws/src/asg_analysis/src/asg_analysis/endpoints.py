@@ -1,0 +1,116 @@
+"""Study endpoints over a campaign's exported rows (issue #78): findings, distinct findings at each
+radius, distinct layouts and failure modes, per 1,000 scenarios and per CPU-hour; and a comparison
+of arms over seeds. A library: a study names its exports and arms, this computes. No ROS.
+
+    python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...]            # one line per campaign
+    python3 -m asg_analysis.endpoints --arm default=GLOB --arm route-random=GLOB [--budget 300]
+                                                                       # arms compared (JSON)
+
+A finding is a row of the target class (`flaw` with three-stack attribution, `regression` with a
+release, else a run that failed: asg_analysis.rules.is_finding); its place and the distinct count
+are asg_agent.scoring.places's, the one definition the campaign and the search use (protocol v4).
+"""
+
+import argparse
+import glob
+import json
+import sys
+from typing import Dict, List, Optional
+
+from asg_agent.scoring.places import PRIMARY_RADIUS_M, REPORTED_RADII_M, count_distinct, place_of_row
+
+LAYOUT_DISTINCT_M = 2.0  # [m] the project's layout distance (campaign_metrics.layout_distance) for distinct layouts
+
+
+def campaign(camp: dict, rows: List[dict], budget: Optional[int] = None, target: Optional[str] = "flaw") -> Dict:
+    """The endpoints of one campaign over its first `budget` jobs (all when None)."""
+    from asg_agent.records import failure_modes as fm
+    from asg_analysis.campaign_metrics import _is_new
+    from asg_analysis.rules import is_finding
+
+    rows = sorted(rows, key=lambda r: r["job"])
+    if budget is not None:
+        rows = [r for r in rows if r["job"] < budget]
+    found = [r for r in rows if is_finding(r, target)]
+    places = [place_of_row(r) for r in found]
+    n = max(1, len(rows))
+    hours = cpu_hours(camp)
+    out = {
+        "campaign": camp.get("name"),
+        "seed": camp.get("seed"),
+        "scenarios": len(rows),
+        "findings": len(found),
+        "distinct": {f"{r:g}": count_distinct(places, r) for r in REPORTED_RADII_M},
+        "distinct_layouts": sum(_is_new(found, LAYOUT_DISTINCT_M)) if found else 0,
+        "modes": fm.distinct(fm.modes_of(camp, found)) if found else 0,
+        "cpu_hours": hours,
+    }
+    out["per_1000"] = {k: 1000.0 * v / n for k, v in out["distinct"].items()}
+    out["findings_per_1000"] = 1000.0 * len(found) / n
+    primary = out["distinct"][f"{PRIMARY_RADIUS_M:g}"]
+    out["per_cpu_hour"] = primary / hours if hours else None
+    return out
+
+
+def cpu_hours(camp: dict) -> Optional[float]:
+    """The campaign's measured CPU-hours (every process of the run, references included), as
+    protocol.py measures them; None when the export holds no measure."""
+    from asg_analysis.exports import settings_of
+    from asg_analysis.protocol import measured_cpu_hours
+
+    return measured_cpu_hours(settings_of(camp))
+
+
+def compare(arms: Dict[str, List[str]], default: str, budget: Optional[int], target: Optional[str] = "flaw") -> Dict:
+    """Arms (name -> exports) against the default: per-seed distinct findings (2 m) per 1,000, the
+    ratio of means with its bootstrap interval and the exact Mann-Whitney test (stats.compare)."""
+    from asg_agent.records.export import read_export
+    from asg_analysis import stats
+
+    per = {}
+    for arm, paths in arms.items():
+        per[arm] = [campaign(*read_export(p), budget=budget, target=target) for p in sorted(paths)]
+    key = f"{PRIMARY_RADIUS_M:g}"
+    rows = stats.compare({a: [c["per_1000"][key] for c in cs] for a, cs in per.items()}, default)
+    return {"campaigns": per, "primary": rows}
+
+
+def line(c: Dict) -> str:
+    d = c["distinct"]
+    return (
+        f"{c['campaign']}: {c['scenarios']} scenarios, {c['findings']} findings, distinct "
+        + ", ".join(f"{v} at {k} m" for k, v in d.items())
+        + f" ({c['per_1000'][f'{PRIMARY_RADIUS_M:g}']:.1f} per 1,000 at {PRIMARY_RADIUS_M:g} m), "
+        f"{c['distinct_layouts']} distinct layouts, {c['modes']} modes"
+    )
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python3 -m asg_analysis.endpoints", description=__doc__.split("\n\n")[0])
+    p.add_argument("exports", nargs="*")
+    p.add_argument("--arm", action="append", default=[], help="NAME=GLOB of exports (the first is the default)")
+    p.add_argument("--budget", type=int, default=None, help="count the first N jobs")
+    p.add_argument("--target", default="flaw", help="flaw, regression or failure")
+    a = p.parse_args(argv)
+    target = None if a.target == "failure" else a.target
+    from asg_agent.records.export import read_export
+
+    try:
+        if a.arm:
+            arms = {}
+            for spec in a.arm:
+                name, _, pattern = spec.partition("=")
+                arms[name] = glob.glob(pattern)
+                if not arms[name]:
+                    raise ValueError(f"--arm {spec}: no export matches")
+            print(json.dumps(compare(arms, next(iter(arms)), a.budget, target), indent=1, default=str))
+        for path in a.exports:
+            print(line(campaign(*read_export(path), budget=a.budget, target=target)))
+    except (OSError, ValueError) as e:
+        print(f"endpoints: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

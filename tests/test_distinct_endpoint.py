@@ -1,0 +1,71 @@
+"""Issue #78: protocol v4's endpoint, distinct flaw findings, recomputed from the flaw study v3's
+exports twice: by the project's library (asg_analysis.endpoints, scoring/places.py) and by a plain
+loop written here apart from it. Both give the issue's table (round 6's default collapsed onto a
+few places: 52.7 distinct per 1,000 at 2 m against route-random's 108.0)."""
+
+import glob
+import gzip
+import json
+import math
+import os
+
+import pytest
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+V3 = os.path.join(REPO, "results", "flaw_study3")
+
+#: the issue's table: distinct flaw findings per seed (seeds 10-14) at 2 m, and the per-1,000 figures
+ISSUE = {
+    "default": {"2": [18, 26, 7, 7, 21], "per_1000": {"2": 52.7, "1": 62.0, "5": 34.0}},
+    "route-random": {"2": [29, 31, 34, 32, 36], "per_1000": {"2": 108.0, "1": 118.0, "5": 71.3}},
+    "map-elites": {"per_1000": {"2": 99.3, "1": 118.7, "5": 61.3}},
+}
+
+
+def _rows(path):
+    with gzip.open(path, "rt") as f:
+        f.readline()
+        return sorted((json.loads(line) for line in f), key=lambda r: r["job"])[:300]
+
+
+def _plain_distinct(rows, radius):
+    """The definition, read from the issue and written out: each flaw finding's place is the
+    obstacle it hit (class, position) or, without contact, where it ended; it is distinct when no
+    earlier distinct one of its class lies closer than `radius`."""
+    kept = []
+    for r in rows:
+        if r.get("attribution") != "flaw":
+            continue
+        if r["termination"] == "COLLISION" and r.get("collision_with") is not None:
+            cls, (x, y) = r["meshes"][r["collision_with"]], r["positions"][r["collision_with"]]
+        else:
+            cls, (x, y) = "none", r["trajectory_xy"][-1]
+        if all(c != cls or math.hypot(x - a, y - b) >= radius for c, a, b in kept):
+            kept.append((cls, x, y))
+    return len(kept)
+
+
+@pytest.mark.parametrize("arm", sorted(ISSUE))
+def test_the_issue_table_by_a_plain_loop_and_by_the_library(arm):
+    from asg_agent.records.export import read_export
+    from asg_analysis import endpoints
+
+    paths = sorted(glob.glob(os.path.join(V3, f"flaw3-{arm}-s1[0-4].jsonl.gz")))
+    assert len(paths) == 5
+    plain = {r: [_plain_distinct(_rows(p), float(r)) for p in paths] for r in ("1", "2", "5")}
+    lib = [endpoints.campaign(*read_export(p), budget=300) for p in paths]
+    for r in ("1", "2", "5"):
+        assert [c["distinct"][r] for c in lib] == plain[r]
+        assert round(1000.0 * sum(plain[r]) / 1500.0, 1) == ISSUE[arm]["per_1000"][r]
+    if "2" in ISSUE[arm]:
+        assert plain["2"] == ISSUE[arm]["2"]
+
+
+def test_every_default_seed_is_below_every_route_random_seed_exact_p_0_0079():
+    from asg_analysis import endpoints
+
+    arms = {a: sorted(glob.glob(os.path.join(V3, f"flaw3-{a}-s1[0-4].jsonl.gz"))) for a in ("default", "route-random")}
+    res = endpoints.compare(arms, "default", 300)
+    rr = [r for r in res["primary"] if r["arm"] == "route-random"][0]
+    assert rr["p"] == pytest.approx(2 / 252) and rr["effect"] == -1.0
+    assert rr["ratio"] == pytest.approx(52.6667 / 108.0, rel=1e-4)
