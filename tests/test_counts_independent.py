@@ -58,7 +58,12 @@ def my_class(row):
     return "unclear"
 
 
-THREE_STACK = sorted(glob.glob(os.path.join(REPO, "results", "attribution", "*.jsonl.gz")))
+THREE_STACK = sorted(
+    glob.glob(os.path.join(REPO, "results", "attribution", "*.jsonl.gz"))
+    # issue #79: the flaw study v3's and protocol v4's headline counts, recounted from the runs
+    + glob.glob(os.path.join(REPO, "results", "flaw_study3", "flaw3-*-s1[0-4].jsonl.gz"))
+    + glob.glob(os.path.join(REPO, "results", "distinct_v4", "*.jsonl.gz"))
+)
 ROUND3 = sorted(glob.glob(os.path.join(REPO, "results", "comparison", "exp1b-*-s*.jsonl.gz")))
 
 
