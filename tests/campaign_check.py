@@ -103,7 +103,11 @@ class CampaignEndToEnd(unittest.TestCase):
             self.assertEqual(len(traj), r["samples"])
             self.assertGreater(r["samples"], 60)
         self.assertTrue(store.integrity_ok())
-        # The top scenario replays exactly, and the bag of the replay holds the run's topics.
+        bag, row = self.check_replay(path, store)
+        self.check_pictures(path, bag, row)
+
+    def check_replay(self, path, store):
+        """The top scenario replays exactly, and the bag of the replay holds the run's topics."""
         top = store.summary("first", top=1)["top"][0]
         bag = os.path.join(os.path.dirname(path), "replay.bag")
         p = subprocess.run(
@@ -144,8 +148,12 @@ class CampaignEndToEnd(unittest.TestCase):
         for topic in ("replay/scene", "replay/optimal_path", "replay/trajectory"):
             self.assertEqual(counts.get("/worker_0/" + topic, 0), 1, topic)
         self.assertEqual(counts.get("/worker_0/replay/labels_rgb", 0), counts["/worker_0/labels"])
-        # rviz with rviz/replay.rviz on that bag, under Xvfb: the vote grid, the plan and the
-        # driven path are drawn (a blank view or an error panel has none of their colours).
+        return bag, row
+
+    def check_pictures(self, path, bag, row):
+        """rviz with rviz/replay.rviz on the replay's bag, under Xvfb: the vote grid, the plan and
+        the driven path are drawn (a blank view or an error panel has none of their colours); a
+        planner snapshot from the bag and the campaign's HTML report."""
         from asg_agent.ros.replay_view import screenshot
 
         shot = os.path.join(os.path.dirname(path), "replay.png")
@@ -153,7 +161,6 @@ class CampaignEndToEnd(unittest.TestCase):
         self.assertGreater(px["votes"], 300, px)
         self.assertGreater(px["plan"], 50, px)
         self.assertGreater(px["trajectory"], 100, px)
-        # A planner snapshot from the bag and the campaign's HTML report.
         from asg_analysis.report import campaign_report
         from asg_agent.ros.bag_figures import snapshot
 
