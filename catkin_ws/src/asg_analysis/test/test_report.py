@@ -68,5 +68,12 @@ def test_the_report_agrees_with_the_store(tmp_path):
     s = c.store.summary("rep")
     page = open(report.campaign_report(c.store.path, "rep", str(tmp_path / "report"), top=3)).read()
     assert f"<td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>" in page
-    assert page.count("rosrun asg_agent replay") == 3
+    # issue #78: what it searched for comes first, its best distinct findings each with its replay
+    from asg_agent.campaign.findings import distinct_summary, findings
+
+    d = distinct_summary(findings(c.store, "rep"))
+    assert page.index("<h2>What it found</h2>") < page.index("<h2>Counts")
+    assert f"<b>{d['findings']}</b> findings of the proxy reward" in page
+    assert f"<b>{d['distinct'][2.0]}</b> at 2 m" in page
+    assert page.count("rosrun asg_agent replay") == 3 + min(3, len(d["first_at_each_place"]))
     assert os.path.isfile(tmp_path / "report" / "curves.png")

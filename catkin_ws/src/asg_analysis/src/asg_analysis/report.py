@@ -3,8 +3,9 @@ replays are asg_agent.ros.bag_figures).
 
     python3 -m asg_analysis.report campaign STORE CAMPAIGN OUT_DIR [--top 10]
 
-`campaign` writes OUT_DIR/index.html (open it from disk, no server): the
-Table-2-style counts, the proxy over scenarios with its running best and the counts >= 3 as the
+`campaign` writes OUT_DIR/index.html (open it from disk, no server): first what the campaign
+searched for (its findings, their distinct places, the rules they have in common and the best
+distinct findings with their top-down figures and replay commands), then the Table-2-style counts, the proxy over scenarios with its running best and the counts >= 3 as the
 campaign went on, terminations, and the top-k table with each scenario's top-down figure and
 its replay command.
 """
@@ -138,6 +139,54 @@ def _three_stack_html(store, store_path: str, campaign: str, s: dict, out_dir: s
     )
 
 
+def _found_html(store, store_path: str, campaign: str, out_dir: str, top: int) -> str:
+    """What the campaign searched for, first (issue #78): its findings, their distinct places at
+    each reported radius and by what they hit, the rules they have in common (asg_analysis.rules,
+    learnt from this campaign; checked only on fresh samples), and the first finding of each
+    distinct place, largest reward first, with its top-down figure and replay command."""
+    from asg_agent.campaign.findings import distinct_summary, finding_rule, findings
+    from asg_analysis import rules
+    from asg_analysis.exports import experiment_of, read_rows, target_of
+    from asg_analysis.figures import top_down
+
+    settings = json.loads(store.campaign(campaign)["settings"] or "{}")
+    rule = finding_rule(settings)
+    d = distinct_summary(findings(store, campaign))
+    primary = d["primary_radius_m"]
+    radii = ", ".join(f"<b>{v}</b> at {r:g} m" if r == primary else f"{v} at {r:g} m" for r, v in d["distinct"].items())
+    hit = ", ".join(f"{html.escape(k)} {v}" for k, v in d["by_class"].items()) or "none"
+    out = (
+        f"<h2>What it found</h2><p><b>{d['findings']}</b> findings of the {html.escape(rule.name)} reward "
+        f"(reward &gt;= {rule.finding_at:g}); distinct: {radii} (a finding is distinct when the obstacle it hit, "
+        f"or where it ended without contact, lies at least {primary:g} m from every earlier distinct one of its "
+        f"class). By what they hit: {hit}.</p>"
+    )
+    try:
+        rows, camp = read_rows([], store_path, campaign)
+        learnt = rules.learn(rows, experiment_of(camp), target_of(camp))
+        out += "<h3>Rules</h3><pre>" + html.escape("\n".join(rules.lines(learnt))) + "</pre>"
+    except ValueError as e:
+        out += f"<h3>Rules</h3><p>none: {html.escape(str(e))}</p>"
+    best = sorted(d["first_at_each_place"], key=lambda f: (-f["reward"], f["job"]))[:top]
+    items = []
+    for f in best:
+        png = f"found_job{f['job']}.png"
+        top_down(store, campaign, f["job"], os.path.join(out_dir, png))
+        cls, x, y = f["place"]
+        cmd = f"rosrun asg_agent replay {store_path} {campaign} {f['job']}"
+        items.append(
+            f"<tr><td>{f['job']}</td><td>{html.escape(f['termination'])}</td><td>{html.escape(cls)} at "
+            f"({x:.1f}, {y:.1f}) m</td><td>{html.escape(str(f['attribution'] or ''))}</td><td>{f['reward']:.3f}</td>"
+            f"<td><a href='{png}'><img src='{png}' width='220'></a></td><td><code>{html.escape(cmd)}</code></td></tr>"
+        )
+    if items:
+        out += (
+            f"<h3>The best distinct findings</h3><table><tr><th>job</th><th>termination</th><th>place</th>"
+            f"<th>class</th><th>reward</th><th>top-down</th><th>replay</th></tr>{''.join(items)}</table>"
+        )
+    return out
+
+
 def _stack_words(settings: dict) -> str:
     """The stack under test as the report names it: the paper's (perception / model) or another."""
     stack = settings.get("stack", "paper")
@@ -215,6 +264,7 @@ def campaign_report(store_path: str, campaign: str, out_dir: str, top: int = 10)
             f"<b>{s['stack_collisions']}</b> the stack's (the reference collided too).</p>"
         )
     attribution += _three_stack_html(store, store_path, campaign, s, out_dir, top)
+    found = _found_html(store, store_path, campaign, out_dir, top)
     baseline = _baseline_html(c["experiment"], settings)
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(campaign)}</title>
 <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;
@@ -223,6 +273,7 @@ padding:4px 8px;text-align:right}}code{{font-size:85%}}</style></head><body>
 <p>method <b>{html.escape(c['method'])}</b>, experiment <b>{html.escape(c['experiment'])}</b>, seed {c['seed']},
 stack: {html.escape(_stack_words(settings))},
 workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html.escape(store_path)}</code></p>
+{found}
 <h2>Counts (as in the paper's Table 2)</h2>
 <table><tr><th>scenarios</th><th>proxy &gt;= 3</th><th>proxy &gt;= 4</th><th>per 1,000: &gt;= 3 / &gt;= 4</th><th>largest proxy</th></tr>
 <tr><td>{s['scenarios']}</td><td>{s['proxy_ge_3']}</td><td>{s['proxy_ge_4']}</td>
