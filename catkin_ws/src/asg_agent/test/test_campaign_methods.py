@@ -103,6 +103,12 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     s = store.summary("t")
     assert sc["findings/perception"][59] == s["perception_ge3"] and sc["findings/stack"][59] == s["stack_ge3"]
     assert sc["findings/proxy_ge3"][59] == sum(r["proxy"] >= 3 for r in rows.values())
+    # issue #78: the campaign's findings (here the proxy reward's) and their distinct places, first
+    from asg_agent.campaign.findings import distinct_summary, findings
+
+    d = distinct_summary(findings(store, "t"))
+    assert sc["findings/of_reward"][59] == d["findings"] == sc["findings/proxy_ge3"][59] > 0
+    assert sc["findings/distinct"][59] == d["distinct"][2.0] and sorted(sc["findings/distinct"]) == list(range(60))
     beta = [sc["agent/per_beta"][k] for k in sorted(sc["agent/per_beta"])]
     assert len(beta) > 10 and beta == sorted(beta) and beta[-1] > beta[0]
     assert {"agent/critic_loss", "agent/q", "agent/actor_loss", "agent/asp_weight", "agent/actor_saturation"} <= set(sc)
