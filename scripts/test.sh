@@ -13,8 +13,8 @@ mkdir -p "$RESULTS/pytest"
 # resolve (a fresh container) does not matter and nothing listens beyond this machine.
 export ROS_HOSTNAME=127.0.0.1 ROS_IP=127.0.0.1
 unset ROS_MASTER_URI
-# The U-Net backend of the end-to-end tests: the shipped bf16 where this CPU runs it natively,
-# channels_last where oneDNN would emulate it (25x slower; asg_perception.numerics.test_backend).
+# The U-Net backend of the end-to-end tests: the shipped default (fp32 polyphase), or, were the
+# default a bf16 one, channels_last where oneDNN would emulate it (asg_perception.numerics.test_backend).
 export ASG_TEST_UNET_BACKEND="${ASG_TEST_UNET_BACKEND:-$(/usr/bin/python3 -c \
     'from asg_perception.numerics import test_backend; print(test_backend())')}"
 log "U-Net backend of the end-to-end tests: $ASG_TEST_UNET_BACKEND"
