@@ -5,10 +5,11 @@ failing command and names it. Only these words change, each for a reason a test 
 - `--layouts 300` and `scenarios:=150`: the baseline's and the campaign's sizes (a test's budget);
 - `JOB`: the page's placeholder for a job number (the campaign's first, 0);
 - `python3`: /usr/bin/python3 (Debian's ROS lives in its site-packages);
-- before step 7, which says "Stop step 4's worker", the step-4 commands started in the background
-  are stopped (the page says it in words; a script says it with `kill`);
-- step 8's replay of a free-running stack may end NOT REPRODUCED (the page says so): its exit
-  status 1 then passes.
+- before step 7, which says "Stop step 4's worker and rviz (the master stays)", the step-4
+  commands started in the background are stopped, but for the master (the page says it in words;
+  a script says it with `kill`); the master is stopped at the end.
+Nothing else is added: no master of the script's own (issue #79: the page's step 4 starts it), and
+no exit status is excused.
 
     python3 tests/doc_recipe.py [--layouts 3] [--scenarios 5] > steps.sh
 """
@@ -66,16 +67,19 @@ def script(text: str, layouts: int = 3, scenarios: int = 5) -> str:
             out.append(STOP)
         for line in steps[s]:
             cmd = substitute(line, layouts, scenarios)
-            if cmd.endswith("&"):
+            if cmd.endswith("&") and cmd.split()[0] == "roscore":
+                out.append(f"{cmd} CORE=$!")  # the master stays until the end
+            elif cmd.endswith("&"):
                 out.append(f"{cmd} BG+=($!)")
             elif " replay " in f" {cmd} ":
-                out.append(
-                    f"OUT=$({cmd} 2>&1) || echo \"$OUT\" | grep -q 'NOT REPRODUCED' || fail {s} {shlex.quote(cmd)}"
-                )
+                out.append(f'OUT=$({cmd} 2>&1) || {{ echo "$OUT" | tail -20; fail {s} {shlex.quote(cmd)}; }}')
                 out.append('echo "$OUT" | tail -4')
             else:
                 out.append(f"{cmd} || fail {s} {shlex.quote(cmd)}")
     out.append(STOP)
+    out.append(
+        'if [ -n "${CORE:-}" ]; then kill -INT "$CORE" 2>/dev/null || true; wait "$CORE" 2>/dev/null || true; fi'
+    )
     out.append('echo "== steps 4-8 ran as the page writes them"')
     return "\n".join(out) + "\n"
 

@@ -88,16 +88,12 @@ set -eo pipefail
 PREFIX=$1 WORK=$2 LAYOUTS=$3 SCENARIOS=$4
 step() { echo "== $*"; }
 python3() { /usr/bin/python3 "$@"; }
-export ROS_MASTER_URI=http://127.0.0.1:11461 ROS_HOSTNAME=127.0.0.1 LP_NUM_THREADS=1
+export ROS_HOSTNAME=127.0.0.1 LP_NUM_THREADS=1
 source "$PREFIX/setup.bash"
 step "2. the user's workspace over the install space"
 (cd "$WORK/my_ws" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 > "$WORK/build.log" 2>&1) ||
   { tail -20 "$WORK/build.log"; exit 1; }
 source "$WORK/my_ws/devel/setup.bash"
-roscore -p 11461 > "$WORK/roscore.log" 2>&1 &
-CORE=$!
-trap 'kill -INT $CORE 2>/dev/null || true' EXIT
-until rostopic list > /dev/null 2>&1; do sleep 1; done
 SCENE=$(rospack find asg_bringup)/scenarios/exp1.yaml
 worker() {  # REG [sim_time]
   roslaunch --wait asg_bringup worker.launch stack:="$1" ${2:+sim_time:=$2} > "$WORK/worker.log" 2>&1 &
@@ -106,16 +102,22 @@ worker() {  # REG [sim_time]
 stop_worker() { kill -INT $WORKER; wait $WORKER || true; }
 
 if [ "$MODES" != free ]; then
-  step "lockstep: my_lockstep, Exp. 1 twice"
+  step "lockstep: my_lockstep, Exp. 1 twice (on a master of this script's own, stopped after)"
+  export ROS_MASTER_URI=http://127.0.0.1:11461
+  roscore -p 11461 > "$WORK/roscore.log" 2>&1 &
+  CORE=$!
+  until rostopic list > /dev/null 2>&1; do sleep 1; done
   worker "$(rospack find my_lockstep)/launch/asg_stack.launch"
   cd "$WORK/home"
   for i in 1 2; do rosrun asg_scenario run_scenario "$SCENE" --worker /worker_0 --out "lock$i" --timeout 300 | tail -1; done
   cmp lock1/trajectory.csv lock2/trajectory.csv
   echo "lockstep: the two runs' trajectories are equal"
   stop_worker
+  kill -INT $CORE; wait $CORE || true
 fi
 
-step "free: my_stack, docs/your-stack.md's steps 4-8 as the page writes them"
+step "free: my_stack, docs/your-stack.md's steps 4-8 as the page writes them (step 4 starts the master)"
+export ROS_MASTER_URI=http://127.0.0.1:11311  # a user's default: the page's roscore listens there
 cd "$WORK/home"
 source "$WORK/steps.sh"
 test "$(wc -l < ~/asg_runs/baseline/exp1-my-stack/my_stack.jsonl)" -eq "$LAYOUTS"
