@@ -380,7 +380,7 @@ def test_the_per_cpu_hour_sensitivity_to_the_machines_is_what_the_exports_say():
     assert min(a) > max(b)
 
 
-def test_the_v3_winner_is_train_launchs_default_and_the_readme_quotes_it_with_its_nearest_competitor():
+def test_the_v3_winner_is_train_launchs_default_and_its_figures_stay_off_the_readme():
     # issue #67: version 3's winner (the most flaw findings per CPU-hour, recomputed here from the
     # exports) is what `bash scripts/train.sh` runs; issue #68 item 7: the README quotes it beside
     # its nearest competitor and route-random, with the exact p values, every number from the exports
@@ -420,4 +420,7 @@ def test_the_v3_winner_is_train_launchs_default_and_the_readme_quotes_it_with_it
         f"nothing) found {mean[rr][0]:.1f} and {mean[rr][1]:.1f} (p = {p(rr, 0):.4f} on each)"
     )
     assert p(nearest, 0) < 0.01 <= p(nearest, 1) and p(rr, 0) == p(rr, 1) < 0.01
-    assert said in " ".join(open(os.path.join(REPO, "README.md"), encoding="utf-8").read().split()), said
+    # issue #79: the README's first screen quotes no study figure (they are docs/experiments.md's,
+    # with what round 7 found of them: the default collapsed onto a few places)
+    readme = " ".join(open(os.path.join(REPO, "README.md"), encoding="utf-8").read().split())
+    assert said not in readme and "p = " not in readme and "per CPU-hour" not in readme
