@@ -39,3 +39,51 @@ def test_a_block_past_the_seeds_is_refused(capsys, tmp_path):
         raise AssertionError("no refusal")
     assert blocks.main([str(tmp_path / "none.yaml"), str(tmp_path / "c.json"), "0"]) == 2
     assert "none.yaml" in capsys.readouterr().err
+
+
+def _export(path, name, seed, places):
+    """A made-up pilot export of Exp. 1: 100 scenarios, a flaw finding on the first juniper at each
+    of `places` (its x [m])."""
+    import gzip
+    import json
+
+    camp = {"name": name, "seed": seed, "settings": "{}", "experiment": "exp1", "experiment_text": "x"}
+    meshes = ["juniper"] * 4 + ["barberry"] * 4
+    with gzip.open(path, "wt") as f:
+        f.write(json.dumps({"campaign": camp}) + "\n")
+        for j in range(100):
+            hit = j < len(places)
+            row = {
+                "job": j,
+                "termination": "COLLISION" if hit else "SUCCESS",
+                "attribution": "flaw" if hit else "not_candidate",
+                "meshes": meshes,
+                "positions": [[places[j] if hit else 5.0, 50.0]] + [[5.0 + 10 * k, 95.0] for k in range(7)],
+                "collision_with": 0 if hit else None,
+                "trajectory_xy": [[20.0, 20.0], [50.0, 50.0]],
+            }
+            f.write(json.dumps(row) + "\n")
+
+
+def test_choose_takes_the_larger_distinct_mean_then_the_5_m_figure(tmp_path):
+    protocol = {
+        "name": "t",
+        "pilot": {
+            "budget": 100,
+            "search": {
+                "near": {"method": "novelty-ts", "tabu_m": 2.0, "reward": "flaw", "experiment": "e1"},
+                "far": {"method": "novelty-ts", "tabu_m": 5.0, "reward": "flaw", "experiment": "e2"},
+                "few": {"method": "random", "reward": "flaw", "experiment": "e3"},
+            },
+        },
+    }
+    # near: 12 places 3 m apart (12 at 2 m, 6 at 5 m); far: 10 places 6 m apart (10 at 2 and 5 m)
+    _export(tmp_path / "t-pilot-near-s20.jsonl.gz", "t-pilot-near-s20", 20, [3.0 * k for k in range(12)])
+    _export(tmp_path / "t-pilot-far-s20.jsonl.gz", "t-pilot-far-s20", 20, [6.0 * k for k in range(10)])
+    _export(tmp_path / "t-pilot-few-s20.jsonl.gz", "t-pilot-few-s20", 20, [6.0 * k for k in range(3)])
+    c = blocks.choose(protocol, str(tmp_path))
+    assert c["arms"]["near"]["mean_2m"] == 120.0 and c["arms"]["far"]["mean_2m"] == 100.0
+    assert c["arm"] == "near"  # 20 per 1,000 ahead: no tie
+    _export(tmp_path / "t-pilot-far-s20.jsonl.gz", "t-pilot-far-s20", 20, [6.0 * k for k in range(12)])
+    c = blocks.choose(protocol, str(tmp_path))  # 120 against 120: a tie; far has more at 5 m (120 against 60)
+    assert c["arm"] == "far" and c["tabu_m"] == 5.0 and c["experiment"] == "e2"

@@ -2,6 +2,7 @@
 of every arm in an order drawn from the block's seed, so that CPU-hours compare within a block.
 No ROS.
 
+    python3 -m asg_analysis.blocks choose PROTOCOL.yaml EXPORTS_DIR > results/STUDY/pilot_choice.json
     python3 -m asg_analysis.blocks PROTOCOL.yaml CHOICE.json BLOCK > results/STUDY/block-BLOCK.txt
 
 BLOCK counts from 0: block k runs every arm's k-th seed. The plan's lines are campaigns.sh's
@@ -60,8 +61,60 @@ def plan_text(cs: List[dict], k: int) -> str:
     return head + "".join(f"{c['name']}  {c['budget']} train {' '.join(c['args'])}\n" for c in cs)
 
 
+TIE = 5.0  # [per 1,000] pilot means closer than this are a tie (the protocol's choose rule)
+
+
+def choose(protocol: dict, folder: str) -> dict:
+    """The pilot's choice by protocol v4's rule: the arm with the larger mean distinct flaw
+    findings (2 m) per 1,000 over the seeds it ran; within TIE of the best, the larger mean at 5 m,
+    then the later-listed wider tabu (the rule names novelty5 over novelty2; among equals, the
+    larger tabu_m). Every arm's per-seed figures are kept in the choice."""
+    import glob
+    import os
+
+    from asg_agent.records.export import read_export
+    from asg_analysis.endpoints import campaign
+
+    pilot = protocol["pilot"]
+    rows = {}
+    for arm, spec in pilot["search"].items():
+        paths = sorted(glob.glob(os.path.join(folder, f"{protocol['name']}-pilot-{arm}-s*.jsonl.gz")))
+        cs = [campaign(*read_export(p), budget=int(pilot["budget"])) for p in paths]
+        if cs:
+            rows[arm] = {
+                "seeds": [c["seed"] for c in cs],
+                "per_1000_2m": [c["per_1000"]["2"] for c in cs],
+                "per_1000_5m": [c["per_1000"]["5"] for c in cs],
+                "mean_2m": sum(c["per_1000"]["2"] for c in cs) / len(cs),
+                "mean_5m": sum(c["per_1000"]["5"] for c in cs) / len(cs),
+                "spec": spec,
+            }
+    if not rows:
+        raise ValueError(f"no pilot export of {protocol['name']} in {folder}")
+    best = max(r["mean_2m"] for r in rows.values())
+    near = [a for a, r in rows.items() if r["mean_2m"] >= best - TIE]
+    arm = max(near, key=lambda a: (rows[a]["mean_5m"], float(rows[a]["spec"].get("tabu_m", 0.0))))
+    spec = rows[arm]["spec"]
+    return {
+        "arm": arm,
+        "method": spec["method"],
+        "tabu_m": float(spec.get("tabu_m", 0.0)),
+        "experiment": spec["experiment"],
+        "reward": spec["reward"],
+        "arms": rows,
+    }
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["choose"] and len(argv) == 3:
+        try:
+            with open(argv[1]) as f:
+                print(json.dumps(choose(yaml.safe_load(f), argv[2]), indent=1, sort_keys=True))
+        except (OSError, ValueError) as e:
+            print(f"blocks: {e}", file=sys.stderr)
+            return 2
+        return 0
     if len(argv) != 3:
         print(__doc__.split("\n\n")[1], file=sys.stderr)
         return 2

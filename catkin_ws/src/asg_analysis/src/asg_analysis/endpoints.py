@@ -2,7 +2,7 @@
 radius, distinct layouts and failure modes, per 1,000 scenarios and per CPU-hour; and a comparison
 of arms over seeds. A library: a study names its exports and arms, this computes. No ROS.
 
-    python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...]            # one line per campaign
+    python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] [--markdown]  # one line (row) per campaign
     python3 -m asg_analysis.endpoints --arm default=GLOB --arm route-random=GLOB [--budget 300]
                                                                        # arms compared (JSON)
 
@@ -85,12 +85,28 @@ def line(c: Dict) -> str:
     )
 
 
+def markdown(cs: List[Dict]) -> str:
+    """A table of campaigns' endpoints, one row each (what docs/experiments.md's blocks hold)."""
+    out = [
+        "| campaign | scenarios | flaw findings | distinct at 1 / 2 / 5 m | distinct per 1,000 (2 m) | distinct layouts | modes |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for c in cs:
+        d = c["distinct"]
+        out.append(
+            f"| {c['campaign']} | {c['scenarios']} | {c['findings']} | {d['1']} / {d['2']} / {d['5']} | "
+            f"{c['per_1000']['2']:.1f} | {c['distinct_layouts']} | {c['modes']} |"
+        )
+    return "\n".join(out)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python3 -m asg_analysis.endpoints", description=__doc__.split("\n\n")[0])
     p.add_argument("exports", nargs="*")
     p.add_argument("--arm", action="append", default=[], help="NAME=GLOB of exports (the first is the default)")
     p.add_argument("--budget", type=int, default=None, help="count the first N jobs")
     p.add_argument("--target", default="flaw", help="flaw, regression or failure")
+    p.add_argument("--markdown", action="store_true", help="the exports as one table")
     a = p.parse_args(argv)
     target = None if a.target == "failure" else a.target
     from asg_agent.records.export import read_export
@@ -104,8 +120,8 @@ def main(argv=None) -> int:
                 if not arms[name]:
                     raise ValueError(f"--arm {spec}: no export matches")
             print(json.dumps(compare(arms, next(iter(arms)), a.budget, target), indent=1, default=str))
-        for path in a.exports:
-            print(line(campaign(*read_export(path), budget=a.budget, target=target)))
+        cs = [campaign(*read_export(path), budget=a.budget, target=target) for path in a.exports]
+        print(markdown(cs) if a.markdown else "\n".join(line(c) for c in cs))
     except (OSError, ValueError) as e:
         print(f"endpoints: {e}", file=sys.stderr)
         return 2
