@@ -1,6 +1,7 @@
 """Issue #68: committed records hold repository-relative paths only. Every file git tracks under
-results/ (gzip files read decompressed; binary files skipped: pictures, SQLite, archives, model
-weights, TensorBoard event files) is scanned for a path of a machine: an absolute path whose first
+results/ (gzip files read decompressed; binary files skipped: pictures, model
+weights, TensorBoard event files; SQLite databases read as their SQL text and tar archives member
+by member since issue #79) is scanned for a path of a machine: an absolute path whose first
 folder is one where a checkout, a home or scratch data lives (/work/, /root/, /home/, /tmp/,
 /usr/local/, /old_root/, /mnt/, /media/, /Users/, /scratch/). Such a path means nothing on
 another machine; a record names a file of the repository relative to its root
@@ -28,7 +29,7 @@ FOLDERS = ("work", "root", "home", "tmp", "usr/local", "old_root", "mnt", "media
 
 #: an absolute path under one of FOLDERS, not preceded by a word character, a dot, `$`
 #: (`$REPO/...`), `~` or `-` (then it is part of a longer name), up to a space, quote or separator
-MACHINE_PATH = re.compile(rb"(?<![\w.$~-])/(?:" + b"|".join(f.encode() for f in FOLDERS) + rb")/[^\s\"'\\,;)\]]*")
+MACHINE_PATH = re.compile(rb"(?<![\w.$~-])/(?:" + b"|".join(f.encode() for f in FOLDERS) + rb")/[^\s\"'\\,;)\]\x00]*")
 
 #: files (fnmatch patterns) where paths under a prefix are allowed, with why
 ALLOWED = {
@@ -63,9 +64,46 @@ def committed(folder: str = "results") -> list:
     return [p for p in out.decode().split("\0") if p]
 
 
+def sqlite_text(data: bytes) -> bytes:
+    """The SQL text of an SQLite database's every table and row (blobs as hex: no path in them)."""
+    import sqlite3
+    import tempfile
+
+    with tempfile.NamedTemporaryFile(suffix=".sqlite") as f:
+        f.write(data)
+        f.flush()
+        db = sqlite3.connect(f.name)
+        try:
+            return "\n".join(db.iterdump()).encode("utf-8", "replace")
+        finally:
+            db.close()
+
+
+def archive_text(path: str, data: bytes) -> bytes:
+    """The text of every member of a tar archive (issue #79: a parked store is one), each read as
+    a committed file of its name would be: a database as its SQL text, a checkpoint (pickled) as
+    its bytes, whose strings a path would show in."""
+    import io
+    import tarfile
+
+    parts = []
+    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
+        for m in tar.getmembers():
+            if m.isfile():
+                body = tar.extractfile(m).read()
+                name = f"{path}/{m.name}"
+                parts.append(body if name.endswith((".ckpt", ".pkl")) else text_of(name, body) or b"")
+    return b"\n".join(parts)
+
+
 def text_of(path: str, data: bytes):
-    """The bytes to scan of a committed file (`data` as stored): gzip decompressed; None for a
-    binary file (by its name, a TensorBoard event file, or a NUL byte in it)."""
+    """The bytes to scan of a committed file (`data` as stored): gzip decompressed, an SQLite
+    database as its SQL text, a tar archive (`.tar`, `.tar.xz`, `.tar.gz`) as its members' text;
+    None for another binary file (by its name, a TensorBoard event file, or a NUL byte in it)."""
+    if path.endswith((".sqlite", ".sqlite3", ".db")):
+        return sqlite_text(data)
+    if path.endswith((".tar", ".tar.xz", ".tar.gz", ".tgz")):
+        return archive_text(path, data)
     if path.endswith(BINARY) or "tfevents" in os.path.basename(path):
         return None
     if path.endswith(".gz"):
@@ -135,3 +173,24 @@ def test_the_rule_tells_a_machine_path_from_others():
     # a gzip file is read decompressed; a binary one is skipped
     assert machine_paths("results/a.jsonl.gz", gzip.compress(b'{"f": "/work/main/x"}\n')) == ["/work/main/x"]
     assert machine_paths("results/a.png", b"/work/main/x") == []
+    # a database is read as its rows, an archive member by member (issue #79: a parked store)
+    import io
+    import sqlite3
+    import tarfile
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        db = sqlite3.connect(os.path.join(d, "s.sqlite"))
+        db.execute("CREATE TABLE campaigns (settings TEXT)")
+        db.execute("""INSERT INTO campaigns VALUES ('{"experiment_file": "/work/main/experiments/exp5.yaml"}')""")
+        db.commit()
+        db.close()
+        store = open(os.path.join(d, "s.sqlite"), "rb").read()
+    assert machine_paths("results/s.sqlite", store) == ["/work/main/experiments/exp5.yaml"]
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w:xz") as tar:
+        for name, body in (("store.sqlite", store), ("checkpoint.ckpt", b"\x80\x04/root/x.yaml\x00")):
+            info = tarfile.TarInfo(name)
+            info.size = len(body)
+            tar.addfile(info, io.BytesIO(body))
+    assert machine_paths("results/p.tar.xz", buf.getvalue()) == ["/work/main/experiments/exp5.yaml", "/root/x.yaml"]
