@@ -82,3 +82,31 @@ def test_the_flaw_study_page_says_the_default_collapsed_with_these_figures():
         assert f"{1000 * sum(per) / 1500:.1f}" in said and ", ".join(map(str, per)) in said
     assert "exact p = 0.0079, the wrong way (MAP-Elites 99.3; at 5 m: 34.0, 71.3 and 61.3)" in text
     assert "a search that learns what exposes the flaw" not in text
+
+
+def test_the_protocol_v4_pilot_block_is_its_exports():
+    """docs/experiments.md's pilot table of protocol v4, regenerated from results/distinct_v4's
+    pilot exports (python3 -m asg_analysis.endpoints --budget 150 --doc docs/experiments.md
+    "distinct v4 pilot" results/distinct_v4/dist4-pilot-*.jsonl.gz), and the figures for scale
+    beside it recomputed from the flaw study v3's exports."""
+    from asg_agent.records.export import read_export
+    from asg_analysis import endpoints
+
+    paths = sorted(glob.glob(os.path.join(REPO, "results", "distinct_v4", "dist4-pilot-*.jsonl.gz")))
+    assert len(paths) >= 4
+    table = endpoints.markdown([endpoints.campaign(*read_export(p), budget=150) for p in paths])
+    page = open(os.path.join(REPO, "docs", "experiments.md"), encoding="utf-8").read()
+    block = page.split("<!-- distinct v4 pilot: begin -->\n", 1)[1].split("<!-- distinct v4 pilot: end -->", 1)[0]
+    assert block.strip() == table.strip()
+    text = " ".join(page.split())
+
+    def first_150(pattern):
+        return [_plain_distinct(_rows(p)[:150], 2.0) for p in sorted(glob.glob(os.path.join(V3, pattern)))]
+
+    rr, rw = first_150("flaw3-route-random-s1[0-4].jsonl.gz"), first_150("flaw3-pilot-random-wide-s2[01].jsonl.gz")
+    said = (
+        f"held {', '.join(map(str, rr[:-1]))} and {rr[-1]} distinct flaw findings at 2 m "
+        f"({1000 * sum(rr) / 750:.1f} per 1,000), random in the route-wide space {rw[0]} and {rw[1]} "
+        f"({1000 * sum(rw) / 300:.1f})"
+    )
+    assert said in text, said

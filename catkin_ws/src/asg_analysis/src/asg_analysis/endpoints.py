@@ -3,6 +3,7 @@ radius, distinct layouts and failure modes, per 1,000 scenarios and per CPU-hour
 of arms over seeds. A library: a study names its exports and arms, this computes. No ROS.
 
     python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] [--markdown]  # one line (row) per campaign
+    python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] --doc PAGE BLOCK  # the table into PAGE's block
     python3 -m asg_analysis.endpoints --arm default=GLOB --arm route-random=GLOB [--budget 300]
                                                                        # arms compared (JSON)
 
@@ -100,6 +101,16 @@ def markdown(cs: List[Dict]) -> str:
     return "\n".join(out)
 
 
+def write_block(doc: str, block: str, text: str) -> None:
+    """Replaces the text between `<!-- BLOCK: begin -->` and `<!-- BLOCK: end -->` of `doc`."""
+    begin, end = f"<!-- {block}: begin -->\n", f"<!-- {block}: end -->"
+    page = open(doc, encoding="utf-8").read()
+    if begin not in page or end not in page:
+        raise ValueError(f"{doc}: no block {block!r}")
+    head, rest = page.split(begin, 1)
+    open(doc, "w", encoding="utf-8").write(head + begin + text.rstrip("\n") + "\n" + end + rest.split(end, 1)[1])
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python3 -m asg_analysis.endpoints", description=__doc__.split("\n\n")[0])
     p.add_argument("exports", nargs="*")
@@ -107,6 +118,7 @@ def main(argv=None) -> int:
     p.add_argument("--budget", type=int, default=None, help="count the first N jobs")
     p.add_argument("--target", default="flaw", help="flaw, regression or failure")
     p.add_argument("--markdown", action="store_true", help="the exports as one table")
+    p.add_argument("--doc", nargs=2, metavar=("PAGE", "BLOCK"), help="write the table into PAGE's block BLOCK")
     a = p.parse_args(argv)
     target = None if a.target == "failure" else a.target
     from asg_agent.records.export import read_export
@@ -120,8 +132,11 @@ def main(argv=None) -> int:
                 if not arms[name]:
                     raise ValueError(f"--arm {spec}: no export matches")
             print(json.dumps(compare(arms, next(iter(arms)), a.budget, target), indent=1, default=str))
-        cs = [campaign(*read_export(path), budget=a.budget, target=target) for path in a.exports]
-        print(markdown(cs) if a.markdown else "\n".join(line(c) for c in cs))
+        cs = [campaign(*read_export(path), budget=a.budget, target=target) for path in sorted(a.exports)]
+        if a.doc:
+            write_block(a.doc[0], a.doc[1], markdown(cs))
+        elif cs:
+            print(markdown(cs) if a.markdown else "\n".join(line(c) for c in cs))
     except (OSError, ValueError) as e:
         print(f"endpoints: {e}", file=sys.stderr)
         return 2
