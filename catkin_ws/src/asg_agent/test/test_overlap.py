@@ -61,7 +61,7 @@ def test_the_default_tolerance_is_the_augmentations_radius(capsys):
     assert overlap.main([suite, TRAINING, "--tol-m", str(overlap.SAME_M)]) == 0
 
 
-def test_a_suite_exported_apart_from_a_training_source(tmp_path):
+def test_a_suite_exported_apart_from_a_training_source(tmp_path, capsys):
     with pytest.raises(overlap.OverlapError, match=r"job 24 = exp1c-td3-per-asp-s0 job 24"):
         export_suite([HELDOUT], str(tmp_path / "s"), ("flaw", "model"), apart_from=[TRAINING])
     s = export_suite([HELDOUT], str(tmp_path / "s"), ("flaw", "model"), apart_from=[TRAINING], drop_shared=True)
@@ -70,7 +70,11 @@ def test_a_suite_exported_apart_from_a_training_source(tmp_path):
     # the suite as a source: its scenes against the training export, none shared
     assert overlap.shared(overlap.scenes_of(str(tmp_path / "s")), overlap.scenes_of(TRAINING)) == []
     assert overlap.main([str(tmp_path / "s"), TRAINING]) == 0
+    assert f"no scene shared with {TRAINING}" in capsys.readouterr().out
     assert overlap.main([HELDOUT, TRAINING]) == 1
+    # the refusal names how many scenes and which (an exit code alone is shared by every error)
+    err = capsys.readouterr().err
+    assert "117 of 500 scenes are in a training source" in err and "job 116 = exp1c-td3-per-asp-s0 job 116" in err
 
 
 def test_the_tolerance_decides_what_is_one_scene():

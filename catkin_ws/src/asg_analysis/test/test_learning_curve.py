@@ -24,7 +24,7 @@ def test_findings_are_counted_in_their_block_and_only_below_the_budget():
         lc.blocks(rows, 10, 0)
 
 
-def test_a_learning_arm_rises_and_a_level_one_does_not(tmp_path):
+def test_a_learning_arm_rises_and_a_level_one_does_not(tmp_path, capsys):
     # made-up campaigns: one finds more as it goes, one finds the same throughout
     _export(tmp_path / "a1.jsonl.gz", "a1", ["pass"] * 5 + ["flaw", "pass", "flaw", "flaw", "flaw"])
     _export(tmp_path / "a2.jsonl.gz", "a2", ["pass"] * 4 + ["flaw"] + ["flaw"] * 5)
@@ -35,5 +35,8 @@ def test_a_learning_arm_rises_and_a_level_one_does_not(tmp_path):
     assert "| 0-4 | 0.5 (0, 1) | 3.0 (3) |" in md and "| 5-9 | 4.5 (4, 5) | 2.0 (2) |" in md
     drawn = lc.figure(res, str(tmp_path / "c.png"))
     assert drawn == {"learns": [0.5, 4.5], "level": [3.0, 2.0]} and (tmp_path / "c.png").stat().st_size > 0
+    # each refusal names what is wrong (an exit code alone is shared by every error)
     assert lc.main([str(tmp_path), "--arm", "x=a1,nope", "--budget", "10", "--block", "5"]) == 2
+    assert f"no export {tmp_path / 'nope.jsonl.gz'}" in capsys.readouterr().err
     assert lc.main([str(tmp_path), "--arm", "no-equals-sign"]) == 2
+    assert "--arm 'no-equals-sign' is not NAME=CAMPAIGN" in capsys.readouterr().err
