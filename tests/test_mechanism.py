@@ -107,7 +107,7 @@ def test_frame_counts_on_a_frame_built_by_hand():
 
 def test_the_dataset_tool_writes_the_obstacle_index_of_a_findings_scene(tmp_path):
     cv2 = pytest.importorskip("cv2")
-    from asg_agent.campaign.hardening import DATASET_TOOL
+    from asg_agent.campaign.hardening import dataset_tool
 
     found = mechanism.findings([os.path.join(REPO, "results", "hardening", "loop-flawed-s20.jsonl.gz")])
     f = max(found[:10], key=lambda f: len(f["xy"]))
@@ -115,7 +115,7 @@ def test_the_dataset_tool_writes_the_obstacle_index_of_a_findings_scene(tmp_path
     keys = mechanism.write_poses([f], str(tmp_path))
     assert keys and all(k == 0 for k, _ in keys)
     subprocess.run(
-        [DATASET_TOOL, "--out", str(tmp_path / "frames"), "--poses", str(tmp_path / "poses.csv"), "--instances", "1"],
+        [dataset_tool(), "--out", str(tmp_path / "frames"), "--poses", str(tmp_path / "poses.csv"), "--instances", "1"],
         check=True,
         capture_output=True,
     )

@@ -112,14 +112,18 @@ def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input
     out = str(tmp_path / "done.jsonl.gz")
     export(c.store, "done", out)
     assert main(["complete", out, "12"]) == 0
+    capsys.readouterr()
     assert main(["complete", out, "13"]) == 1  # a larger budget than it ran: not done
+    assert "not complete: 12 of 13 scenarios" in capsys.readouterr().err
     assert main(["complete", str(tmp_path / "none.jsonl.gz"), "12"]) == 1
+    assert "none.jsonl.gz: not complete: no such export" in capsys.readouterr().err
     cut = campaign(tmp_path, "cut", DyingPool(9, workers=2, seed=5), total=40, store=c.store)
     cut.start()
     with pytest.raises(Interrupt):
         cut.run()
     export(c.store, "cut", str(tmp_path / "cut.jsonl.gz"))
     assert main(["complete", str(tmp_path / "cut.jsonl.gz"), "1"]) == 1  # unfinished
+    assert "not complete: campaign cut is unfinished" in capsys.readouterr().err
     store = c.store.path
     assert main(["park", "--unfinished-only", store, "done", str(tmp_path / "p.tar.xz")]) == 0
     assert not os.path.exists(tmp_path / "p.tar.xz") and "finished; not parked" in capsys.readouterr().out
@@ -305,13 +309,18 @@ def test_the_store_and_the_export_hold_repository_relative_paths(tmp_path):
 
 def test_reward_auto_stands_for_what_the_references_can_see_and_is_stored_resolved():
     """train.launch's default (issue #67): --reward auto is flaw with the unflawed stack's re-runs,
-    regression with a release's, and the paper's proxy with none or ground truth alone; the
-    parsed options (and so the store's record of the campaign) name the resolved reward."""
+    regression with a release's, and (issue #78) the stack's own failures with none or ground
+    truth alone; the parsed options (and so the store's record of the campaign) name the resolved
+    reward."""
     from asg_agent.cli.campaign import parse
     from asg_agent.scoring import rewards
 
     assert rewards.for_roles(["full", "ground_truth"]) == "flaw"
     assert rewards.for_roles(["release"]) == "regression"
-    assert rewards.for_roles(["ground_truth"]) == "proxy" and rewards.for_roles([]) == "proxy"
-    assert parse([EXP, "--fake-workers", "2", "--reward", "auto"]).reward == "proxy"
+    assert rewards.for_roles(["ground_truth"]) == "failure" and rewards.for_roles([]) == "failure"
+    assert parse([EXP, "--fake-workers", "2", "--reward", "auto"]).reward == "failure"
+    # the failure reward: 1 for a failed run, graded below 0.5 by clearance, a finding at 1
+    assert rewards.failure_reward("COLLISION", 0.0) == rewards.failure_reward("STUCK_TIMEOUT", 4.0) == 1.0
+    assert rewards.GRADED_CAP > rewards.failure_reward("SUCCESS", 0.5) > rewards.failure_reward("SUCCESS", 3.0) > 0.0
+    assert rewards.failure_reward("SUCCESS", 9.0) == 0.0 and rewards.REGISTRY["failure"].finding_at == 1.0
     assert rewards.AUTO not in rewards.REWARDS  # a name for a choice, never a reward of its own

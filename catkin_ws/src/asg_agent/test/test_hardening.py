@@ -93,7 +93,6 @@ def test_frame_sets_are_exact_and_reproducible(tmp_path, suite_sources):
         hd.write_frame_set(suite_sources[:4], str(tmp_path / "d"), 10, 7, hd.Perturbation(variants=0), {})
 
 
-@pytest.mark.skipif(not os.path.isfile(hd.DATASET_TOOL), reason="asg_sim_dataset not built")
 def test_cli_renders_ground_truth_frames_of_the_scenes(tmp_path, capsys):
     out = str(tmp_path / "set")
     rc = harden_cli(
@@ -119,7 +118,7 @@ def test_cli_renders_ground_truth_frames_of_the_scenes(tmp_path, capsys):
     ]:
         bad.write_text(text)
         r = subprocess.run(
-            [hd.DATASET_TOOL, "--out", str(tmp_path / "o"), "--poses", str(bad)], capture_output=True, text=True
+            [hd.dataset_tool(), "--out", str(tmp_path / "o"), "--poses", str(bad)], capture_output=True, text=True
         )
         assert r.returncode == 1 and why in r.stderr, r.stderr
     capsys.readouterr()

@@ -3,13 +3,23 @@ import subprocess
 
 import pytest
 
-WS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-DATASET_TOOL = os.path.join(WS, "devel", "lib", "asg_sim", "asg_sim_dataset")
-
 
 def make_dataset(folder, count, seed, meshes="juniper,barberry", extra=()):
+    from asg_scenario.binaries import find_binary
+
     subprocess.run(
-        [DATASET_TOOL, "--out", str(folder), "--count", str(count), "--seed", str(seed), "--meshes", meshes, *extra],
+        [
+            find_binary("asg_sim", "asg_sim_dataset"),
+            "--out",
+            str(folder),
+            "--count",
+            str(count),
+            "--seed",
+            str(seed),
+            "--meshes",
+            meshes,
+            *extra,
+        ],
         check=True,
         capture_output=True,
         env=dict(os.environ, LP_NUM_THREADS="1"),

@@ -126,7 +126,7 @@ def measure(export_paths: Sequence[str], out: str, models: Dict[str, str], tool:
     """Renders, labels and counts (module docstring); writes and returns `out`/mechanism.json."""
     import cv2
 
-    from asg_agent.campaign.hardening import DATASET_TOOL
+    from asg_agent.campaign.hardening import dataset_tool
     from asg_perception.inference import Segmenter
 
     found = findings(export_paths)
@@ -135,7 +135,7 @@ def measure(export_paths: Sequence[str], out: str, models: Dict[str, str], tool:
     keys = write_poses(found, out)
     frames = os.path.join(out, "frames")
     r = subprocess.run(
-        [tool or DATASET_TOOL, "--out", frames, "--poses", os.path.join(out, "poses.csv"), "--instances", "1"],
+        [tool or dataset_tool(), "--out", frames, "--poses", os.path.join(out, "poses.csv"), "--instances", "1"],
         capture_output=True,
         text=True,
     )

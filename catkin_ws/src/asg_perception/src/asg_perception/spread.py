@@ -31,7 +31,9 @@ def measure(seed: int, suffix: str, out: str):
     models = os.path.join(WS, "src", "asg_perception", "models")
     with tempfile.TemporaryDirectory() as d:
         env = dict(os.environ, LP_NUM_THREADS="1")
-        dataset = os.path.join(WS, "devel", "lib", "asg_sim", "asg_sim_dataset")
+        from asg_scenario.binaries import find_binary  # asg_sim: an exec_depend of asg_perception
+
+        dataset = find_binary("asg_sim", "asg_sim_dataset")
         cmd = [dataset, "--out", d, "--count", str(FRAMES), "--seed", str(seed), "--meshes", "juniper,barberry"]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, env=env)
         cmd = [sys.executable, "-m", "asg_perception.evaluate", f"full={models}/full{suffix}.pt"]

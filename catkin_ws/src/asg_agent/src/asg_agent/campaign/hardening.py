@@ -26,9 +26,19 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 from asg_agent.campaign.overlap import AUGMENT_SHIFT_M
-from asg_agent.paths import REPO
 
-DATASET_TOOL = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "asg_sim_dataset")
+
+def dataset_tool() -> str:
+    """asg_sim's `asg_sim_dataset`, found as ROS finds executables (asg_scenario.binaries; an
+    exec_depend of asg_agent)."""
+    from asg_scenario.binaries import BinaryNotFound, find_binary
+
+    try:
+        return find_binary("asg_sim", "asg_sim_dataset")
+    except BinaryNotFound as e:
+        raise HardeningError(str(e)) from None
+
+
 FORMAT = "asg_hardening/1"
 
 
@@ -263,8 +273,9 @@ def write_frame_set(sources: List[Source], out: str, frames: int, seed: int, p: 
     return info
 
 
-def render(out: str, tool: str = DATASET_TOOL, quiet: bool = False) -> str:
-    """Renders `out`/poses.csv into `out`/frames with asg_sim_dataset; returns that folder."""
+def render(out: str, tool: str = "", quiet: bool = False) -> str:
+    """Renders `out`/poses.csv into `out`/frames with asg_sim_dataset (or `tool`); returns that folder."""
+    tool = tool or dataset_tool()
     if not os.path.isfile(tool):
         raise HardeningError(f"{tool}: not built (build the workspace: scripts/common.sh build_workspace)")
     frames = os.path.join(out, "frames")

@@ -152,7 +152,11 @@ class Campaign:
             self.seed,
             # the reward as it ran (what its findings are: campaign/findings.py)
             dict(
-                self.settings, total=self.total, slots=self.slots, method_config=self.method.config(), reward=self.reward
+                self.settings,
+                total=self.total,
+                slots=self.slots,
+                method_config=self.method.config(),
+                reward=self.reward,
             ),
         )
         self.store.record_event(self.name, dict(provenance(), kind="start", stored=0))

@@ -135,15 +135,17 @@ def run(a) -> int:
 
 
 def closed_loop_tool() -> str:
-    """The built asg_closed_loop of this workspace (or $ASG_CLOSED_LOOP)."""
-    tool = os.environ.get("ASG_CLOSED_LOOP") or os.path.join(
-        REPO, "catkin_ws", "devel", "lib", "asg_planner_harness", "asg_closed_loop"
-    )
+    """asg_planner_harness's asg_closed_loop, found as ROS finds executables (asg_scenario.binaries;
+    an exec_depend of asg_agent), or $ASG_CLOSED_LOOP."""
+    from asg_scenario.binaries import BinaryNotFound, find_binary
+
+    tool = os.environ.get("ASG_CLOSED_LOOP")
+    try:
+        tool = tool or find_binary("asg_planner_harness", "asg_closed_loop")
+    except BinaryNotFound as e:
+        raise SystemExit(f"baseline offline: {e}, or set ASG_CLOSED_LOOP") from None
     if not os.access(tool, os.X_OK):
-        raise SystemExit(
-            f"baseline offline: no asg_closed_loop at {tool}: build the workspace first "
-            "(bash scripts/setup.sh) or set ASG_CLOSED_LOOP"
-        )
+        raise SystemExit(f"baseline offline: ASG_CLOSED_LOOP={tool} is not an executable")
     return tool
 
 

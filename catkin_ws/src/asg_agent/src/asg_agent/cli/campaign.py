@@ -158,7 +158,7 @@ def _run_options(p):
         default="proxy",
         choices=REWARDS + (rewards.AUTO,),
         help="what the search maximises: auto (the one the references can see: flaw with --reference "
-        "full=..., regression with --reference release=..., else proxy; train.launch's default), the stack under test's proxy (the paper), "
+        "full=..., regression with --reference release=..., else failure; train.launch's default), the stack under test's proxy (the paper), "
         "proxy - reference proxy (differential; needs --reference-workers), the proxy plus "
         "--collision-bonus when the stack under test collided and the reference reached the goal (collision), "
         "the proxy plus a dense term for how close the vehicle came to an obstacle (clearance) or how soon it "
@@ -290,7 +290,9 @@ def findings_lines(store, name, top: int = 10) -> list:
         lines.append("findings by what they hit: " + ", ".join(f"{k} {v}" for k, v in d["by_class"].items()))
     first = sorted(d["first_at_each_place"], key=lambda f: (-f["reward"], f["job"]))[:top]
     if first:
-        lines.append(f"best distinct findings (the first at each place; replay: rosrun asg_agent replay STORE {name} JOB):")
+        lines.append(
+            f"best distinct findings (the first at each place; replay: rosrun asg_agent replay STORE {name} JOB):"
+        )
     for f in first:
         cls, x, y = f["place"]
         what = f"{cls} at ({x:.1f}, {y:.1f}) m" if cls != "no contact" else f"no contact, ended at ({x:.1f}, {y:.1f}) m"

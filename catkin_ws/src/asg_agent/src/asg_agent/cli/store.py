@@ -82,11 +82,18 @@ def main(argv=None) -> int:
         n = export(store, args.campaign, args.out)
         print(f"{args.out}: {n} scenarios")
         return 0
-    if args.cmd == "complete":
+    if args.cmd == "complete":  # exit 1 (not complete) says why
         if not os.path.isfile(args.export):
+            print(f"{args.export}: not complete: no such export", file=sys.stderr)
             return 1
         c, rows = read_export(args.export)
-        return 0 if c["finished"] and len(rows) >= args.scenarios else 1
+        if not c["finished"]:
+            print(f"{args.export}: not complete: campaign {c['name']} is unfinished", file=sys.stderr)
+            return 1
+        if len(rows) < args.scenarios:
+            print(f"{args.export}: not complete: {len(rows)} of {args.scenarios} scenarios", file=sys.stderr)
+            return 1
+        return 0
     for path in args.exports:  # summary
         c, rows = read_export(path)
         print(json.dumps({"campaign": c["name"], **counts(rows)}))

@@ -38,9 +38,13 @@ search may vary is otherwise the same (the obstacles' classes and counts stay th
 With `action_space: route-wide` (issue #67) u is the same and v maps piecewise linearly: |v| <= 1/2
 covers the route band |d| <= route_lateral_m (at half the route space's resolution), and 1/2 < |v|
 <= 1 covers the rest, out to the farthest corner of the landscape's square from the route line
-(`RouteFrame.edge_m`; a point beyond the square is clipped onto its border). Every layout of the
-scene's square is reachable (every obstacle may be near the route or out of its way), and half of
-each obstacle's range still lies in the band. Nothing in the map depends on an obstacle's class.
+(`RouteFrame.edge_m`; a point beyond the square is clipped onto its border: about 13 % of uniform
+obstacles on Exp. 1). Not every layout of the square is reachable: along the route u covers only
+the part outside the safety radii, so a point whose projection on the route falls behind the
+start's safety radius or beyond the goal's is not (about 25 % of Exp. 1's square outside the
+safety discs: the corners behind the start and beyond the goal). Every obstacle may still be near
+the route or out of its way, and half of each obstacle's range lies in the band. Nothing in the
+map depends on an obstacle's class.
 
 The action then goes on with the terrain values, in this order: the amplitude, one height per
 hill, one x, y per hill.

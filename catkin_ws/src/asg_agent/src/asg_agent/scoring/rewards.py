@@ -20,6 +20,10 @@ proxy, which scores a collision like any short run.
   with proxy below attribution.CANDIDATE) is NON_CANDIDATE_FLAW: it showed nothing of a failure.
 - `regression` (issue #67): the same for a stack pair (attribution's `release` role): 1 for a
   `regression` (only the stack under test fails), graded against the release's run, 0 otherwise.
+- `failure` (issue #78): a stack's own failures, for a stack tested without a reference (a user's
+  stack, `attribution:=false`): 1 for a run that failed (a collision, a timeout, a flip, out of
+  bounds: asg_scenario.schema.FAILED_TERMINATIONS), else a graded part below GRADED_CAP from how
+  close it came to an obstacle, GRADED_CAP x (1 - c / CLEARANCE_RANGE); nothing for an ERROR.
 
 All distances are read at 10 Hz (every 6th sample of the 60 Hz trajectory, as attribution keeps a
 reference run's positions), so the stack under test and a reference are measured alike.
@@ -124,6 +128,16 @@ def flaw_reward(
     c, cf = min(clearance, CLEARANCE_RANGE), min(full_clearance, CLEARANCE_RANGE)
     dc = max(cf - c, 0.0) / CLEARANCE_RANGE
     return GRADED_CAP * 0.5 * (dp + dc) * (1.0 - 1e-9)
+
+
+def failure_reward(termination: str, clearance: float) -> float:
+    """The `failure` reward of a run (see the module's text): its termination and its smallest
+    clearance [m] to an obstacle's disc."""
+    from asg_scenario.schema import FAILED_TERMINATIONS
+
+    if termination in FAILED_TERMINATIONS:
+        return CLASS_FINDING
+    return GRADED_CAP * (1.0 - min(clearance, CLEARANCE_RANGE) / CLEARANCE_RANGE) * (1.0 - 1e-9)
 
 
 def collision_reward(proxy: float, termination: str, reference_termination: Optional[str], bonus: float) -> float:
@@ -247,6 +261,11 @@ def _registry() -> Dict[str, Reward]:
             ),
             Reward("regret", proxy, _regret, waits=True, roles=(attr.FULL,), every_scenario=True),
             Reward(
+                "failure",
+                lambda run, bonus: failure_reward(run.termination, min_clearance(run.request, run.xy, run.removed)),
+                finding_at=CLASS_FINDING,
+            ),
+            Reward(
                 "flaw",
                 lambda run, bonus: NON_CANDIDATE_FLAW,
                 _class_reward("flaw", attr.FULL),
@@ -277,12 +296,13 @@ AUTO = "auto"
 def for_roles(roles: Sequence[str]) -> str:
     """The reward `auto` stands for, given the roles of the campaign's references: `flaw` with the
     unflawed stack's re-runs (three-stack attribution; the flaw study v3's winner), `regression`
-    with a release's (a stack pair), else the paper's `proxy` (no reference, or ground truth
-    alone, which classes no flaw)."""
+    with a release's (a stack pair), else `failure`, the stack's own failures (no reference, or
+    ground truth alone, which classes no flaw; issue #78: the paper's proxy, round 6's choice
+    here, does not see failures)."""
     from asg_agent.scoring import attribution as attr
 
     if attr.FULL in roles:
         return "flaw"
     if attr.RELEASE in roles:
         return "regression"
-    return "proxy"
+    return "failure"

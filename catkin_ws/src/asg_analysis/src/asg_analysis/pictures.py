@@ -1,9 +1,10 @@
 """The picture panels of docs/simulator.md (issue #27; in Python since issue #38): variants of one
 scenario file (terrain removed, fog, overcast) rendered from one camera pose with asg_sim_render,
-camera RGB above and ground-truth labels below. No ROS.
+camera RGB above and ground-truth labels below. No ROS. (In asg_analysis since issue #80: it runs
+asg_sim's renderer, and asg_sim builds on asg_scenario, where it was.)
 
-    python3 -m asg_scenario.pictures terrain [--out docs/images/terrain_panel.png] [--pose 22 50 0.3]
-    python3 -m asg_scenario.pictures weather [--out docs/images/weather_panel.png]
+    python3 -m asg_analysis.pictures terrain [--out docs/images/terrain_panel.png] [--pose 22 50 0.3]
+    python3 -m asg_analysis.pictures weather [--out docs/images/weather_panel.png]
 """
 
 import argparse
@@ -17,7 +18,6 @@ from typing import Dict, List, Tuple
 import yaml
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 5))
-RENDER = os.path.join(REPO, "catkin_ws", "devel", "lib", "asg_sim", "asg_sim_render")
 
 FOG = {"fog_visibility_m": 40.0}  # [m] visibility
 OVERCAST = {"cloud_cover": 1.0}  # [-] full cover
@@ -68,8 +68,13 @@ def variants(scenario: dict, specs: List[Tuple]) -> Dict[str, dict]:
     return out
 
 
-def render(scenarios: Dict[str, dict], folder: str, pose, render_bin: str = RENDER):
-    """Each scenario through asg_sim_render: FOLDER/NAME_{rgb,labels,top}.png."""
+def render(scenarios: Dict[str, dict], folder: str, pose, render_bin: str = ""):
+    """Each scenario through asg_sim_render (asg_sim's, found as ROS finds executables, or
+    `render_bin`): FOLDER/NAME_{rgb,labels,top}.png."""
+    if not render_bin:
+        from asg_scenario.binaries import find_binary
+
+        render_bin = find_binary("asg_sim", "asg_sim_render")
     if not os.access(render_bin, os.X_OK):
         raise FileNotFoundError(f"{render_bin}: not built (bash scripts/setup.sh)")
     for name, s in scenarios.items():
@@ -107,7 +112,7 @@ def compose(folder: str, panel: dict, out: str):
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="asg_scenario.pictures", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="asg_analysis.pictures", description=__doc__.split("\n\n")[0])
     p.add_argument("panel", choices=sorted(PANELS))
     p.add_argument("--out", default="", help="PNG (default: docs/images/PANEL_panel.png)")
     p.add_argument("--pose", type=float, nargs=3, default=None, help="[m m rad] camera x, y, yaw")
