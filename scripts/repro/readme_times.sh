@@ -12,7 +12,8 @@ for name in "$@"; do
   case "$name" in demo | train | test) ;; *) echo "readme_times: $name is not demo, train or test" >&2; exit 2 ;; esac
   fresh=$([ -f "$REPO/catkin_ws/devel/setup.bash" ] && echo false || echo true)
   start=$(date +%s.%N)
-  bash "$REPO/scripts/$name.sh" > "$OUT/$name.log" 2>&1
+  mkdir -p "$REPO/runs/readme_times"
+  bash "$REPO/scripts/$name.sh" > "$REPO/runs/readme_times/$name.log" 2>&1  # its console, not committed
   rc=$?
   end=$(date +%s.%N)
   /usr/bin/python3 - "$OUT" "$name" "$start" "$end" "$rc" "$fresh" <<'PY'
