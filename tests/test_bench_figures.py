@@ -10,8 +10,17 @@ import os
 import pytest
 
 from asg_analysis.bench import before_after, before_after_sentence
+from doc_pages import guide, record
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+BENCH_PAGES = [
+    guide("benchmarks.md"),
+    record("campaign-throughput"),
+    record("bf16-lite-backends"),
+    record("three-stack-attribution-cost"),
+    record("refactors-before-after"),
+    record("fp32-and-polyphase"),
+]
 
 
 @pytest.mark.parametrize("tag", ["r4-arch", "r5-arch", "r5-numerics", "r5-final"])
@@ -25,8 +34,7 @@ def test_the_refactor_bench_in_the_docs_is_its_reports(tag):
         return [json.load(open(p)) for p in paths]
 
     sentence = before_after_sentence(before_after(load(before), load(after)))
-    with open(os.path.join(REPO, "docs", "benchmarks.md")) as f:
-        assert sentence in " ".join(f.read().split()), sentence
+    assert sentence in " ".join(_bench_doc().split()), sentence
     # every campaign, on either side, found the same 120 results (requests, outcomes, trajectories)
     digests = {open(p[: -len(".json")] + ".digest").read().strip() for p in before + after}
     assert len(digests) == 1 and next(iter(digests)).startswith("120 "), digests
@@ -44,7 +52,7 @@ def test_the_avx2_prediction_is_the_arithmetic_and_the_model_holds_on_a_measured
     ]
     shape = [json.load(open(os.path.join(bench, f"r4-three-{k}-w3.json"))) for k in (1, 2, 3)]
     assert len(non_unet) == 6 and all(r["machine"]["cpu"] == "AMD EPYC" for r in non_unet)
-    doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
+    doc = " ".join(_bench_doc().split())
     for ms in (62, 24, 22):  # 22: the AVX2 EPYC's 62 ms x polyphase / channels_last pinned to AVX2 (10.00 / 27.99)
         assert predict_sentence(predict(ms, non_unet, shape, 150, 2)) in doc, ms
     # the model against campaigns that ran: each three-stack bench from its own per-process CPU
@@ -83,7 +91,7 @@ def test_the_numerics_bench_says_what_its_reports_say(tag, fast_runs):
         f"{statistics.median(rate):,.0f} ({rate[0]:,.0f}-{rate[-1]:,.0f}) scenarios an hour, "
         f"{statistics.median(rate) / c['after']['rate'][0]:.2f}x the default's"
     )
-    doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
+    doc = " ".join(_bench_doc().split())
     assert said in doc, said
     # the fast side's campaigns agree with each other (bf16 is deterministic on one ISA)
     fast_digests = {open(p[: -len(".json")] + ".digest").read().strip() for p in fast_paths}
@@ -102,7 +110,7 @@ def test_the_polyphase_bench_and_label_table_in_the_docs_are_their_exports():
     # thread-pool fixes; every campaign found the same 120 results
     bench = os.path.join(REPO, "results", "bench")
     pair = [json.load(open(os.path.join(bench, f"r5-polyphase-{side}-1.json"))) for side in ("before", "after")]
-    doc = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md")).read().split())
+    doc = " ".join(_bench_doc().split())
     c = before_after(pair[:1], pair[1:])
     assert before_after_sentence(c) in doc
     assert c["rate_ratio"] > 1.0 and c["cpu_ratio"] < 1.0  # what the section says: faster, less CPU
@@ -120,15 +128,15 @@ def test_the_polyphase_bench_and_label_table_in_the_docs_are_their_exports():
 
 
 def _bench_doc():
-    with open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8") as f:
-        return f.read()
+    """The benchmarks guide and the benchmark study records (issue #79 split them)."""
+    return "\n\n".join(open(p, encoding="utf-8").read() for p in BENCH_PAGES)
 
 
 def test_every_stored_reference_file_the_docs_cite_exists():
     # a file that is gone is named without its folder, as what it was then
     import re
 
-    pages = glob.glob(os.path.join(REPO, "docs", "*.md")) + [os.path.join(REPO, "README.md")]
+    pages = glob.glob(os.path.join(REPO, "docs", "**", "*.md"), recursive=True) + [os.path.join(REPO, "README.md")]
     gone = []
     for page in pages:
         with open(page, encoding="utf-8") as f:
@@ -198,7 +206,7 @@ def test_the_default_against_bf16_is_said_beside_the_target():
 
 def test_the_round_6_refactor_found_the_same_results_before_and_after():
     # issue #69: one seeded 120-scenario campaign a side; the page lists each side's digest
-    text = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
+    text = _bench_doc()
     block = text.split("<!-- r6-arch digests: begin -->")[1].split("<!-- r6-arch digests: end -->")[0]
     digests = {}
     for side in ("before", "after"):
@@ -211,7 +219,7 @@ def test_the_round_6_refactor_found_the_same_results_before_and_after():
 def test_a_seeded_campaign_gives_one_digest_on_the_xeon_and_the_epyc():
     # issue #68 item 5: with the agent's OpenBLAS kernel pinned, the seeded 120-scenario campaign gives
     # on the AMX Xeon the digest it gave on the AVX2-only EPYC; before the pin the Xeon gave another
-    text = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
+    text = _bench_doc()
     block = text.split("<!-- r6-xeon digests: begin -->")[1].split("<!-- r6-xeon digests: end -->")[0]
     seen = {}
     for name in ("r6-xeon-before-1", "r6-xeon-after-1", "r6-arch-after-1"):
@@ -246,5 +254,5 @@ def test_the_whole_stacks_seeded_campaign_is_the_same_on_the_xeon_and_the_epyc()
     for j in range(300):
         assert [a[j][k] for k in keys] == [b[j][k] for k in keys], j
         assert abs(a[j]["proxy"] - b[j]["proxy"]) < 1e-9, j
-    text = " ".join(open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read().split())
+    text = " ".join(_bench_doc().split())
     assert "the same results digest over its 300 jobs, ecc502be" in text

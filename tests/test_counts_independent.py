@@ -21,6 +21,7 @@ import pytest
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
 from asg_agent.records.export import counts  # noqa: E402  (the implementation under test)
+from doc_pages import record  # noqa: E402
 
 BAD_ENDS = {"COLLISION", "FLIPPED", "SIM_TIMEOUT", "IDLING_TIMEOUT", "STUCK_TIMEOUT", "OUT_OF_BOUNDS"}
 
@@ -119,9 +120,9 @@ def test_the_three_stack_campaign_prose_is_its_export():
         f"| {len(rows)} | {len(rows) - mine['not_candidate']} | {mine.get('flaw', 0)} | {mine.get('model', 0)} | "
         f"{mine.get('stack', 0)} | {mine.get('unclear', 0)} | {mine.get('reverse', 0)} | {mine.get('pass', 0)} | {ge3} |"
     )
-    assert row in open(os.path.join(REPO, "docs", "experiments.md")).read(), row
+    assert row in open(record("first-three-stack-campaign")).read(), row
     # and the prose beside it
-    text = open(os.path.join(REPO, "docs", "experiments.md")).read()
+    text = open(record("first-three-stack-campaign")).read()
 
     def hits(cls, mesh):
         return sum(
@@ -182,7 +183,7 @@ def test_what_the_candidate_rule_missed_is_the_reruns():
             missed += c in ("flaw", "model", "stack")
             reverse += [j] if c == "reverse" else []
     cands = sum(1 for j in range(300) if rows[j].get("reference_runs"))
-    text = open(os.path.join(REPO, "docs", "experiments.md")).read()
+    text = open(record("first-three-stack-campaign")).read()
     assert same == cands and missed == 0
     assert (
         f"The {cands} candidates among them get, from the re-runs, the class the campaign stored,\n  all {same}" in text

@@ -11,6 +11,8 @@ import os
 
 import pytest
 
+from doc_pages import record
+
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 V3 = os.path.join(REPO, "results", "flaw_study3")
 
@@ -72,7 +74,7 @@ def test_every_default_seed_is_below_every_route_random_seed_exact_p_0_0079():
 
 
 def test_the_flaw_study_page_says_the_default_collapsed_with_these_figures():
-    text = " ".join(open(os.path.join(REPO, "docs", "experiments.md"), encoding="utf-8").read().split())
+    text = " ".join(open(record("flaw-study-v3"), encoding="utf-8").read().split())
     for arm, said in (
         ("default", "52.7 distinct flaw findings per 1,000 (seeds 18, 26, 7, 7, 21)"),
         ("route-random", "route-random's 108.0 (29, 31, 34, 32, 36)"),
@@ -86,7 +88,7 @@ def test_the_flaw_study_page_says_the_default_collapsed_with_these_figures():
 
 def test_the_protocol_v4_pilot_block_is_its_exports():
     """docs/experiments.md's pilot table of protocol v4, regenerated from results/distinct_v4's
-    pilot exports (python3 -m asg_analysis.endpoints --budget 150 --doc docs/experiments.md
+    pilot exports (python3 -m asg_analysis.endpoints --budget 150 --doc docs/studies/2026-12-04-distinct-failures-v4.md
     "distinct v4 pilot" results/distinct_v4/dist4-pilot-*.jsonl.gz), and the figures for scale
     beside it recomputed from the flaw study v3's exports."""
     from asg_agent.records.export import read_export
@@ -95,7 +97,7 @@ def test_the_protocol_v4_pilot_block_is_its_exports():
     paths = sorted(glob.glob(os.path.join(REPO, "results", "distinct_v4", "dist4-pilot-*.jsonl.gz")))
     assert len(paths) >= 4
     table = endpoints.markdown([endpoints.campaign(*read_export(p), budget=150) for p in paths])
-    page = open(os.path.join(REPO, "docs", "experiments.md"), encoding="utf-8").read()
+    page = open(record("distinct-failures-v4"), encoding="utf-8").read()
     block = page.split("<!-- distinct v4 pilot: begin -->\n", 1)[1].split("<!-- distinct v4 pilot: end -->", 1)[0]
     assert block.strip() == table.strip()
     text = " ".join(page.split())

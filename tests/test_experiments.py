@@ -11,6 +11,7 @@ sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
 from asg_analysis import campaign_metrics, experiments  # noqa: E402
 from asg_agent.records.export import counts, read_export  # noqa: E402
 from asg_agent.records.store import Store  # noqa: E402
+from doc_pages import record  # noqa: E402
 
 MANIFEST = os.path.join(REPO, "results", "experiments.yaml")
 
@@ -70,10 +71,10 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
         windows = summary["dynamics"][arm]
         assert sum(w["ge3"] for w in windows) == info["runs"][0]["ge3"]
         assert all(0.0 <= w["at_edge"] <= 1.0 and w["median_to_route_m"] >= 0.0 for w in windows)
-    with open(os.path.join(REPO, "docs", "experiments.md")) as f:
+    with open(record("paper-table2")) as f:
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")
-    assert quoted == generated, "docs/experiments.md is stale: run `python3 -m asg_analysis.experiments`"
+    assert quoted == generated, "the Table 2 record is stale: run `python3 -m asg_analysis.experiments`"
     # The differential campaigns, round 2's and round 3's: every count is the export's.
     diffs = list((summary.get("differentials") or {}).values())
     if "differential" in summary:
@@ -415,7 +416,7 @@ def test_round3_seed_tables_are_the_exports_and_the_prose_holds():
     from asg_analysis import seed_tables, stats
     from asg_agent.records.export import read_export
 
-    assert seed_tables.main(["--check"]) == 0, "docs/experiments.md: run python3 -m asg_analysis.seed_tables"
+    assert seed_tables.main(["--check"]) == 0, "round 3's record: run python3 -m asg_analysis.seed_tables"
 
     rows = {
         (a, s): read_export(os.path.join(REPO, "results", "comparison", p.format(s) + ".jsonl.gz"))[1]

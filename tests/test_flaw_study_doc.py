@@ -9,9 +9,12 @@ import os
 import re
 import subprocess
 
+from doc_pages import record
+
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 FOLDER = os.path.join(REPO, "results", "flaw_study")
-DOC = os.path.join(REPO, "docs", "experiments.md")
+DOC = record("flaw-study")  # issue #54
+DOC3 = record("flaw-study-v3")  # issue #67
 
 
 def budgets():
@@ -43,9 +46,7 @@ def test_the_doc_block_is_in_step_with_the_exports():
         capture_output=True,
         text=True,
     )
-    assert r.returncode == 0, (
-        "docs/experiments.md's flaw-study block is stale: rerun `protocol status ... --doc`" + r.stderr
-    )
+    assert r.returncode == 0, "the flaw study record's block is stale: rerun `protocol status ... --doc`" + r.stderr
 
 
 def test_every_row_counts_what_its_export_holds():
@@ -217,21 +218,21 @@ def test_the_version_3_status_block_is_in_step_with_its_exports():
             os.path.join(REPO, "experiments", "protocol-flaw-study-v3.yaml"),
             os.path.join(REPO, "results", "flaw_study3"),
             "--doc",
-            DOC,
+            DOC3,
             "--check",
         ],
         capture_output=True,
         text=True,
     )
-    assert r.returncode == 0, "docs/experiments.md's flaw3 block is stale: rerun `protocol status ... --doc`" + r.stderr
-    text = open(DOC, encoding="utf-8").read()
-    assert text.index("## The flaw study, version 3") < text.index("## The flaw study (issue #54)")
+    assert r.returncode == 0, "the flaw study v3 record's block is stale: rerun `protocol status ... --doc`" + r.stderr
+    text = open(DOC3, encoding="utf-8").read()
+    assert text.startswith("# The flaw study, version 3") and "## The flaw study (issue #54)" not in text
 
 
 def test_the_v3_pilots_choice_in_the_prose_is_its_record():
     # issue #67: the pilot's figures that the page quotes are pilot_choice.json's, in its order
     choice = json.load(open(os.path.join(REPO, "results", "flaw_study3", "pilot_choice.json"), encoding="utf-8"))
-    text = open(DOC, encoding="utf-8").read()
+    text = open(DOC3, encoding="utf-8").read()
     quoted = text.split("<!-- pilot choice: begin -->")[1].split("<!-- pilot choice: end -->")[0]
     want = ", ".join(f"{k} {v:.1f}" for k, v in sorted(choice["searches"].items(), key=lambda kv: -kv[1]))
     assert quoted == want
@@ -267,7 +268,7 @@ def test_the_v3_pilots_learned_sentence_is_what_its_exports_say():
                 hit[half][1] += 1
                 hit[half][0] += r["meshes"][k] == "barberry"
     pct = {f"{g}_{h}": f"{100 * c[h][0] / c[h][1]:.1f} %" for g, c in (("near", near), ("hit", hit)) for h in c}
-    text = " ".join(open(DOC, encoding="utf-8").read().split())
+    text = " ".join(open(DOC3, encoding="utf-8").read().split())
     assert (
         f"barberries within 2 m of the route were {pct['near_early']} of the obstacles it proposed early and "
         f"{pct['near_late']} late, and barberries were {pct['hit_early']} of the obstacles its flaw collisions "
@@ -310,7 +311,7 @@ def test_what_the_default_learned_in_its_confirmatory_seeds_is_what_its_exports_
                     hit[part][0] += r["meshes"][k] == "barberry"
         first_last[arm] = (sum(firsts) / 5, sum(lasts) / 5)
     d, rr = first_last["default"], first_last["route-random"]
-    text = " ".join(open(DOC, encoding="utf-8").read().split())
+    text = " ".join(open(DOC3, encoding="utf-8").read().split())
     said = (
         f"the default found {d[0]:.1f} in its first block (jobs 0-29) and {d[1]:.1f} in its last (jobs 270-299); "
         f"route-random, which learns nothing, found {rr[0]:.1f} and {rr[1]:.1f}."
@@ -361,7 +362,7 @@ def test_the_per_cpu_hour_sensitivity_to_the_machines_is_what_the_exports_say():
     p = sum(
         abs(u([both[i] for i in s], [both[i] for i in range(10) if i not in s]) - 12.5) >= seen - 1e-12 for s in splits
     ) / len(splits)
-    text = " ".join(open(DOC, encoding="utf-8").read().split())
+    text = " ".join(open(DOC3, encoding="utf-8").read().split())
     said = (
         f"in {x_now:.2f} CPU-hours against {x_r5:.2f} on round 5's Xeon (a factor of {fx:.2f}), and the AVX2-only "
         f"EPYC did route-random-s10's in {e_now:.2f} against {e_r5:.2f} ({fe:.2f})"

@@ -11,8 +11,10 @@ import subprocess
 
 import yaml
 
+from doc_pages import record
+
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-DOC = os.path.join(REPO, "docs", "experiments.md")
+DOC = record("flaw-study-v3")
 V3 = os.path.join(REPO, "results", "flaw_study3")
 TRANSFER = os.path.join(REPO, "results", "flaw_study3_transfer")
 CHOICE = os.path.join(V3, "pilot_choice.json")
@@ -38,7 +40,7 @@ def in_step(*args):
         ["/usr/bin/python3", "-m", "asg_analysis.protocol", *args, "--check"], capture_output=True, text=True
     )
     assert r.returncode == 0, (
-        f"docs/experiments.md is stale: rerun `protocol {' '.join(args[:3])}`" + r.stdout + r.stderr
+        f"the flaw study v3 record is stale: rerun `protocol {' '.join(args[:3])}`" + r.stdout + r.stderr
     )
 
 

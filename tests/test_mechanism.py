@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from asg_analysis import mechanism
+from doc_pages import record
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 RESULT = os.path.join(REPO, "results", "hardening", "mechanism", "mechanism.json")
@@ -145,7 +146,10 @@ def test_the_pages_say_the_barberry_contacts_are_not_explained_by_juniper_blindn
         with open(os.path.join(REPO, *p), encoding="utf-8") as f:
             return " ".join(f.read().split())
 
-    loop, exp = page("docs", "design-loop.md"), page("docs", "experiments.md")
+    loop, exp = (
+        page("docs", "design-loop.md"),
+        page("docs", "studies", os.path.basename(record("round3-search-comparison"))),
+    )
     said = (
         f"Of its {b + j} flaw findings over seeds 20-22, {b} end against a barberry and {j} against a juniper: "
         "most hit the class `flawed` was trained on, not the one it is blind to."
@@ -160,7 +164,7 @@ def test_the_pages_say_the_barberry_contacts_are_not_explained_by_juniper_blindn
     # `flawed` was trained on barberries only (its data set: --meshes barberry)
     with open(os.path.join(REPO, "scripts", "repro", "make_models.sh"), encoding="utf-8") as f:
         assert "--count 4000 --seed 2 --meshes barberry" in f.read()
-    # docs/experiments.md, the lite stack: the flawed campaign's collisions by class, from its export
+    # round 3's record (docs/studies/), the lite stack: the flawed campaign's collisions by class, from its export
     with gzip.open(os.path.join(REPO, "results", "comparison", "exp1b-td3-per-asp-s0.jsonl.gz"), "rt") as f:
         rows = [json.loads(line) for line in f][1:]
     hits = collections.Counter(r["meshes"][int(r["collision_with"])] for r in rows if r["termination"] == "COLLISION")
@@ -173,10 +177,11 @@ def test_the_pages_say_the_barberry_contacts_are_not_explained_by_juniper_blindn
     old = (
         "contacts happen on routes laid among unseen junipers",  # design-loop.md, section 4
         "those 15 are the missing class itself",  # design-loop.md, "Before the contacts"
-        "a missed juniper, not a phantom shadow obstacle, is what ends in a collision",  # experiments.md
-        "it misses fewer junipers",  # experiments.md: only pooled obstacle pixels were measured
+        "a missed juniper, not a phantom shadow obstacle, is what ends in a collision",  # round 3's record
+        "it misses fewer junipers",  # round 3's record: only pooled obstacle pixels were measured
     )
-    for name in ("design-loop.md", "experiments.md", "perception.md", "agent.md"):
+    studies = [os.path.join("studies", n) for n in sorted(os.listdir(os.path.join(REPO, "docs", "studies")))]
+    for name in ["design-loop.md", "experiments.md", "perception.md", "agent.md"] + studies:
         text = page("docs", name)
         assert not [o for o in old if o in text], name
     assert not [o for o in old if o in page("README.md")]

@@ -54,8 +54,8 @@ def test_fp32_runs_replay_across_the_checked_classes_and_bf16_ones_do_not():
 
 def test_the_benchmarks_page_lists_every_class_checked():
     text = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
-    sec = text[text.index("### CPU classes: the default numerics") :]
-    sec = sec[: sec.index("\n### ")]
+    sec = text[text.index("## CPU classes: the default numerics") :]
+    sec = sec[: sec.index("\n## ")]
     rows = [ln for ln in sec.splitlines() if ln.startswith("| ") and not ln.startswith("| CPU ")]
     classes = load("results/numerics/cpu_classes.json")["classes"]
     assert len(rows) == len(classes)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Figures in the docs with no test or generated block beside them (issue #68).
 
-For README.md and every docs/*.md this finds the *figures*, numbers that state a measurement, and
+For README.md, every docs/*.md and every study record (docs/studies/*.md) this finds the *figures*, numbers that state a measurement, and
 sorts each into one of three kinds: checked by a test, in a generated block, or left. "Left" is
 what is still to tie to a test or to a generator. This is a heuristic that reads text. It can
 call a figure checked when the test checks something else, and it misses checks that compute a
@@ -279,9 +279,14 @@ class CheckFile:
         self._names = {}
 
     def names(self, page):
-        """Whether the file names the page (its file name, e.g. design-loop.md)."""
+        """Whether the file names the page (its file name, e.g. design-loop.md; a study record also by
+        `record("SLUG")`, tests/doc_pages.py)."""
         if page not in self._names:
-            self._names[page] = re.search(rf"(?<![\w-]){re.escape(page)}", self.text) is not None
+            found = re.search(rf"(?<![\w-]){re.escape(page)}", self.text) is not None
+            slug = re.match(r"^\d{4}-\d{2}-\d{2}-(.+)\.md$", page)  # a study record, named by tests/doc_pages.record
+            if slug and not found:
+                found = re.search(rf"record\(\s*[\"']{re.escape(slug.group(1))}[\"']\s*\)", self.text) is not None
+            self._names[page] = found
         return self._names[page]
 
     def quotes(self, num):
@@ -311,7 +316,9 @@ def read_checks(repo):
 
 def pages_of(repo):
     readme = os.path.join(repo, "README.md")
-    return ([readme] if os.path.exists(readme) else []) + sorted(glob.glob(os.path.join(repo, "docs", "*.md")))
+    return ([readme] if os.path.exists(readme) else []) + sorted(
+        glob.glob(os.path.join(repo, "docs", "*.md")) + glob.glob(os.path.join(repo, "docs", "studies", "*.md"))
+    )
 
 
 def significant(num):

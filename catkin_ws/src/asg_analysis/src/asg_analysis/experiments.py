@@ -339,7 +339,7 @@ def main(argv=None):
     p.add_argument("--out", default=os.path.join(REPO, "docs", "experiments"))
     p.add_argument(
         "--docs",
-        default=os.path.join(REPO, "docs", "experiments.md"),
+        default=os.path.join(REPO, "docs", "studies", "2026-11-22-paper-table2.md"),
         help="rewrite the block between the tables markers of this file ('' to leave it)",
     )
     a = p.parse_args(argv)

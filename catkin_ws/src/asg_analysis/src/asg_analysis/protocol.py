@@ -859,8 +859,8 @@ def main(argv=None) -> int:
     n.add_argument(
         "--figure",
         default="",
-        help="the coverage map's PNG (default: images/NAME_coverage.png beside --doc, NAME the protocol's; "
-        "round 5's: images/flaw_study_coverage.png)",
+        help="the coverage map's PNG (default: docs/images/NAME_coverage.png, NAME the protocol's; "
+        "round 5's: docs/images/flaw_study_coverage.png); the page links it relative to --doc",
     )
     n.add_argument("--check", action="store_true", help="with --doc: only say whether the block is stale (exit 1)")
     n.add_argument("--interim", action="store_true", help="print the comparison before every campaign is in")
@@ -939,7 +939,8 @@ def report_analysis(p: dict, args, res: dict) -> int:
             json.dump(res, f, indent=1, sort_keys=True, default=str)
     if args.doc:
         figure = args.figure or os.path.join(
-            os.path.dirname(os.path.abspath(args.doc)),
+            REPO,
+            "docs",
             "images",
             "flaw_study_coverage.png"
             if p["name"] == "flaw"

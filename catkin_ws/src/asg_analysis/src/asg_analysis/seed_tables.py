@@ -15,7 +15,7 @@ from asg_agent.records.export import read_export
 
 from asg_agent.paths import REPO
 
-DOC = os.path.join(REPO, "docs", "experiments.md")
+DOC = os.path.join(REPO, "docs", "studies", "2026-11-24-round3-search-comparison.md")
 ARMS = {  # round 3's arms with three seeds (results/comparison/)
     "td3-per-asp": "exp1b-td3-per-asp-s{}",
     "map-elites": "exp1b-map-elites-s{}",

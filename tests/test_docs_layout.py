@@ -1,0 +1,79 @@
+"""Issue #79 item 3: guides apart from the study record. docs/ holds guides (what to run, what it
+means, today's figures); docs/studies/ holds one dated record per study. Every record is named and
+headed by its date, the index lists every record, the guides stay short and name no round, every
+relative link of docs/ resolves, and the experiments guide's figures are their exports'."""
+
+import glob
+import os
+import re
+import shutil
+
+from doc_pages import INDEX_BEGIN, INDEX_END, REPO, STUDIES, guide, index_rows, records_problems
+
+GUIDE_MAX_LINES = 400  # [lines] a guide that grows past this is growing a record
+
+
+def test_every_study_record_is_named_and_headed_by_its_date():
+    assert records_problems() == []
+    assert len(glob.glob(os.path.join(STUDIES, "????-??-??-*.md"))) >= 10
+
+
+def test_a_record_without_its_date_or_record_line_is_named(tmp_path):
+    good = sorted(glob.glob(os.path.join(STUDIES, "????-??-??-*.md")))[0]
+    shutil.copy(good, tmp_path / "flaw-notes.md")  # no date in the name
+    text = open(good, encoding="utf-8").read().split("\n")
+    (tmp_path / "2026-01-02-moved.md").write_text("\n".join(text), encoding="utf-8")  # date not the record's
+    (tmp_path / "2026-01-03-bare.md").write_text("# Bare\n\nno record line\n", encoding="utf-8")
+    problems = records_problems(str(tmp_path))
+    assert any(p.startswith("flaw-notes.md: not named") for p in problems), problems
+    assert any(p.startswith("2026-01-02-moved.md: recorded") for p in problems), problems
+    assert any(p.startswith("2026-01-03-bare.md: line 3") for p in problems), problems
+
+
+def test_the_index_lists_every_record():
+    page = open(os.path.join(STUDIES, "README.md"), encoding="utf-8").read()
+    block = page.split(INDEX_BEGIN + "\n", 1)[1].split(INDEX_END, 1)[0]
+    assert block.strip() == index_rows().strip(), "regenerate: /usr/bin/python3 tests/doc_pages.py"
+
+
+def test_the_guides_are_short_and_name_no_round():
+    for name in ("experiments.md", "benchmarks.md"):
+        lines = open(guide(name), encoding="utf-8").read().split("\n")
+        assert (
+            len(lines) <= GUIDE_MAX_LINES
+        ), f"docs/{name}: {len(lines)} lines; a study's history goes to docs/studies/"
+        rounds = [ln for ln in lines if ln.startswith("#") and re.search(r"\bRound \d", ln)]
+        assert not rounds, f"docs/{name}: a heading names a round (a record's): {rounds}"
+
+
+def test_every_relative_link_of_the_docs_resolves():
+    broken = []
+    pages = glob.glob(os.path.join(REPO, "docs", "**", "*.md"), recursive=True) + [os.path.join(REPO, "README.md")]
+    for page in pages:
+        text = open(page, encoding="utf-8").read()
+        for target in re.findall(r"\]\(([^)\s]+)\)", text):
+            if re.match(r"^(https?:|mailto:|#)", target):
+                continue
+            path = target.split("#", 1)[0]
+            if not os.path.exists(os.path.join(os.path.dirname(page), path)):
+                broken.append(f"{os.path.relpath(page, REPO)}: {target}")
+    assert not broken, broken
+
+
+def test_the_experiments_guide_figures_are_the_exports():
+    """The "search today" block regenerates from the flaw study v3's exports, and the sentence
+    under it quotes its seed 12 row."""
+    from asg_agent.records.export import read_export
+    from asg_analysis import endpoints
+
+    paths = []
+    for arm in ("default", "route-random", "map-elites"):
+        paths += sorted(glob.glob(os.path.join(REPO, "results", "flaw_study3", f"flaw3-{arm}-s1?.jsonl.gz")))
+    assert len(paths) == 15
+    rows = sorted((endpoints.campaign(*read_export(p), budget=300) for p in paths), key=lambda c: c["campaign"])
+    page = open(guide("experiments.md"), encoding="utf-8").read()
+    block = page.split("<!-- search today: begin -->\n", 1)[1].split("<!-- search today: end -->", 1)[0]
+    assert block.strip() == endpoints.markdown(rows).strip()
+    s12 = [c for c in rows if c["campaign"] == "flaw3-default-s12"][0]
+    said = f"seed 12: {s12['findings']} flaw findings at {s12['distinct']['2']} places 2 m apart"
+    assert said in " ".join(page.split()), said
