@@ -3,6 +3,8 @@
 # Installs and builds first when needed. Prints 'N passed, N failed' and exits non-zero on any
 # failure or when no test ran.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+# the whole run's wall time, measured from here (summarize_tests.py writes it into times.json as wall_s)
+export ASG_SUITE_START="${ASG_SUITE_START:-$(date +%s.%N)}"
 install_packages
 build_workspace ON
 RESULTS="$WS/build/test_results"

@@ -157,10 +157,12 @@ def wait_for_numerics(worker, timeout=120.0):
     return wait_for_param(f"{worker}/segmenter/numerics", timeout)
 
 
-def check_reference(test, c, path, write=False, worker="/worker_0"):
+def check_reference(test, c, path, write=False, worker="/worker_0", on_produced=None):
     """Runs every stored request of `path` on client `c`; each run must repeat its stored
     termination, length and trajectory digest. write=True (ASG_WRITE_REFERENCE=1) stores what
-    the runs did instead. Returns (the segmenter's numerics here, the digests the runs produced)."""
+    the runs did instead. `on_produced(here, produced)` is called with what every run produced
+    before any comparison (issue #79: a CPU-class record holds the runs' digests, equal or not).
+    Returns (the segmenter's numerics here, the digests the runs produced)."""
     import json
 
     # A new CPU's file is written with the requests of the backend's first one.
@@ -181,8 +183,8 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
             f"{os.path.basename(path)} was recorded where the segmenter ran {ref.get('numerics')!r}; this "
             f"machine cannot repeat it bit for bit: {why}",
         )
-    produced = []
-    for k, entry in enumerate(ref["runs"]):
+    produced, gots = [], []
+    for entry in ref["runs"]:
         state, r = run(c, entry["request"])
         test.assertEqual(state, SUCCEEDED, r.error)
         got = {
@@ -192,6 +194,10 @@ def check_reference(test, c, path, write=False, worker="/worker_0"):
             "final_xy": [r.trajectory[-1].pose.position.x, r.trajectory[-1].pose.position.y],
         }
         produced.append(got["digest"])
+        gots.append(got)
+    if on_produced is not None and not write:
+        on_produced(here, list(produced))
+    for k, (entry, got) in enumerate(zip(ref["runs"], gots)):
         if write:
             entry.update(got)
             continue

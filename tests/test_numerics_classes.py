@@ -95,3 +95,48 @@ def test_a_cpu_class_line_holds_the_digests_its_runs_produced(tmp_path, monkeypa
     su.record_cpu_class(path, "polyphase isa=AVX2 threads=1 torch=x", produced, "test")
     line = json.loads(table.read_text())["classes"][-1]
     assert line["digests"] == produced and line["reference"] == "tests/reference/exp1_flawed_fp32.json"
+
+
+def test_a_class_whose_runs_differ_is_recorded_before_the_comparison_fails(tmp_path, monkeypatch):
+    """issue #79: record_cpu_class used to run only after check_reference had asserted the digests
+    equal, so every recorded line equalled the stored file by construction. Now check_reference
+    hands what the runs produced to its recorder before any comparison: a run that differs is
+    recorded (and the test above then fails on its line), and the comparison still fails."""
+    import types
+    import unittest
+
+    sys.path.insert(0, os.path.join(REPO, "tests"))
+    import stack_util as su
+
+    ref = load("tests/reference/exp1_flawed_fp32.json")
+    stored = os.path.join(REPO, "tests", "reference", "exp1_flawed_fp32.json")
+    pose = types.SimpleNamespace(pose=types.SimpleNamespace(position=types.SimpleNamespace(x=1.0, y=2.0)))
+
+    def fake_run(client, request):
+        entry = ref["runs"][fake_run.k]
+        fake_run.k += 1
+        r = types.SimpleNamespace(termination_name=entry["termination"], trajectory=[pose] * entry["samples"], error="")
+        r.digest = "a digest of another CPU %d" % fake_run.k
+        return su.SUCCEEDED, r
+
+    fake_run.k = 0
+    monkeypatch.setattr(su, "run", fake_run)
+    monkeypatch.setattr(su, "trajectory_digest", lambda r: r.digest)
+    monkeypatch.setattr(su, "wait_for_numerics", lambda worker: ref["numerics"])
+    table = tmp_path / "cpu_classes.json"
+    monkeypatch.setattr(su, "CPU_CLASSES", str(table))
+    seen = []
+
+    def record(here, produced):
+        seen.append(list(produced))
+        su.record_cpu_class(stored, here, produced, "test")
+
+    case = unittest.TestCase()
+    try:
+        su.check_reference(case, None, stored, False, on_produced=record)
+        raise AssertionError("digests that differ from the stored ones passed the comparison")
+    except case.failureException as e:
+        assert "trajectory differs" in str(e)
+    want = ["a digest of another CPU %d" % (k + 1) for k in range(len(ref["runs"]))]
+    assert seen == [want]
+    assert json.loads(table.read_text())["classes"][-1]["digests"] == want

@@ -20,8 +20,38 @@ def prose():
 
 
 def wall_s(r):
-    """The whole run's seconds, from the record's own words ("... (1,068 s) ...")."""
-    return int(re.search(r"\(([\d,]+) s\)", r["wall"]).group(1).replace(",", ""))
+    """The whole run's seconds: the record's number (issue #79), not its words."""
+    return int(round(r["wall_s"]))
+
+
+def test_every_record_holds_its_wall_seconds_as_a_number_its_words_agree_with():
+    for name in sorted(os.listdir(TIMES)):
+        r = record(name)
+        assert isinstance(r["wall_s"], (int, float)) and r["wall_s"] > 0 and r["wall_s_from"], name
+        m = re.search(r"(\d+) m (\d+) s", r.get("wall", ""))
+        if m:  # the words typed beside it, where there are any, say the same time
+            assert abs(int(m.group(1)) * 60 + int(m.group(2)) - r["wall_s"]) < 1.0, name
+
+
+def test_the_suite_writes_its_measured_wall_time_into_its_record(tmp_path, monkeypatch):
+    import subprocess
+    import sys
+    import time
+
+    sys.path.insert(0, os.path.join(REPO, "scripts", "ci"))
+    import summarize_tests
+
+    monkeypatch.setenv("ASG_SUITE_START", str(time.time() - 12.5))
+    summarize_tests.write_times(str(tmp_path), {"tests: tests.test_a": 3.0})
+    rec = json.loads((tmp_path / "times.json").read_text())
+    assert 12.5 <= rec["wall_s"] < 60.0 and "scripts/test.sh" in rec["wall_s_from"]
+    monkeypatch.setenv("ASG_SUITE_START", "yesterday")
+    summarize_tests.write_times(str(tmp_path), {"tests: tests.test_a": 3.0})
+    assert "wall_s" not in json.loads((tmp_path / "times.json").read_text())
+    # scripts/test.sh starts the clock before it installs or builds anything
+    text = open(os.path.join(REPO, "scripts", "test.sh"), encoding="utf-8").read()
+    assert text.index("ASG_SUITE_START=") < text.index("install_packages")
+    assert subprocess.run(["bash", "-n", os.path.join(REPO, "scripts", "test.sh")]).returncode == 0
 
 
 def test_each_recorded_run_is_as_the_page_gives_it():
