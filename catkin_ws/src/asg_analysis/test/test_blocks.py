@@ -29,6 +29,20 @@ def test_a_block_holds_one_seed_of_every_arm_in_an_order_drawn_from_its_seed():
     assert text.startswith("# block 2:") and text.count(" 300 train ") == len(protocol["arms"])
 
 
+def test_the_transfer_plans_are_the_protocols_with_the_launchs_false():
+    """protocol v4's transfer (Exp. 3, Exp. 6, gap_nav): each committed plan is the protocol's block,
+    and gap_nav's `attribution: false` is written as the launch reads it (it wrote "False")."""
+    for scene in ("exp3", "exp6", "gapnav"):
+        with open(os.path.join(REPO, "experiments", f"protocol-distinct-v4-{scene}.yaml")) as f:
+            protocol = yaml.safe_load(f)
+        for k in range(3):
+            cs = blocks.block(protocol, {}, k)
+            with open(os.path.join(REPO, "results", "distinct_v4_transfer", f"{scene}-block-{k}.txt")) as f:
+                assert f.read() == blocks.plan_text(cs, k)
+    gap = [a for c in cs for a in c["args"] if a.startswith("attribution:=")]
+    assert gap == ["attribution:=false"] * 2
+
+
 def test_a_block_past_the_seeds_is_refused(capsys, tmp_path):
     protocol = {"name": "x", "budget": 10, "arms": {"a": {"method": "random", "seeds": [1]}}}
     try:

@@ -26,6 +26,11 @@ ARGS = (
 )
 
 
+def _launch_value(v) -> str:
+    """A protocol's value as train.launch reads it (YAML's false is the launch's `false`)."""
+    return ("true" if v else "false") if isinstance(v, bool) else str(v)
+
+
 def resolve(arm: dict, choice: dict) -> dict:
     """The arm with every "pilot" value replaced by the pilot's choice."""
     return {k: (choice[k] if v == "pilot" else v) for k, v in arm.items()}
@@ -48,7 +53,7 @@ def block(protocol: dict, choice: dict, k: int) -> List[dict]:
         args += [
             f"seed:={seed}",
             f"workers:={protocol.get('workers', 3)}",
-            f"attribution:={protocol.get('attribution', 'three')}",
+            f"attribution:={_launch_value(protocol.get('attribution', 'three'))}",
         ]
         out.append({"name": f"{name}-{arm}-s{seed}", "arm": arm, "seed": seed, "budget": budget, "args": args})
     order_seed = min(c["seed"] for c in out)
