@@ -162,3 +162,30 @@ def test_per_cpu_hour_ratios_are_taken_within_blocks_and_pooled_by_their_geometr
         "| route-random | 2 | 50.0, 60.0 | 55.0 (50.0-60.0) | 2.00x (1.70-2.40) | 0.3333 | s30 2.00, s31 0.50 | 1.00x |"
         in table
     )
+
+
+def test_the_rules_check_prose_is_its_exports_counted_by_a_plain_loop():
+    """The v4 record's sentence on the rule checked on fresh samples (amendment 3), recounted here
+    from the rule-sampler's and the random-own arm's exports without asg_analysis.rules."""
+    from scipy.stats import fisher_exact
+
+    d4 = os.path.join(REPO, "results", "distinct_v4")
+
+    def counts(paths):
+        rows = [r for p in paths for r in _rows(p) if r["termination"] != "ERROR"]
+        return [r for r in rows if r.get("attribution") == "flaw"], len(rows)
+
+    fresh, n1 = counts([os.path.join(d4, "dist4-rule-top-s40.jsonl.gz")])
+    base, n0 = counts(sorted(glob.glob(os.path.join(d4, "dist4-random-own-s3?.jsonl.gz"))))
+    learnt = json.load(open(os.path.join(d4, "rules-ops-wide.json")))["rules"][0]
+    barberry = sum(r["meshes"][r["collision_with"]] == "barberry" for r in fresh if r.get("collision_with") is not None)
+    p = fisher_exact([[len(fresh), n1 - len(fresh)], [len(base), n0 - len(base)]])[1]
+    text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
+    said = (
+        f"{100 * len(fresh) / n1:.0f} % of its layouts were flaw findings against {100 * learnt['precision']:.0f} % "
+        f"in the campaigns it was learnt from, and {len(fresh) / n1 / (len(base) / n0):.2f}x the base rate "
+        f"(Fisher p = {p:.3f})"
+    )
+    assert said in text, said
+    assert f"{barberry} of the rule's {len(fresh)} fresh findings hit a barberry" in text
+    assert learnt["text"] == "barberry d<2m q3 >= 3"

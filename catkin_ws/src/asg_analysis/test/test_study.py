@@ -42,7 +42,7 @@ def test_the_runner_writes_and_checks_each_block(tmp_path, capsys):
 def test_a_bad_entry_or_a_protocol_without_report_is_named(tmp_path, capsys):
     _, proto = _study(tmp_path, [{"block": "one", "table": "pie", "exports": PILOT}])
     assert study.main([str(proto)]) == 2
-    assert "table 'pie' must be one of campaigns, arms, command" in capsys.readouterr().err
+    assert "table 'pie' must be one of campaigns, arms, rules, command" in capsys.readouterr().err
     bare = tmp_path / "bare.yaml"
     bare.write_text("name: x\n")
     assert study.main([str(bare)]) == 2
@@ -94,3 +94,27 @@ def test_every_study_with_a_record_lists_its_blocks():
         ):
             continue
         assert p.get("report"), f"{name}: its record's blocks are not listed (report:)"
+
+
+def test_the_rules_table_shows_the_learnt_rules_and_the_first_ones_check(tmp_path):
+    from asg_analysis import rules
+    from asg_analysis.exports import read_rows
+
+    d4 = os.path.join(REPO, "results", "distinct_v4")
+    entry = {
+        "block": "r",
+        "table": "rules",
+        "rules": "results/distinct_v4/rules-ops-wide.json",
+        "exports": "results/distinct_v4/dist4-rule-top-s40.jsonl.gz",
+        "base": "results/distinct_v4/dist4-random-own-s3?.jsonl.gz",
+    }
+    text = study.render(entry)
+    fresh = read_rows([os.path.join(d4, "dist4-rule-top-s40.jsonl.gz")], "", "")[0]
+    base = read_rows(sorted(glob.glob(os.path.join(d4, "dist4-random-own-s3?.jsonl.gz"))), "", "")[0]
+    c = rules.check(fresh, base, "flaw")
+    first, second = text.splitlines()[2:4]
+    assert first.startswith("| `barberry d<2m q3 >= 3` |")
+    assert f"{c['rule_findings']} / {c['rule_scenarios']}" in first and f"{c['fisher_p']:.3f}" in first
+    assert "not checked" in second and "not checked" not in first
+    # without the fresh samples the first rule is not checked either
+    assert "not checked" in study.render(dict(entry, exports="results/distinct_v4/none-*.jsonl.gz")).splitlines()[2]

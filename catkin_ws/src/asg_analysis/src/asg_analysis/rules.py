@@ -205,6 +205,32 @@ def lines(result: Dict, top: int = 5) -> List[str]:
     return out
 
 
+def _pct(lo_hi) -> str:
+    return f"[{100 * lo_hi[0]:.1f}, {100 * lo_hi[1]:.1f}]"
+
+
+def markdown(learnt: Dict, checked: Optional[Dict] = None, top: int = 5) -> str:
+    """A record's table of learnt rules (in the campaigns they came from) and, for the rule the
+    protocol checked (the file's first), its precision on fresh samples against the base rate."""
+    rows = [
+        "| rule | in-sample: distinct findings / scenarios (precision, lift) | share of distinct findings | "
+        "fresh samples: findings / scenarios (precision, 95 % CI) | base rate (95 % CI) | ratio | Fisher p |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for i, r in enumerate(learnt["rules"][:top]):
+        fresh = base = ratio = p = "not checked"
+        if checked is not None and i == 0:
+            c = checked
+            fresh = f"{c['rule_findings']} / {c['rule_scenarios']} ({100 * c['precision']:.1f} %, {_pct(c['precision_ci'])})"
+            base = f"{c['base_findings']} / {c['base_scenarios']} ({100 * c['base_rate']:.1f} %, {_pct(c['base_ci'])})"
+            ratio, p = f"{c['ratio']:.2f}x", f"{c['fisher_p']:.3f}"
+        rows.append(
+            f"| `{r['text']}` | {r['distinct']} / {r['support']} ({100 * r['precision']:.0f} %, {r['lift']:.1f}x) | "
+            f"{100 * r['share_of_distinct']:.0f} % | {fresh} | {base} | {ratio} | {p} |"
+        )
+    return "\n".join(rows) + "\n"
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python3 -m asg_analysis.rules", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)

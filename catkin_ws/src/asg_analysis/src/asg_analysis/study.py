@@ -22,6 +22,14 @@ Each entry of `report:`:
       arms: {default: GLOB, route-random: GLOB}   # the default first
       budget: 300
 
+    - page: ...
+      block: ...
+      table: rules                             # learnt rules and the first one's check (rules.markdown)
+      rules: results/STUDY/rules.json          # what `asg_analysis.rules learn --out` wrote
+      exports: results/STUDY/RULE-SAMPLER-GLOB.jsonl.gz   # the check's fresh samples (optional)
+      base: results/STUDY/RANDOM-GLOB.jsonl.gz             # the same sampler without the rule
+      target: flaw
+
     - table: command                           # a generator of its own that writes its block(s)
       module: asg_analysis.protocol            # run as python3 -m MODULE ARGS (from the repository)
       args: [status, experiments/protocol-NAME.yaml, results/STUDY, --doc, docs/studies/DATE-NAME.md]
@@ -42,7 +50,7 @@ import yaml
 
 from asg_agent.paths import REPO
 
-TABLES = ("campaigns", "arms")
+TABLES = ("campaigns", "arms", "rules")
 KINDS = TABLES + ("command",)
 
 
@@ -61,6 +69,8 @@ def render(entry: Dict) -> str:
     budget = entry.get("budget")
     target = entry.get("target", "flaw")
     target = None if target == "failure" else target
+    if kind == "rules":
+        return _rules(entry, target)
     if kind == "campaigns":
         paths = _paths(entry["exports"])
         if not paths:
@@ -72,6 +82,23 @@ def render(entry: Dict) -> str:
         raise FileNotFoundError(f"no export of arm(s) {', '.join(empty)}")
     res = endpoints.compare(arms, next(iter(arms)), budget, target)
     return endpoints.comparison_markdown(res)
+
+
+def _rules(entry: Dict, target) -> str:
+    """The `rules` table: the learnt rules, the first checked on fresh samples once they are in."""
+    import json
+
+    from asg_analysis import rules
+    from asg_analysis.exports import read_rows
+
+    with open(os.path.join(REPO, entry["rules"]), encoding="utf-8") as f:
+        learnt = json.load(f)
+    checked = None
+    if entry.get("exports"):
+        fresh, base = _paths(entry["exports"]), _paths(entry["base"])
+        if fresh and base:
+            checked = rules.check(read_rows(fresh, "", "")[0], read_rows(base, "", "")[0], target)
+    return rules.markdown(learnt, checked)
 
 
 def block_text(page: str, block: str) -> str:
