@@ -213,7 +213,11 @@ def test_map_elites_tells_its_emitter_every_result_and_proposes_as_before():
     class AddOnly(type(shipped)):
         def observe(self, job, episode, step, state, action, reward, next_state, done):
             n = self.exp.action_dim
-            path = (np.asarray(next_state[n : n + 2 * self.states.n_path], np.float64).reshape(-1, 2) + 1.0) * 0.5 * self.exp.size
+            path = (
+                (np.asarray(next_state[n : n + 2 * self.states.n_path], np.float64).reshape(-1, 2) + 1.0)
+                * 0.5
+                * self.exp.size
+            )
             self.archive.add_single(np.asarray(action, np.float64), float(reward), self.descriptors(action, path))
             return {}
 
