@@ -100,3 +100,22 @@ CLIENT = [
         "(`stack/mode`), else true",
     ),
 ]
+
+#: The stand-in stack of the scene worker's tests and benchmarks (asg_sim/scripts/scripted_driver;
+#: docs/simulator.md quotes this table). It reads its parameters through this table, so that
+#: `~throttle: true` is refused by name instead of driving at float(True) = 1.0 (issue #80).
+SCRIPTED_DRIVER = [
+    Param(
+        "mode",
+        str,
+        "constant",
+        "-",
+        "constant: the fixed command below; goal: steer towards the goal at the scenario's speed, from "
+        "the odometry of the tick's own stamp; silent: acknowledge, never answer (to test the timeout)",
+        choices=("constant", "goal", "silent"),
+    ),
+    Param("throttle", float, 0.5, "-", "mode constant: the throttle of every command", 0.0, 1.0),
+    Param("steering", float, 0.0, "-", "mode constant: the steering of every command (left positive)", -1.0, 1.0),
+    Param("brake", float, 0.0, "-", "mode constant: the brake of every command", 0.0, 1.0),
+    Param("ack_name", str, "", "-", "the name its acknowledgements carry (empty: the node's name)"),
+]
