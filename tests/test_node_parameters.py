@@ -180,3 +180,23 @@ def test_the_scripted_driver_reads_its_table_and_refuses_a_boolean_throttle():
         os.path.join(REPO, "catkin_ws", "src", "asg_sim", "scripts", "scripted_driver"), encoding="utf-8"
     ).read()
     assert "read(SCRIPTED_DRIVER" in script and "float(rospy.get_param" not in script
+
+
+def test_a_registration_mode_other_than_lockstep_or_free_is_refused_by_name():
+    """Issue #80: the clients read `stack/mode` as "lockstep or anything else": a typo ran free,
+    and in C++ a value of another type read as unset and ran in lockstep. Both now refuse it with
+    the same words (asg_lockstep.params.registered_lockstep, client_settings.hpp's gtest)."""
+    from asg_lockstep.params import registered_lockstep
+
+    assert (registered_lockstep(None), registered_lockstep("lockstep"), registered_lockstep("free")) == (
+        None,
+        True,
+        False,
+    )
+    for bad, shown in (("lock-step", "'lock-step'"), (1, "1"), (True, "true")):
+        with pytest.raises(ValueError, match=re.escape(f"stack/mode = {shown}: must be 'lockstep' or 'free'")):
+            registered_lockstep(bad)
+    client = open(
+        os.path.join(REPO, "catkin_ws", "src", "asg_lockstep", "src", "asg_lockstep", "ros", "client.py")
+    ).read()
+    assert 'registered_lockstep(rospy.get_param("stack/mode", None))' in client

@@ -119,3 +119,17 @@ SCRIPTED_DRIVER = [
     Param("brake", float, 0.0, "-", "mode constant: the brake of every command", 0.0, 1.0),
     Param("ack_name", str, "", "-", "the name its acknowledgements carry (empty: the node's name)"),
 ]
+
+
+def registered_lockstep(mode) -> Optional[bool]:
+    """What a stack registration's `stack/mode` says of lockstep: None when unset, True for
+    'lockstep', False for 'free'; anything else is refused by name (issue #80: another string ran
+    free without a word). The C++ client words it the same (client_settings.hpp)."""
+    if mode is None:
+        return None
+    if isinstance(mode, str) and mode in ("lockstep", "free"):
+        return mode == "lockstep"
+    shown = (
+        f"'{mode}'" if isinstance(mode, str) else ("true" if mode is True else "false" if mode is False else str(mode))
+    )
+    raise ValueError(f"stack/mode = {shown}: must be 'lockstep' or 'free'")
