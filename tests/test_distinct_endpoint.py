@@ -112,3 +112,53 @@ def test_the_protocol_v4_pilot_block_is_its_exports():
         f"({1000 * sum(rw) / 300:.1f})"
     )
     assert said in text, said
+
+
+def test_per_cpu_hour_ratios_are_taken_within_blocks_and_pooled_by_their_geometric_mean():
+    """Protocol v4: a block is one seed of every arm on one machine; the default's distinct
+    findings per CPU-hour over the arm's, block by block, pooled by the geometric mean; a block
+    with no CPU measure is left out and named."""
+    from asg_analysis import endpoints
+
+    def c(seed, per_hour):
+        return {"seed": seed, "per_cpu_hour": per_hour}
+
+    per = {
+        "default": [c(30, 40.0), c(31, 10.0), c(32, 30.0)],
+        "route-random": [c(30, 20.0), c(31, 20.0), c(32, None)],
+    }
+    got = endpoints.within_blocks(per, "default")["route-random"]
+    assert [(b["seed"], b["ratio"]) for b in got["blocks"]] == [(30, 2.0), (31, 0.5)]
+    assert got["geomean"] == pytest.approx(1.0) and got["min"] == 0.5 and got["left_out"] == [32]
+    # the table: one row an arm, the default's first, the blocks' ratios and their geometric mean
+    res = {
+        "primary": [
+            {
+                "arm": "default",
+                "seeds": 2,
+                "counts": [100.0, 120.0],
+                "mean": 110.0,
+                "lo": 100.0,
+                "hi": 120.0,
+                "ratio": None,
+            },
+            {
+                "arm": "route-random",
+                "seeds": 2,
+                "counts": [50.0, 60.0],
+                "mean": 55.0,
+                "lo": 50.0,
+                "hi": 60.0,
+                "ratio": 2.0,
+                "ratio_lo": 1.7,
+                "ratio_hi": 2.4,
+                "p": 0.3333,
+            },
+        ],
+        "per_cpu_hour": endpoints.within_blocks(per, "default"),
+    }
+    table = endpoints.comparison_markdown(res)
+    assert (
+        "| route-random | 2 | 50.0, 60.0 | 55.0 (50.0-60.0) | 2.00x (1.70-2.40) | 0.3333 | s30 2.00, s31 0.50 | 1.00x |"
+        in table
+    )

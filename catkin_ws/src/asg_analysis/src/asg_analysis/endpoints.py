@@ -5,7 +5,7 @@ of arms over seeds. A library: a study names its exports and arms, this computes
     python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] [--markdown]  # one line (row) per campaign
     python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] --doc PAGE BLOCK  # the table into PAGE's block
     python3 -m asg_analysis.endpoints --arm default=GLOB --arm route-random=GLOB [--budget 300]
-                                                                       # arms compared (JSON)
+                                  [--markdown | --doc PAGE BLOCK]      # arms compared (JSON, or the table)
 
 A finding is a row of the target class (`flaw` with three-stack attribution, `regression` with a
 release, else a run that failed: asg_analysis.rules.is_finding); its place and the distinct count
@@ -73,7 +73,74 @@ def compare(arms: Dict[str, List[str]], default: str, budget: Optional[int], tar
         per[arm] = [campaign(*read_export(p), budget=budget, target=target) for p in sorted(paths)]
     key = f"{PRIMARY_RADIUS_M:g}"
     rows = stats.compare({a: [c["per_1000"][key] for c in cs] for a, cs in per.items()}, default)
-    return {"campaigns": per, "primary": rows}
+    return {"campaigns": per, "primary": rows, "per_cpu_hour": within_blocks(per, default)}
+
+
+def within_blocks(per: Dict[str, List[Dict]], default: str) -> Dict[str, Dict]:
+    """Protocol v4's CPU-hour comparison: a block is one seed of every arm run back to back on one
+    machine, so the default's campaign and an arm's of the same seed form a block. Per arm: each
+    block's ratio of distinct findings (2 m) per CPU-hour, default over arm; their geometric mean;
+    the smallest. A block where either side has no CPU measure or the arm found nothing is left out
+    and named."""
+    import math
+
+    mine = {c["seed"]: c for c in per[default]}
+    out = {}
+    for arm, cs in per.items():
+        if arm == default:
+            continue
+        blocks, left = [], []
+        for c in sorted(cs, key=lambda c: c["seed"]):
+            d = mine.get(c["seed"])
+            if d is None or not d["per_cpu_hour"] or not c["per_cpu_hour"]:
+                left.append(c["seed"])
+                continue
+            blocks.append(
+                {
+                    "seed": c["seed"],
+                    "default": d["per_cpu_hour"],
+                    "arm": c["per_cpu_hour"],
+                    "ratio": d["per_cpu_hour"] / c["per_cpu_hour"],
+                }
+            )
+        ratios = [b["ratio"] for b in blocks]
+        out[arm] = {
+            "blocks": blocks,
+            "left_out": left,
+            "geomean": math.exp(sum(math.log(r) for r in ratios) / len(ratios)) if ratios else None,
+            "min": min(ratios) if ratios else None,
+        }
+    return out
+
+
+def comparison_markdown(res: Dict) -> str:
+    """The confirmatory table: per arm, the per-seed distinct findings (2 m) per 1,000, the mean
+    with its interval, the default's ratio with its interval and the exact test, and the ratios per
+    CPU-hour within blocks with their geometric mean."""
+    out = [
+        "| arm | seeds | distinct per 1,000 at 2 m, per seed | mean (95 % interval) | default / arm (95 % interval) | exact p | per CPU-hour, default / arm, by block | geometric mean |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    blocks = res["per_cpu_hour"]
+    for r in res["primary"]:
+        cells = [
+            r["arm"],
+            str(r["seeds"]),
+            ", ".join(f"{v:.1f}" for v in r["counts"]),
+            f"{r['mean']:.1f} ({r['lo']:.1f}-{r['hi']:.1f})",
+        ]
+        if r["ratio"] is None:
+            cells += ["-", "-", "-", "-"]
+        else:
+            b = blocks[r["arm"]]
+            cells += [
+                f"{r['ratio']:.2f}x ({r['ratio_lo']:.2f}-{r['ratio_hi']:.2f})",
+                f"{r['p']:.4f}",
+                ", ".join(f"s{x['seed']} {x['ratio']:.2f}" for x in b["blocks"]) or "-",
+                f"{b['geomean']:.2f}x" if b["geomean"] is not None else "-",
+            ]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
 
 
 def line(c: Dict) -> str:
@@ -131,7 +198,12 @@ def main(argv=None) -> int:
                 arms[name] = glob.glob(pattern)
                 if not arms[name]:
                     raise ValueError(f"--arm {spec}: no export matches")
-            print(json.dumps(compare(arms, next(iter(arms)), a.budget, target), indent=1, default=str))
+            res = compare(arms, next(iter(arms)), a.budget, target)
+            if a.doc:
+                write_block(a.doc[0], a.doc[1], comparison_markdown(res))
+                return 0
+            print(comparison_markdown(res) if a.markdown else json.dumps(res, indent=1, default=str))
+            return 0
         cs = [campaign(*read_export(path), budget=a.budget, target=target) for path in sorted(a.exports)]
         if a.doc:
             write_block(a.doc[0], a.doc[1], markdown(cs))
