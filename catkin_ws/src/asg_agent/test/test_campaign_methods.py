@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig, FunctionCallback
 from asg_agent.records.experiment import ExperimentError, load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.search.methods import make_method
@@ -80,17 +81,20 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     exp = load_experiment(EXP)
     log = TensorBoardLog(str(tmp_path / "tb"))
     c = Campaign(
-        "t",
-        exp,
-        make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)),
-        store,
-        FakePool(2, seed=2, gain=6.0),
-        60,
-        5,
-        str(tmp_path / "t.ckpt"),
-        slots=4,
-        reference=FakePool(2, seed=12, gain=1.5, prefix="fake_ref"),
-        scalars=log.scenario,
+        CampaignConfig(
+            name="t",
+            experiment=exp,
+            method=make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)),
+            store=store,
+            pool=FakePool(2, seed=2, gain=6.0),
+            total=60,
+            seed=5,
+            checkpoint=str(tmp_path / "t.ckpt"),
+            slots=4,
+            references={"ground_truth": FakePool(2, seed=12, gain=1.5, prefix="fake_ref")},
+            candidates="all",
+            callbacks=[FunctionCallback(scenario=log.scenario)],
+        )
     )
     c.start()
     c.run(poll_timeout=0.0)
@@ -230,7 +234,8 @@ def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsy
     # row's reference run; it counts as reproduced only when the termination, the proxy and the
     # kept positions (campaign.kept_xy) equal what attribution stored.
     import argparse
-    from asg_agent.campaign.loop import Outcome, kept_xy
+    from asg_agent.campaign.dispatch import Outcome
+    from asg_agent.records.store import kept_xy
     from asg_agent.scoring.proxy import compute, placed_mask
     from asg_agent.ros.replay import check_reference_run
 
@@ -275,15 +280,17 @@ def test_an_experiment_with_free_weather_sets_it_from_the_action(tmp_path):
     for method in ("random", "cmaes", "map-elites", "td3-per-asp"):
         m = make_method(method, exp, 1, budget=40, td3_config=TD3Config(**SMALL))
         c = Campaign(
-            method,
-            exp,
-            m,
-            Store(str(tmp_path / f"{method}.sqlite")),
-            FakePool(2, seed=1),
-            12,
-            1,
-            str(tmp_path / f"{method}.ckpt"),
-            slots=4,
+            CampaignConfig(
+                name=method,
+                experiment=exp,
+                method=m,
+                store=Store(str(tmp_path / f"{method}.sqlite")),
+                pool=FakePool(2, seed=1),
+                total=12,
+                seed=1,
+                checkpoint=str(tmp_path / f"{method}.ckpt"),
+                slots=4,
+            )
         )
         c.start()
         c.run()
@@ -322,7 +329,18 @@ def test_an_experiment_with_free_terrain_sets_it_from_the_action(tmp_path):
     validate_scenario(req)  # every request the search can make is a valid scene
     assert np.array_equal(exp.to_positions(a), load_experiment(EXP).to_positions(a[:16]))
     m = make_method("td3-per-asp", exp, 1, budget=40, td3_config=TD3Config(**SMALL))
-    c = Campaign("t", exp, m, Store(str(tmp_path / "t.sqlite")), FakePool(2, seed=1), 12, 1, str(tmp_path / "t.ckpt"))
+    c = Campaign(
+        CampaignConfig(
+            name="t",
+            experiment=exp,
+            method=m,
+            store=Store(str(tmp_path / "t.sqlite")),
+            pool=FakePool(2, seed=1),
+            total=12,
+            seed=1,
+            checkpoint=str(tmp_path / "t.ckpt"),
+        )
+    )
     c.start()
     c.run()
     amps = [json.loads(r["request"])["structural"]["terrain"]["amplitude_m"] for r in c.store.rows("t")]

@@ -30,7 +30,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from asg_agent.records.experiment import Experiment
-from asg_agent.search.base import SearchMethod, StateBuilder, _rng  # noqa: F401 (StateBuilder: its old home)
+from asg_agent.search.base import SearchMethod, _rng
 from asg_agent.search.td3 import TD3Agent, TD3Config
 from asg_scenario.layout import RouteFrame
 
