@@ -164,7 +164,7 @@ def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
             classes["cancel_mid_run"] += 1
         if not c.wait_for_result(rospy.Duration(20)):
             gid = c.gh.comm_state_machine.action_goal.goal_id.id if c.gh else ""
-            if gid in answered:  # the worker answered; SimpleActionClient did not deliver it
+            if gid in answered:  # the worker answered; the client did not deliver it
                 lost.append(
                     {
                         "class": cls,
@@ -174,6 +174,11 @@ def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
                     }
                 )
                 states["answered, lost by the client"] += 1
+                # a failure too (issue #79): the client of issue #68 delivers every answer, and a
+                # lost one must fail the run rather than pass as answered
+                failures.append(
+                    {"class": cls, "detail": detail, "n": n, "why": "answered by the worker, lost by the client"}
+                )
             else:
                 failures.append({"class": cls, "detail": detail, "n": n, "why": "no result within 20 s"})
             c.cancel_goal()
@@ -204,6 +209,7 @@ def fuzz_goals(worker, count, seed, pid_of=None, progress=True):
         "rss_kb": rss,
         "rss_growth_kb_after_warmup": growth,
         "lost_by_client": lost[:50],
+        "lost_count": len(lost),
         "failures": failures[:50],
         "failure_count": len(failures),
     }

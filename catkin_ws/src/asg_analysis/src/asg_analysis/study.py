@@ -1,0 +1,120 @@
+"""One study runner driven by the protocol file (issue #80 item 1; no ROS).
+
+A protocol's `report:` list names every generated block of its study record, what fills it and
+from which exports, so that a new study is a protocol file and the record regenerates with one
+command:
+
+    python3 -m asg_analysis.study experiments/protocol-NAME.yaml            # rewrite every block
+    python3 -m asg_analysis.study experiments/protocol-NAME.yaml --check    # exit 1 if one is stale
+
+Each entry of `report:`:
+
+    - page: docs/studies/DATE-NAME.md         # the record (relative to the repository)
+      block: NAME                              # its <!-- NAME: begin --> ... <!-- NAME: end -->
+      table: campaigns                         # one row a campaign (endpoints.markdown)
+      exports: results/STUDY/GLOB.jsonl.gz     # the campaigns' compact exports
+      budget: 150                              # count the first N jobs (optional)
+      target: flaw                             # flaw, regression or failure (default flaw)
+
+    - page: ...
+      block: ...
+      table: arms                              # arms compared (endpoints.comparison_markdown)
+      arms: {default: GLOB, route-random: GLOB}   # the default first
+      budget: 300
+
+The statistics are the library's (asg_analysis.endpoints, asg_analysis.stats); an entry names
+only what to read and where to write. An entry whose exports match nothing is named and its block
+left as it is (a study under way).
+"""
+
+import argparse
+import glob
+import os
+import sys
+from typing import Dict, List
+
+import yaml
+
+from asg_agent.paths import REPO
+
+TABLES = ("campaigns", "arms")
+
+
+def _paths(pattern: str) -> List[str]:
+    return sorted(glob.glob(os.path.join(REPO, pattern)))
+
+
+def render(entry: Dict) -> str:
+    """The block's text of one `report:` entry (ValueError naming what is wrong)."""
+    from asg_agent.records.export import read_export
+    from asg_analysis import endpoints
+
+    kind = entry.get("table")
+    if kind not in TABLES:
+        raise ValueError(f"report entry {entry.get('block')!r}: table {kind!r} must be one of {', '.join(TABLES)}")
+    budget = entry.get("budget")
+    target = entry.get("target", "flaw")
+    target = None if target == "failure" else target
+    if kind == "campaigns":
+        paths = _paths(entry["exports"])
+        if not paths:
+            raise FileNotFoundError(f"no export matches {entry['exports']}")
+        return endpoints.markdown([endpoints.campaign(*read_export(p), budget=budget, target=target) for p in paths])
+    arms = {name: _paths(pattern) for name, pattern in entry["arms"].items()}
+    empty = [name for name, ps in arms.items() if not ps]
+    if empty:
+        raise FileNotFoundError(f"no export of arm(s) {', '.join(empty)}")
+    res = endpoints.compare(arms, next(iter(arms)), budget, target)
+    return endpoints.comparison_markdown(res)
+
+
+def block_text(page: str, block: str) -> str:
+    text = open(page, encoding="utf-8").read()
+    begin, end = f"<!-- {block}: begin -->\n", f"<!-- {block}: end -->"
+    if begin not in text or end not in text:
+        raise ValueError(f"{os.path.relpath(page, REPO)}: no block {block!r}")
+    return text.split(begin, 1)[1].split(end, 1)[0]
+
+
+def run(protocol_path: str, check: bool = False, out=None) -> int:
+    from asg_analysis.endpoints import write_block
+
+    out = out or sys.stdout
+
+    with open(protocol_path, encoding="utf-8") as f:
+        protocol = yaml.safe_load(f)
+    entries = (protocol or {}).get("report") or []
+    if not entries:
+        raise ValueError(f"{protocol_path}: no `report:` list (the blocks of its study record)")
+    stale = 0
+    for e in entries:
+        page = os.path.join(REPO, e["page"])
+        try:
+            text = render(e)
+        except FileNotFoundError as err:
+            print(f"{e['block']}: skipped, {err}", file=out)
+            continue
+        if check:
+            if block_text(page, e["block"]).strip() != text.strip():
+                print(f"{e['page']}: block {e['block']!r} is stale", file=out)
+                stale += 1
+        else:
+            write_block(page, e["block"], text)
+            print(f"{e['page']}: block {e['block']!r} written", file=out)
+    return 1 if stale else 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python3 -m asg_analysis.study", description=__doc__.split("\n\n")[0])
+    p.add_argument("protocol", help="a protocol file with a `report:` list")
+    p.add_argument("--check", action="store_true", help="exit 1 if a block is stale; write nothing")
+    a = p.parse_args(argv)
+    try:
+        return run(a.protocol, a.check)
+    except (OSError, ValueError, KeyError, yaml.YAMLError) as e:
+        print(f"study: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

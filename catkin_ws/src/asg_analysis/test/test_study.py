@@ -1,0 +1,57 @@
+"""asg_analysis.study (issue #80 item 1): a protocol's `report:` list regenerates its record's
+blocks with one command, `--check` tells a stale block, and a bad entry is named."""
+
+import glob
+import os
+
+import yaml
+
+from asg_analysis import endpoints, study
+from asg_agent.records.export import read_export
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
+PILOT = os.path.join(REPO, "results", "distinct_v4", "dist4-pilot-ops-wide-s2*.jsonl.gz")
+
+
+def _study(tmp_path, entries):
+    page = tmp_path / "record.md"
+    page.write_text("# r\n\n<!-- one: begin -->\nold\n<!-- one: end -->\n\n<!-- two: begin -->\n<!-- two: end -->\n")
+    proto = tmp_path / "protocol.yaml"
+    proto.write_text(yaml.safe_dump({"name": "x", "report": [dict(e, page=str(page)) for e in entries]}))
+    return page, proto
+
+
+def test_the_runner_writes_and_checks_each_block(tmp_path, capsys):
+    page, proto = _study(
+        tmp_path,
+        [
+            {"block": "one", "table": "campaigns", "exports": PILOT, "budget": 150},
+            {"block": "two", "table": "arms", "arms": {"default": PILOT, "none": str(tmp_path / "no-*.jsonl.gz")}},
+        ],
+    )
+    assert study.main([str(proto), "--check"]) == 1  # block one is stale ("old")
+    assert "block 'one' is stale" in capsys.readouterr().out
+    assert study.main([str(proto)]) == 0
+    out = capsys.readouterr().out
+    assert "block 'one' written" in out and "two: skipped, no export of arm(s) none" in out
+    want = endpoints.markdown([endpoints.campaign(*read_export(p), budget=150) for p in sorted(glob.glob(PILOT))])
+    assert study.block_text(str(page), "one").strip() == want.strip()
+    assert study.main([str(proto), "--check"]) == 0
+
+
+def test_a_bad_entry_or_a_protocol_without_report_is_named(tmp_path, capsys):
+    _, proto = _study(tmp_path, [{"block": "one", "table": "pie", "exports": PILOT}])
+    assert study.main([str(proto)]) == 2
+    assert "table 'pie' must be one of campaigns, arms" in capsys.readouterr().err
+    bare = tmp_path / "bare.yaml"
+    bare.write_text("name: x\n")
+    assert study.main([str(bare)]) == 2
+    assert "no `report:` list" in capsys.readouterr().err
+
+
+def test_the_v4_record_is_what_its_protocols_generate():
+    for name in ("distinct-v4", "distinct-v4-exp3", "distinct-v4-exp6", "distinct-v4-gapnav"):
+        assert (
+            study.run(os.path.join(REPO, "experiments", f"protocol-{name}.yaml"), check=True, out=open(os.devnull, "w"))
+            == 0
+        ), name
