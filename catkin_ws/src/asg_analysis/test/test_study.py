@@ -42,7 +42,7 @@ def test_the_runner_writes_and_checks_each_block(tmp_path, capsys):
 def test_a_bad_entry_or_a_protocol_without_report_is_named(tmp_path, capsys):
     _, proto = _study(tmp_path, [{"block": "one", "table": "pie", "exports": PILOT}])
     assert study.main([str(proto)]) == 2
-    assert "table 'pie' must be one of campaigns, arms" in capsys.readouterr().err
+    assert "table 'pie' must be one of campaigns, arms, command" in capsys.readouterr().err
     bare = tmp_path / "bare.yaml"
     bare.write_text("name: x\n")
     assert study.main([str(bare)]) == 2
@@ -55,3 +55,42 @@ def test_the_v4_record_is_what_its_protocols_generate():
             study.run(os.path.join(REPO, "experiments", f"protocol-{name}.yaml"), check=True, out=open(os.devnull, "w"))
             == 0
         ), name
+
+
+def test_a_command_entry_runs_its_generator_and_checks_it(tmp_path, capsys):
+    from asg_analysis import replays
+
+    folder = os.path.join(REPO, "results", "flaw_study")
+    begin, end = replays.markers(folder)
+    page = tmp_path / "record.md"
+    page.write_text(f"# r\n\n{begin}\nold\n{end}\n")
+    proto = tmp_path / "protocol.yaml"
+    entry = {"table": "command", "module": "asg_analysis.replays", "args": [folder, "--doc", str(page)]}
+    proto.write_text(yaml.safe_dump({"name": "x", "report": [entry]}))
+    assert study.main([str(proto), "--check"]) == 1 and "stale" in capsys.readouterr().out
+    assert page.read_text().count("old") == 1  # --check wrote nothing
+    assert study.main([str(proto)]) == 0
+    assert replays.markdown(replays.read(folder)) in page.read_text()
+    assert study.main([str(proto), "--check"]) == 0
+
+
+def test_every_study_with_a_record_lists_its_blocks():
+    """A new study is a protocol file: each protocol whose study has a record under docs/studies/
+    names that record's generated blocks in its `report:` list."""
+    records = " ".join(
+        open(p, encoding="utf-8").read() for p in glob.glob(os.path.join(REPO, "docs", "studies", "*.md"))
+    )
+    for path in sorted(glob.glob(os.path.join(REPO, "experiments", "protocol-*.yaml"))):
+        name = os.path.basename(path)
+        if name not in records:
+            continue  # a protocol no record names
+        with open(path, encoding="utf-8") as f:
+            p = yaml.safe_load(f)
+        if name in (
+            "protocol-round4.yaml",
+            "protocol-design-loop.yaml",
+            "protocol-regression-depth-rc2.yaml",
+            "protocol-regression-depth-rc3.yaml",
+        ):
+            continue
+        assert p.get("report"), f"{name}: its record's blocks are not listed (report:)"

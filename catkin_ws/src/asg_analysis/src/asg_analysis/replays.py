@@ -55,29 +55,38 @@ def markdown(records: List[dict]) -> str:
     return "\n".join(rows)
 
 
-def write_doc(doc: str, table: str, folder: str = os.path.join("results", "flaw_study")) -> None:
+def write_doc(doc: str, table: str, folder: str = os.path.join("results", "flaw_study"), check: bool = False) -> bool:
+    """Rewrites the replays block of `doc` (check: write nothing, say whether it is current)."""
     begin, end = markers(folder)
     with open(doc, encoding="utf-8") as f:
         text = f.read()
     pattern = re.escape(begin) + r"\n(?:.*?\n)?" + re.escape(end)  # an empty block too
     if not re.search(pattern, text, re.S):
         raise ValueError(f"{doc}: no replays block ({begin} ... {end})")
+    new = re.sub(pattern, lambda _: f"{begin}\n{table}\n{end}", text, flags=re.S)
+    if check:
+        return new == text
     with open(doc, "w", encoding="utf-8") as f:
-        f.write(re.sub(pattern, lambda _: f"{begin}\n{table}\n{end}", text, flags=re.S))
+        f.write(new)
+    return True
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("folder", help="the study's folder (its replays/ holds the records)")
     p.add_argument("--doc", default="", help="rewrite this page's replays block")
+    p.add_argument("--check", action="store_true", help="with --doc: write nothing, exit 1 if the block is stale")
     a = p.parse_args(argv)
     table = markdown(read(a.folder))
     if a.doc:
         try:
-            write_doc(a.doc, table, a.folder)
+            current = write_doc(a.doc, table, a.folder, a.check)
         except (OSError, ValueError) as e:
             print(f"replays: {e}", file=sys.stderr)
             return 2
+        if not current:
+            print(f"replays: {a.doc}'s replays block is stale: rerun without --check", file=sys.stderr)
+            return 1
     print(table)
     return 0
 

@@ -22,6 +22,11 @@ Each entry of `report:`:
       arms: {default: GLOB, route-random: GLOB}   # the default first
       budget: 300
 
+    - table: command                           # a generator of its own that writes its block(s)
+      module: asg_analysis.protocol            # run as python3 -m MODULE ARGS (from the repository)
+      args: [status, experiments/protocol-NAME.yaml, results/STUDY, --doc, docs/studies/DATE-NAME.md]
+      check: [--check]                          # added with --check (the default)
+
 The statistics are the library's (asg_analysis.endpoints, asg_analysis.stats); an entry names
 only what to read and where to write. An entry whose exports match nothing is named and its block
 left as it is (a study under way).
@@ -38,6 +43,7 @@ import yaml
 from asg_agent.paths import REPO
 
 TABLES = ("campaigns", "arms")
+KINDS = TABLES + ("command",)
 
 
 def _paths(pattern: str) -> List[str]:
@@ -51,7 +57,7 @@ def render(entry: Dict) -> str:
 
     kind = entry.get("table")
     if kind not in TABLES:
-        raise ValueError(f"report entry {entry.get('block')!r}: table {kind!r} must be one of {', '.join(TABLES)}")
+        raise ValueError(f"report entry {entry.get('block')!r}: table {kind!r} must be one of {', '.join(KINDS)}")
     budget = entry.get("budget")
     target = entry.get("target", "flaw")
     target = None if target == "failure" else target
@@ -76,6 +82,24 @@ def block_text(page: str, block: str) -> str:
     return text.split(begin, 1)[1].split(end, 1)[0]
 
 
+def _command(e: Dict, check: bool, out) -> int:
+    """Runs a `command` entry (its module writes its own blocks); 1 when --check finds it stale."""
+    import subprocess
+
+    args = [str(x) for x in e.get("args", [])]
+    if check:
+        args += [str(x) for x in e.get("check", ["--check"])]
+    r = subprocess.run([sys.executable, "-m", e["module"], *args], cwd=REPO, capture_output=True, text=True)
+    what = f"{e['module']} {' '.join(args[:3])}"
+    if r.returncode == 0:
+        print(f"{what}: {'in step' if check else 'written'}", file=out)
+        return 0
+    if check:
+        print(f"{what}: stale (exit {r.returncode}) {r.stderr.strip()[-300:]}", file=out)
+        return 1
+    raise ValueError(f"{what} failed (exit {r.returncode}): {r.stderr.strip()[-500:]}")
+
+
 def run(protocol_path: str, check: bool = False, out=None) -> int:
     from asg_analysis.endpoints import write_block
 
@@ -88,6 +112,9 @@ def run(protocol_path: str, check: bool = False, out=None) -> int:
         raise ValueError(f"{protocol_path}: no `report:` list (the blocks of its study record)")
     stale = 0
     for e in entries:
+        if e.get("table") == "command":
+            stale += _command(e, check, out)
+            continue
         page = os.path.join(REPO, e["page"])
         try:
             text = render(e)
