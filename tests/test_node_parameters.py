@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from asg_depth_stack.params import DEPTH_STACK
-from asg_lockstep.params import CLIENT, Param, markdown, read
+from asg_lockstep.params import CLIENT, SCRIPTED_DRIVER, Param, markdown, read
 from asg_perception.node_params import SEGMENTER
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
@@ -23,6 +23,7 @@ TABLES = {
     ("perception.md", "segmenter"): SEGMENTER,
     ("your-stack.md", "depth_stack"): DEPTH_STACK,
     ("your-stack.md", "lockstep_client"): CLIENT,
+    ("simulator.md", "scripted_driver"): SCRIPTED_DRIVER,
 }
 
 
@@ -164,3 +165,38 @@ def test_gap_drives_table_is_printed_quoted_and_its_yaml_holds_its_defaults():
     path = os.path.join(REPO, "catkin_ws", "src", "gap_nav", "config", "gap_drive.yaml")
     with open(path, encoding="utf-8") as f:
         assert yaml.safe_load(f) == rows
+
+
+def test_the_scripted_driver_reads_its_table_and_refuses_a_boolean_throttle():
+    """Issue #80: scripted_driver read its parameters by hand, so `~throttle: true` drove at
+    float(True) = 1.0. It reads SCRIPTED_DRIVER now, which names the bad value."""
+    with pytest.raises(ValueError, match=r"~throttle = True: must be a number in \[0, 1\]"):
+        read(SCRIPTED_DRIVER, lambda n, d: True if n == "throttle" else d)
+    with pytest.raises(ValueError, match="~mode = 'drive'"):
+        read(SCRIPTED_DRIVER, lambda n, d: "drive" if n == "mode" else d)
+    got = read(SCRIPTED_DRIVER, lambda n, d: {"mode": "goal", "steering": -0.5}.get(n, d))
+    assert got == {"mode": "goal", "throttle": 0.5, "steering": -0.5, "brake": 0.0, "ack_name": ""}
+    script = open(
+        os.path.join(REPO, "catkin_ws", "src", "asg_sim", "scripts", "scripted_driver"), encoding="utf-8"
+    ).read()
+    assert "read(SCRIPTED_DRIVER" in script and "float(rospy.get_param" not in script
+
+
+def test_a_registration_mode_other_than_lockstep_or_free_is_refused_by_name():
+    """Issue #80: the clients read `stack/mode` as "lockstep or anything else": a typo ran free,
+    and in C++ a value of another type read as unset and ran in lockstep. Both now refuse it with
+    the same words (asg_lockstep.params.registered_lockstep, client_settings.hpp's gtest)."""
+    from asg_lockstep.params import registered_lockstep
+
+    assert (registered_lockstep(None), registered_lockstep("lockstep"), registered_lockstep("free")) == (
+        None,
+        True,
+        False,
+    )
+    for bad, shown in (("lock-step", "'lock-step'"), (1, "1"), (True, "true")):
+        with pytest.raises(ValueError, match=re.escape(f"stack/mode = {shown}: must be 'lockstep' or 'free'")):
+            registered_lockstep(bad)
+    client = open(
+        os.path.join(REPO, "catkin_ws", "src", "asg_lockstep", "src", "asg_lockstep", "ros", "client.py")
+    ).read()
+    assert 'registered_lockstep(rospy.get_param("stack/mode", None))' in client

@@ -49,18 +49,25 @@ def struct_members(text: str, struct: str) -> dict:
 
 
 def test_scene_defaults_come_from_the_generated_schema():
-    text = open(os.path.join(SIM, "include", "asg_sim", "scene.hpp"), encoding="utf-8").read()
+    # TerrainSpec (terrain.hpp) too (issue #80: its defaults were literals, and the loader keeps a
+    # struct's default when the key is missing)
+    texts = {
+        h: open(os.path.join(SIM, "include", "asg_sim", h), encoding="utf-8").read()
+        for h in ("scene.hpp", "terrain.hpp")
+    }
     sections = dict(schema.SECTIONS)
     checked = 0
-    for struct, section in STRUCTS.items():
-        members = struct_members(text, struct)
+    for struct, section in list(STRUCTS.items()) + [("TerrainSpec", "structural.terrain")]:
+        members = struct_members(texts["terrain.hpp" if struct == "TerrainSpec" else "scene.hpp"], struct)
+        if struct == "TerrainSpec":
+            assert {"amplitude_m", "wavelength_m", "seed"} <= set(members), members
         for f in sections[section]:
             if f.key not in members or f.default is None:
                 continue  # required fields: the reader sets them
             want = "schema::" + cpp_schema.constant_name(section, f.key) + ".default_value"
             assert want in members[f.key], f"scene.hpp {struct}.{f.key} = {members[f.key]!r}: use {want}"
             checked += 1
-    assert checked >= 18
+    assert checked >= 21
 
 
 def test_the_vehicle_and_traversable_height_are_the_catalogues():

@@ -5,6 +5,7 @@ import os
 
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
 from asg_agent.records.store import Store
 from asg_agent.search.methods import make_method
@@ -19,7 +20,20 @@ def campaign(tmp_path, name, pool, total=40, method="td3-per-asp", seed=7, store
     exp = load_experiment(EXP)
     store = store or Store(str(tmp_path / "store.sqlite"))
     m = make_method(method, exp, seed, budget=total, td3_config=TD3Config(**SMALL))
-    return Campaign(name, exp, m, store, pool, total, seed, str(tmp_path / f"{name}.ckpt"), slots=4, checkpoint_every=1)
+    return Campaign(
+        CampaignConfig(
+            name=name,
+            experiment=exp,
+            method=m,
+            store=store,
+            pool=pool,
+            total=total,
+            seed=seed,
+            checkpoint=str(tmp_path / f"{name}.ckpt"),
+            slots=4,
+            checkpoint_every=1,
+        )
+    )
 
 
 class Interrupt(Exception):

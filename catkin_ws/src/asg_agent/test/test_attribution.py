@@ -11,6 +11,7 @@ import pytest
 from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig, FunctionCallback
 from asg_agent.records.store import Store
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring.attribution import RunOutcome as R
@@ -84,17 +85,19 @@ def three_stack(tmp_path, name, candidates="failures", total=24, store=None, poo
         FakePool(1, seed=3, gain=0.0, prefix="fake_gt", collide_jobs=TRUTH_COLLIDES),
     )
     c = Campaign(
-        name,
-        exp,
-        make_method("random", exp, 5, budget=total),
-        store,
-        pools[0],
-        total,
-        5,
-        str(tmp_path / f"{name}.ckpt"),
-        slots=4,
-        references={attr.FULL: pools[1], attr.TRUTH: pools[2]},
-        candidates=candidates,
+        CampaignConfig(
+            name=name,
+            experiment=exp,
+            method=make_method("random", exp, 5, budget=total),
+            store=store,
+            pool=pools[0],
+            total=total,
+            seed=5,
+            checkpoint=str(tmp_path / f"{name}.ckpt"),
+            slots=4,
+            references={attr.FULL: pools[1], attr.TRUTH: pools[2]},
+            candidates=candidates,
+        )
     )
     return c, store, pools
 
@@ -102,7 +105,7 @@ def three_stack(tmp_path, name, candidates="failures", total=24, store=None, poo
 def test_candidates_run_on_every_reference_and_nothing_else_does(tmp_path):
     c, store, (test, full, truth) = three_stack(tmp_path, "f")
     seen = []
-    c.attributed = lambda job, label, counts: seen.append((job, label))
+    c.add_callback(FunctionCallback(attributed=lambda job, label, counts: seen.append((job, label))))
     c.start()
     s = c.run(poll_timeout=0.0)
     rows = {r["job"]: dict(r) for r in store.rows("f")}
@@ -157,15 +160,17 @@ def test_a_resume_reruns_the_references_still_out_and_the_search_ignores_them(tm
     # The same seed without any reference stack proposes and stores the same scenarios.
     exp = load_experiment(EXP)
     plain = Campaign(
-        "p",
-        exp,
-        make_method("random", exp, 5, budget=24),
-        store,
-        FakePool(2, seed=9, gain=0.0, collide_jobs=TEST_COLLIDES),
-        24,
-        5,
-        str(tmp_path / "p.ckpt"),
-        slots=4,
+        CampaignConfig(
+            name="p",
+            experiment=exp,
+            method=make_method("random", exp, 5, budget=24),
+            store=store,
+            pool=FakePool(2, seed=9, gain=0.0, collide_jobs=TEST_COLLIDES),
+            total=24,
+            seed=5,
+            checkpoint=str(tmp_path / "p.ckpt"),
+            slots=4,
+        )
     )
     plain.start()
     plain.run(poll_timeout=0.0)
@@ -177,16 +182,64 @@ def test_reference_roles_and_rules_are_checked():
     m = make_method("random", exp, 0, budget=4)
     kw = dict(slots=2)
     with pytest.raises(ValueError, match="ground_truth"):
-        Campaign("x", exp, m, None, FakePool(1), 4, 0, "/tmp/x", references={attr.FULL: FakePool(1)}, **kw)
+        Campaign(
+            CampaignConfig(
+                name="x",
+                experiment=exp,
+                method=m,
+                store=None,
+                pool=FakePool(1),
+                total=4,
+                seed=0,
+                checkpoint="/tmp/x",
+                references={attr.FULL: FakePool(1)},
+                **kw,
+            )
+        )
     with pytest.raises(ValueError, match="roles"):
-        Campaign("x", exp, m, None, FakePool(1), 4, 0, "/tmp/x", references={"mine": FakePool(1)}, **kw)
+        Campaign(
+            CampaignConfig(
+                name="x",
+                experiment=exp,
+                method=m,
+                store=None,
+                pool=FakePool(1),
+                total=4,
+                seed=0,
+                checkpoint="/tmp/x",
+                references={"mine": FakePool(1)},
+                **kw,
+            )
+        )
     with pytest.raises(ValueError, match="candidates"):
         Campaign(
-            "x", exp, m, None, FakePool(1), 4, 0, "/tmp/x", references={attr.TRUTH: FakePool(1)}, candidates="some"
+            CampaignConfig(
+                name="x",
+                experiment=exp,
+                method=m,
+                store=None,
+                pool=FakePool(1),
+                total=4,
+                seed=0,
+                checkpoint="/tmp/x",
+                references={attr.TRUTH: FakePool(1)},
+                candidates="some",
+            )
         )
     with pytest.raises(ValueError, match="every scenario"):
         Campaign(
-            "x", exp, m, None, FakePool(1), 4, 0, "/tmp/x", references={attr.TRUTH: FakePool(1)}, reward="differential"
+            CampaignConfig(
+                name="x",
+                experiment=exp,
+                method=m,
+                store=None,
+                pool=FakePool(1),
+                total=4,
+                seed=0,
+                checkpoint="/tmp/x",
+                references={attr.TRUTH: FakePool(1)},
+                reward="differential",
+            )
         )
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig, FunctionCallback
 from asg_agent.records.experiment import ExperimentError, load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.search.methods import make_method
@@ -80,17 +81,20 @@ def test_tensorboard_log_holds_every_scenario_and_the_agent_figures(tmp_path):
     exp = load_experiment(EXP)
     log = TensorBoardLog(str(tmp_path / "tb"))
     c = Campaign(
-        "t",
-        exp,
-        make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)),
-        store,
-        FakePool(2, seed=2, gain=6.0),
-        60,
-        5,
-        str(tmp_path / "t.ckpt"),
-        slots=4,
-        reference=FakePool(2, seed=12, gain=1.5, prefix="fake_ref"),
-        scalars=log.scenario,
+        CampaignConfig(
+            name="t",
+            experiment=exp,
+            method=make_method("td3-per-asp", exp, 5, budget=60, td3_config=TD3Config(**SMALL)),
+            store=store,
+            pool=FakePool(2, seed=2, gain=6.0),
+            total=60,
+            seed=5,
+            checkpoint=str(tmp_path / "t.ckpt"),
+            slots=4,
+            references={"ground_truth": FakePool(2, seed=12, gain=1.5, prefix="fake_ref")},
+            candidates="all",
+            callbacks=[FunctionCallback(scenario=log.scenario)],
+        )
     )
     c.start()
     c.run(poll_timeout=0.0)
@@ -169,12 +173,69 @@ def test_map_elites_fills_its_archive_and_keeps_the_best_of_each_cell():
     assert m.archive.stats.obj_max > 2.0
 
 
+def test_map_elites_tells_its_emitter_every_result_and_proposes_as_before():
+    """Issue #80: MAP-Elites added results to the archive and never told the emitter, which works
+    only while the emitter learns nothing (IsoLineEmitter). Each result now goes through the
+    archive's add and the emitter's tell, as ribs' Scheduler.tell does for a batch. A counting
+    emitter sees every result in job order with the add's info; and the proposals of a seeded run
+    are those of the archive-only update that shipped (the same layouts, so the same digest)."""
+    import hashlib
+
+    exp = load_experiment(EXP)
+    start = None
+
+    def run(m, told=None):
+        nonlocal start
+        start = np.array(m.states.start), np.array(m.states.goal)
+        if told is not None:
+            tell = m.emitter.tell
+
+            def counting(solution, objective, measures, add_info, **fields):
+                told.append((solution.copy(), float(objective[0]), int(add_info["status"][0])))
+                return tell(solution, objective, measures, add_info, **fields)
+
+            m.emitter.tell = counting
+        h, flight, fed = hashlib.sha256(), [], []
+        for job in range(160):
+            a = m.propose(job, job // 5, job % 5, None)
+            h.update(a.tobytes())
+            flight.append((job, a))
+            if len(flight) > 3:
+                j, aj = flight.pop(0)
+                path = np.array([start[0], (start[0] + start[1]) / 2 + (j % 9) * np.array([0.7, -0.7]), start[1]])
+                m.observe(j, j // 5, j % 5, None, aj, float(np.sum(aj)), m.states.build(aj, path, 1), False)
+                fed.append(aj)
+        return h.hexdigest(), fed
+
+    told = []
+    shipped = make_method("map-elites", exp, 7, budget=400)
+    digest, fed = run(shipped, told)
+    assert len(told) == len(fed) == 157 and all(np.array_equal(t[0][0], f) for t, f in zip(told, fed))
+    assert {t[2] for t in told} >= {0, 1, 2}  # not added, improved, new cell: the add's own info
+
+    # the archive-only update of round 6 (add_single, no tell), on the same seed
+    class AddOnly(type(shipped)):
+        def observe(self, job, episode, step, state, action, reward, next_state, done):
+            n = self.exp.action_dim
+            path = (
+                (np.asarray(next_state[n : n + 2 * self.states.n_path], np.float64).reshape(-1, 2) + 1.0)
+                * 0.5
+                * self.exp.size
+            )
+            self.archive.add_single(np.asarray(action, np.float64), float(reward), self.descriptors(action, path))
+            return {}
+
+    old = AddOnly(exp, 7, init_random=shipped.init_random)
+    assert run(old)[0] == digest
+
+
 def test_replayed_reference_run_is_checked_against_what_attribution_stored(capsys):
     # Issue #25: `replay_ros STORE CAMPAIGN JOB --perception ground_truth` replays an attributed
     # row's reference run; it counts as reproduced only when the termination, the proxy and the
     # kept positions (campaign.kept_xy) equal what attribution stored.
     import argparse
-    from asg_agent.campaign.loop import Outcome, kept_xy
+    from asg_agent.campaign.dispatch import Outcome
+    from asg_agent.records.store import kept_xy
     from asg_agent.scoring.proxy import compute, placed_mask
     from asg_agent.ros.replay import check_reference_run
 
@@ -219,15 +280,17 @@ def test_an_experiment_with_free_weather_sets_it_from_the_action(tmp_path):
     for method in ("random", "cmaes", "map-elites", "td3-per-asp"):
         m = make_method(method, exp, 1, budget=40, td3_config=TD3Config(**SMALL))
         c = Campaign(
-            method,
-            exp,
-            m,
-            Store(str(tmp_path / f"{method}.sqlite")),
-            FakePool(2, seed=1),
-            12,
-            1,
-            str(tmp_path / f"{method}.ckpt"),
-            slots=4,
+            CampaignConfig(
+                name=method,
+                experiment=exp,
+                method=m,
+                store=Store(str(tmp_path / f"{method}.sqlite")),
+                pool=FakePool(2, seed=1),
+                total=12,
+                seed=1,
+                checkpoint=str(tmp_path / f"{method}.ckpt"),
+                slots=4,
+            )
         )
         c.start()
         c.run()
@@ -266,7 +329,18 @@ def test_an_experiment_with_free_terrain_sets_it_from_the_action(tmp_path):
     validate_scenario(req)  # every request the search can make is a valid scene
     assert np.array_equal(exp.to_positions(a), load_experiment(EXP).to_positions(a[:16]))
     m = make_method("td3-per-asp", exp, 1, budget=40, td3_config=TD3Config(**SMALL))
-    c = Campaign("t", exp, m, Store(str(tmp_path / "t.sqlite")), FakePool(2, seed=1), 12, 1, str(tmp_path / "t.ckpt"))
+    c = Campaign(
+        CampaignConfig(
+            name="t",
+            experiment=exp,
+            method=m,
+            store=Store(str(tmp_path / "t.sqlite")),
+            pool=FakePool(2, seed=1),
+            total=12,
+            seed=1,
+            checkpoint=str(tmp_path / "t.ckpt"),
+        )
+    )
     c.start()
     c.run()
     amps = [json.loads(r["request"])["structural"]["terrain"]["amplitude_m"] for r in c.store.rows("t")]

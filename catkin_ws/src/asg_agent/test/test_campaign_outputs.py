@@ -7,6 +7,7 @@ import time
 import pytest
 
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.search.methods import make_method
@@ -40,7 +41,7 @@ def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_p
     """--reward collision (issue #27): the search learns from the proxy plus the bonus where the
     stack under test collided and the reference stack reached the goal (a perception collision, as
     every count defines it); the stored proxy stays the paper's."""
-    from asg_agent.campaign.loop import collision_reward
+    from asg_agent.scoring.rewards import collision_reward
 
     assert collision_reward(1.2, "COLLISION", None, 2.0) == 3.2  # no reference: every collision
     assert collision_reward(1.2, "COLLISION", "SUCCESS", 2.0) == 3.2
@@ -50,18 +51,21 @@ def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_p
     exp = load_experiment(EXP)
     store = Store(str(tmp_path / "r.sqlite"))
     c = Campaign(
-        "r",
-        exp,
-        make_method("random", exp, 3, budget=24),
-        store,
-        FakePool(2, seed=1, collide_jobs={2, 5, 9}),
-        24,
-        3,
-        str(tmp_path / "r.ckpt"),
-        slots=4,
-        reference=FakePool(2, seed=11, prefix="fake_ref", collide_jobs={9}),
-        reward="collision",
-        collision_bonus=1.5,
+        CampaignConfig(
+            name="r",
+            experiment=exp,
+            method=make_method("random", exp, 3, budget=24),
+            store=store,
+            pool=FakePool(2, seed=1, collide_jobs={2, 5, 9}),
+            total=24,
+            seed=3,
+            checkpoint=str(tmp_path / "r.ckpt"),
+            slots=4,
+            reward="collision",
+            collision_bonus=1.5,
+            references={"ground_truth": FakePool(2, seed=11, prefix="fake_ref", collide_jobs={9})},
+            candidates="all",
+        )
     )
     c.start()
     c.run(poll_timeout=0.0)
@@ -82,7 +86,17 @@ def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_p
     ):
         with pytest.raises(ValueError, match=match):
             Campaign(
-                "x", exp, make_method("random", exp, 3, budget=4), store, FakePool(1), 4, 3, str(tmp_path / "x"), **bad
+                CampaignConfig(
+                    name="x",
+                    experiment=exp,
+                    method=make_method("random", exp, 3, budget=4),
+                    store=store,
+                    pool=FakePool(1),
+                    total=4,
+                    seed=3,
+                    checkpoint=str(tmp_path / "x"),
+                    **bad,
+                )
             )
 
 
@@ -144,17 +158,20 @@ def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
         store = Store(str(tmp_path / "d.sqlite"))
         exp = load_experiment(EXP)
         c = Campaign(
-            name,
-            exp,
-            make_method("td3-per-asp", exp, 4, budget=40),
-            store,
-            FakePool(2, seed=seed),
-            40,
-            4,
-            str(tmp_path / f"{name}.ckpt"),
-            slots=4,
-            reference=FakePool(2, seed=seed + 10, gain=0.3, prefix="fake_ref"),
-            reward="differential",
+            CampaignConfig(
+                name=name,
+                experiment=exp,
+                method=make_method("td3-per-asp", exp, 4, budget=40),
+                store=store,
+                pool=FakePool(2, seed=seed),
+                total=40,
+                seed=4,
+                checkpoint=str(tmp_path / f"{name}.ckpt"),
+                slots=4,
+                reward="differential",
+                references={"ground_truth": FakePool(2, seed=seed + 10, gain=0.3, prefix="fake_ref")},
+                candidates="all",
+            )
         )
         c.start()
         c.run(poll_timeout=0.0)
@@ -182,16 +199,19 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     store = Store(str(tmp_path / "a.sqlite"))
     exp = load_experiment(EXP)
     c = Campaign(
-        "a",
-        exp,
-        make_method("random", exp, 3, budget=60),
-        store,
-        FakePool(2, seed=1, gain=6.0),
-        60,
-        3,
-        str(tmp_path / "a.ckpt"),
-        slots=4,
-        reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"),
+        CampaignConfig(
+            name="a",
+            experiment=exp,
+            method=make_method("random", exp, 3, budget=60),
+            store=store,
+            pool=FakePool(2, seed=1, gain=6.0),
+            total=60,
+            seed=3,
+            checkpoint=str(tmp_path / "a.ckpt"),
+            slots=4,
+            references={"ground_truth": FakePool(2, seed=11, gain=1.5, prefix="fake_ref")},
+            candidates="all",
+        )
     )
     c.start()
     c.run(poll_timeout=0.0)
@@ -244,30 +264,35 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     assert store.summary("a")["plr_below_0999"] == base + 1  # job 20, not the collision of job 0
     # A resumed campaign takes its counts from the store.
     again = Campaign(
-        "a",
-        exp,
-        make_method("random", exp, 3, budget=60),
-        store,
-        FakePool(2, seed=1, gain=6.0),
-        60,
-        3,
-        str(tmp_path / "a.ckpt"),
-        slots=4,
-        reference=FakePool(2, seed=11, gain=1.5, prefix="fake_ref"),
+        CampaignConfig(
+            name="a",
+            experiment=exp,
+            method=make_method("random", exp, 3, budget=60),
+            store=store,
+            pool=FakePool(2, seed=1, gain=6.0),
+            total=60,
+            seed=3,
+            checkpoint=str(tmp_path / "a.ckpt"),
+            slots=4,
+            references={"ground_truth": FakePool(2, seed=11, gain=1.5, prefix="fake_ref")},
+            candidates="all",
+        )
     )
     again.resume()
     assert (again.status()["perception"], again.status()["stack"]) == (perception, stack)
     with pytest.raises(ValueError, match="needs a reference stack"):
         Campaign(
-            "b",
-            exp,
-            make_method("random", exp, 3, budget=5),
-            store,
-            FakePool(1),
-            5,
-            3,
-            str(tmp_path / "b.ckpt"),
-            reward="differential",
+            CampaignConfig(
+                name="b",
+                experiment=exp,
+                method=make_method("random", exp, 3, budget=5),
+                store=store,
+                pool=FakePool(1),
+                total=5,
+                seed=3,
+                checkpoint=str(tmp_path / "b.ckpt"),
+                reward="differential",
+            )
         )
 
 

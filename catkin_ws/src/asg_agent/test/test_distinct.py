@@ -10,6 +10,7 @@ import pytest
 
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
 from asg_agent.records.store import Store
 from asg_agent.scoring import attribution as attr
@@ -187,17 +188,19 @@ def test_a_campaign_tells_its_search_each_place_and_counts_distinct_findings_in_
     outcome = m.outcome
     m.outcome = lambda job, where, finding: (told.append((job, where, finding)), outcome(job, where, finding))
     c = Campaign(
-        "d",
-        exp,
-        m,
-        store,
-        FakePool(2, collide_jobs=collide),
-        20,
-        2,
-        "/x",
-        slots=4,
-        reward="flaw",
-        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        CampaignConfig(
+            name="d",
+            experiment=exp,
+            method=m,
+            store=store,
+            pool=FakePool(2, collide_jobs=collide),
+            total=20,
+            seed=2,
+            checkpoint="/x",
+            slots=4,
+            reward="flaw",
+            references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        )
     )
     c._checkpoint = lambda: None
     c.start()

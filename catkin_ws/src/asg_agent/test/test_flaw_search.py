@@ -10,6 +10,7 @@ import pytest
 
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
 from asg_agent.records.store import Store
 from asg_agent.scoring import attribution as attr
@@ -84,17 +85,19 @@ def test_flaw_reward_is_one_for_a_flaw_finding_graded_below_half_for_a_near_one_
 
 def _campaign(name, exp, method, store, total, collide=(), workers=2):
     c = Campaign(
-        name,
-        exp,
-        method,
-        store,
-        FakePool(workers, collide_jobs=collide),
-        total,
-        method.seed,
-        "/x",
-        slots=4,
-        reward="flaw",
-        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        CampaignConfig(
+            name=name,
+            experiment=exp,
+            method=method,
+            store=store,
+            pool=FakePool(workers, collide_jobs=collide),
+            total=total,
+            seed=method.seed,
+            checkpoint="/x",
+            slots=4,
+            reward="flaw",
+            references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        )
     )
     c._checkpoint = lambda: None
     c.start()
@@ -118,16 +121,18 @@ def test_a_campaign_learns_from_the_flaw_reward_of_its_candidates():
             assert 0.0 <= r["reward"] < rw.GRADED_CAP and json.loads(r["reference_runs"])["full"]
     with pytest.raises(ValueError, match="the flaw reward needs the 'full' reference"):
         Campaign(
-            "g",
-            exp,
-            make_method("random", exp, 1),
-            store,
-            FakePool(1),
-            4,
-            1,
-            "/x",
-            reward="flaw",
-            references={attr.TRUTH: FakePool(1)},
+            CampaignConfig(
+                name="g",
+                experiment=exp,
+                method=make_method("random", exp, 1),
+                store=store,
+                pool=FakePool(1),
+                total=4,
+                seed=1,
+                checkpoint="/x",
+                reward="flaw",
+                references={attr.TRUTH: FakePool(1)},
+            )
         )
 
 
@@ -264,17 +269,19 @@ def test_a_pair_campaign_learns_from_its_regressions():
     store = Store(":memory:")
     collide = {1, 4}
     c = Campaign(
-        "p",
-        exp,
-        make_method("surrogate-ts", exp, 2, budget=12),
-        store,
-        FakePool(2, collide_jobs=collide),
-        12,
-        2,
-        "/x",
-        slots=4,
-        reward="regression",
-        references={attr.RELEASE: FakePool(1, gain=0.0, prefix="r")},
+        CampaignConfig(
+            name="p",
+            experiment=exp,
+            method=make_method("surrogate-ts", exp, 2, budget=12),
+            store=store,
+            pool=FakePool(2, collide_jobs=collide),
+            total=12,
+            seed=2,
+            checkpoint="/x",
+            slots=4,
+            reward="regression",
+            references={attr.RELEASE: FakePool(1, gain=0.0, prefix="r")},
+        )
     )
     c._checkpoint = lambda: None
     c.start()
@@ -289,16 +296,18 @@ def test_a_pair_campaign_learns_from_its_regressions():
     )
     with pytest.raises(ValueError, match="the regression reward needs the 'release' reference"):
         Campaign(
-            "q",
-            exp,
-            make_method("random", exp, 1),
-            store,
-            FakePool(1),
-            4,
-            1,
-            "/x",
-            reward="regression",
-            references={attr.TRUTH: FakePool(1)},
+            CampaignConfig(
+                name="q",
+                experiment=exp,
+                method=make_method("random", exp, 1),
+                store=store,
+                pool=FakePool(1),
+                total=4,
+                seed=1,
+                checkpoint="/x",
+                reward="regression",
+                references={attr.TRUTH: FakePool(1)},
+            )
         )
 
 
@@ -319,19 +328,21 @@ def test_a_flaw_campaign_cut_with_candidates_pending_resumes_each_scenario_once(
             attr.TRUTH: FakePool(1, seed=seed_refs + 1, gain=0.0, prefix="g"),
         }
         c = Campaign(
-            name,
-            exp,
-            make_method("surrogate-ts", exp, 4, budget=30),
-            store,
-            pool,
-            30,
-            4,
-            str(tmp_path / f"{name}.ckpt"),
-            slots=4,
-            checkpoint_every=1,
-            reward="flaw",
-            references=refs,
-            collision_bonus=2.0,
+            CampaignConfig(
+                name=name,
+                experiment=exp,
+                method=make_method("surrogate-ts", exp, 4, budget=30),
+                store=store,
+                pool=pool,
+                total=30,
+                seed=4,
+                checkpoint=str(tmp_path / f"{name}.ckpt"),
+                slots=4,
+                checkpoint_every=1,
+                reward="flaw",
+                references=refs,
+                collision_bonus=2.0,
+            )
         )
         return c
 

@@ -12,6 +12,7 @@ from asg_agent.records.export import read_export
 from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign as Loop
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store, checkpoint_path
 from asg_agent.cli import plan
 from asg_agent.search.methods import make_method
@@ -86,16 +87,18 @@ def stand_in(cut_after):
         m = make_method("random", exp, seed, budget=c.scenarios)
         pool = CuttingPool(cut_after if first else None, workers=2, seed=seed)
         loop = Loop(
-            c.name,
-            exp,
-            m,
-            store,
-            pool,
-            c.scenarios,
-            seed,
-            checkpoint_path(store_path, c.name),
-            slots=4,
-            checkpoint_every=1,
+            CampaignConfig(
+                name=c.name,
+                experiment=exp,
+                method=m,
+                store=store,
+                pool=pool,
+                total=c.scenarios,
+                seed=seed,
+                checkpoint=checkpoint_path(store_path, c.name),
+                slots=4,
+                checkpoint_every=1,
+            )
         )
         if store.campaign(c.name) is not None:
             loop.resume()

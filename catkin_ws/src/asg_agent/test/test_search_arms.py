@@ -84,6 +84,7 @@ def test_failure_modes_of_findings():
 def test_dense_rewards_see_how_close_a_run_came():
     from asg_agent.campaign.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
+    from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store
     from asg_agent.scoring import attribution as attr
     from asg_agent.scoring import rewards as rw
@@ -110,16 +111,18 @@ def test_dense_rewards_see_how_close_a_run_came():
     store = Store(":memory:")
     for reward in ("clearance", "ttc"):
         c = Campaign(
-            reward,
-            exp,
-            make_method("random", exp, 1, budget=12),
-            store,
-            FakePool(2),
-            12,
-            1,
-            "/x",
-            slots=2,
-            reward=reward,
+            CampaignConfig(
+                name=reward,
+                experiment=exp,
+                method=make_method("random", exp, 1, budget=12),
+                store=store,
+                pool=FakePool(2),
+                total=12,
+                seed=1,
+                checkpoint="/x",
+                slots=2,
+                reward=reward,
+            )
         )
         c._checkpoint = lambda: None  # nothing to resume here
         c.start()
@@ -129,30 +132,34 @@ def test_dense_rewards_see_how_close_a_run_came():
         assert any(r["reward"] > r["proxy"] for r in rows)
     with pytest.raises(ValueError, match="every scenario"):
         Campaign(
-            "g",
-            exp,
-            make_method("random", exp, 1),
-            store,
-            FakePool(1),
-            4,
-            1,
-            "/x",
-            reward="regret",
-            references={attr.FULL: FakePool(1), attr.TRUTH: FakePool(1)},
+            CampaignConfig(
+                name="g",
+                experiment=exp,
+                method=make_method("random", exp, 1),
+                store=store,
+                pool=FakePool(1),
+                total=4,
+                seed=1,
+                checkpoint="/x",
+                reward="regret",
+                references={attr.FULL: FakePool(1), attr.TRUTH: FakePool(1)},
+            )
         )
     c = Campaign(
-        "g",
-        exp,
-        make_method("random", exp, 1, budget=8),
-        store,
-        FakePool(2),
-        8,
-        1,
-        "/x",
-        slots=2,
-        reward="regret",
-        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, prefix="g")},
-        candidates="all",
+        CampaignConfig(
+            name="g",
+            experiment=exp,
+            method=make_method("random", exp, 1, budget=8),
+            store=store,
+            pool=FakePool(2),
+            total=8,
+            seed=1,
+            checkpoint="/x",
+            slots=2,
+            reward="regret",
+            references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, prefix="g")},
+            candidates="all",
+        )
     )
     c._checkpoint = lambda: None
     c.start()

@@ -11,6 +11,7 @@ from asg_agent.campaign import soak_check
 from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign as Loop
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store
 from asg_agent.cli import soak
 from asg_agent.search.methods import make_method
@@ -102,7 +103,19 @@ def test_the_report_counts_lost_and_doubled_scenarios(tmp_path):
     exp = load_experiment(os.path.join(REPO, "experiments", "exp1.yaml"))
     store = Store(str(tmp_path / "soak.sqlite"))
     m = make_method("random", exp, 1, budget=20)
-    loop = Loop("soak", exp, m, store, FakePool(2, seed=1), 20, 1, str(tmp_path / "soak.ckpt"), slots=4)
+    loop = Loop(
+        CampaignConfig(
+            name="soak",
+            experiment=exp,
+            method=m,
+            store=store,
+            pool=FakePool(2, seed=1),
+            total=20,
+            seed=1,
+            checkpoint=str(tmp_path / "soak.ckpt"),
+            slots=4,
+        )
+    )
     loop.start()
     loop.run()
     kills = tmp_path / "kills.log"

@@ -12,6 +12,7 @@ from asg_agent.records.export import export
 from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store
 from asg_agent.campaign import suite as st
 from asg_agent.cli.suite import main as suite_cli
@@ -28,17 +29,19 @@ def campaign_export(tmp_path):
     store = Store(str(tmp_path / "s.sqlite"))
     settings = {"perception": "unet", "model": "flawed", "unet_backend": "bf16", "reward": "proxy"}
     c = Campaign(
-        "c",
-        exp,
-        make_method("route-random", exp, 3, options={"band": 4.0}),
-        store,
-        FakePool(2, gain=0.0, collide_jobs=COLLIDE),
-        24,
-        3,
-        str(tmp_path / "c.ckpt"),
-        slots=4,
-        settings=settings,
-        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        CampaignConfig(
+            name="c",
+            experiment=exp,
+            method=make_method("route-random", exp, 3, options={"band": 4.0}),
+            store=store,
+            pool=FakePool(2, gain=0.0, collide_jobs=COLLIDE),
+            total=24,
+            seed=3,
+            checkpoint=str(tmp_path / "c.ckpt"),
+            slots=4,
+            settings=settings,
+            references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        )
     )
     c.start()
     c.run(poll_timeout=0.0)
@@ -160,7 +163,7 @@ def test_bad_suites_are_refused_by_name(tmp_path, campaign_export, capsys):
 
 def test_run_each_retries_an_error_and_answers_every_request_once():
     from asg_agent.records.experiment import load_experiment as load
-    from asg_agent.campaign.loop import run_each
+    from asg_agent.campaign.dispatch import run_each
 
     exp = load(os.path.join(REPO, "experiments", "exp1.yaml"))
     m = make_method("random", exp, 2)

@@ -13,6 +13,7 @@ from asg_agent.cli.plan import cpu_event
 from asg_agent.records.experiment import load_experiment
 from asg_agent.campaign.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
+from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store
 from asg_agent.scoring import attribution as attr
 from asg_agent.search.methods import make_method
@@ -45,18 +46,20 @@ def run(tmp_path, store, c, collide, workers=3):
         "references": {"full": {}, "ground_truth": {}},
     }
     camp = Campaign(
-        c["name"],
-        exp,
-        m,
-        store,
-        FakePool(2, gain=0.0, collide_jobs=collide),
-        c["budget"],
-        c["seed"],
-        str(tmp_path / (c["name"] + ".ckpt")),
-        slots=4,
-        settings=settings,
-        reward=c["reward"],
-        references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        CampaignConfig(
+            name=c["name"],
+            experiment=exp,
+            method=m,
+            store=store,
+            pool=FakePool(2, gain=0.0, collide_jobs=collide),
+            total=c["budget"],
+            seed=c["seed"],
+            checkpoint=str(tmp_path / (c["name"] + ".ckpt")),
+            slots=4,
+            settings=settings,
+            reward=c["reward"],
+            references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
+        )
     )
     camp.start()
     camp.run(poll_timeout=0.0)
@@ -255,16 +258,18 @@ def test_interruptions_and_cpu_hours_from_events_and_gaps(tmp_path):
 
     def campaign(total):
         return Campaign(
-            "c",
-            exp,
-            make_method("random", exp, 0),
-            store,
-            FakePool(2, gain=0.0),
-            total,
-            0,
-            str(tmp_path / "c.ckpt"),
-            slots=2,
-            checkpoint_every=2,
+            CampaignConfig(
+                name="c",
+                experiment=exp,
+                method=make_method("random", exp, 0),
+                store=store,
+                pool=FakePool(2, gain=0.0),
+                total=total,
+                seed=0,
+                checkpoint=str(tmp_path / "c.ckpt"),
+                slots=2,
+                checkpoint_every=2,
+            )
         )
 
     first = campaign(6)

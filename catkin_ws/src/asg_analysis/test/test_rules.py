@@ -112,6 +112,7 @@ def test_the_command_line_learns_from_exports_and_names_bad_input(tmp_path, caps
 def test_learn_reads_the_store_campaign_that_ran_last(tmp_path, capsys):
     from asg_agent.campaign.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
+    from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store
     from asg_agent.search.methods import make_method
 
@@ -119,15 +120,17 @@ def test_learn_reads_the_store_campaign_that_ran_last(tmp_path, capsys):
     path = str(tmp_path / "s.sqlite")
     for name, seed in (("first", 1), ("second", 2)):
         c = Campaign(
-            name,
-            exp,
-            make_method("random", exp, seed),
-            Store(path),
-            FakePool(2, seed=seed),
-            40,
-            seed,
-            "/x",
-            settings={"experiment_file": WIDE},  # as the campaign command records it
+            CampaignConfig(
+                name=name,
+                experiment=exp,
+                method=make_method("random", exp, seed),
+                store=Store(path),
+                pool=FakePool(2, seed=seed),
+                total=40,
+                seed=seed,
+                checkpoint="/x",
+                settings={"experiment_file": WIDE},
+            )
         )
         c._checkpoint = lambda: None
         c.start()

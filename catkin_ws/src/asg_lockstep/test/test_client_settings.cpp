@@ -29,3 +29,18 @@ TEST(ClientSettings, AValueOfAnotherKindIsRefusedByName) {
     EXPECT_EQ(std::string(e.what()), "~lockstep = 'yes': must be true or false");  // the Python client's words
   }
 }
+
+TEST(ClientSettings, ARegistrationModeOtherThanLockstepOrFreeIsRefusedByName) {
+  // issue #80: any other string ran free without a word; the Python client's words
+  // (asg_lockstep.params.registered_lockstep)
+  const std::string typo = "lock-step";
+  for (const ParameterRead& own : {ParameterRead{}, ParameterRead{ParameterRead::kBool, true, ""}}) {
+    try {
+      clientLockstep(own, &typo);
+      FAIL() << "accepted stack/mode = 'lock-step'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()), "stack/mode = 'lock-step': must be 'lockstep' or 'free'");
+    }
+  }
+  EXPECT_EQ(std::string(asg_lockstep::badRegisteredMode("1").what()), "stack/mode = 1: must be 'lockstep' or 'free'");
+}

@@ -35,3 +35,20 @@ def test_no_measurement_and_a_training_seed_are_named(tmp_path, capsys):
     with pytest.raises(SystemExit):
         spread.main(["--seeds", "1", "--table-only"])
     assert "--seeds 1: a training seed" in capsys.readouterr().err
+
+
+def test_a_held_apart_set_draws_every_class_of_the_catalogue_in_its_order(tmp_path, monkeypatch):
+    """Issue #80: spread.py named the classes ("juniper,barberry"); it asks the catalogue (the one
+    source), in the catalogue's order, which is the order the stored sets were drawn in."""
+    import subprocess
+
+    from asg_scenario import binaries
+    from asg_scenario.catalogue import MESHES
+
+    calls = []
+    monkeypatch.setattr(binaries, "find_binary", lambda pkg, name: f"/bin/{name}")
+    monkeypatch.setattr(subprocess, "run", lambda cmd, **kw: calls.append(cmd))
+    spread.measure(3, "", str(tmp_path))
+    dataset = calls[0]
+    assert dataset[0] == "/bin/asg_sim_dataset" and dataset[dataset.index("--meshes") + 1] == ",".join(MESHES)
+    assert ",".join(MESHES) == "juniper,barberry"  # the stored sets' order (results/perception_spread)

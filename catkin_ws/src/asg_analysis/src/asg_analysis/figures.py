@@ -81,6 +81,7 @@ def top_down(store: Store, campaign: str, job: int, out: str):
 
 def asp_effect(scenarios: int, seeds: int, experiment: str):
     from asg_agent.campaign.loop import Campaign
+    from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.experiment import load_experiment
     from asg_agent.campaign.fake_pool import FakePool
     from asg_agent.search.methods import make_method
@@ -93,16 +94,18 @@ def asp_effect(scenarios: int, seeds: int, experiment: str):
         for seed in range(seeds):
             name = f"{method}-s{seed}"
             c = Campaign(
-                name,
-                exp,
-                make_method(method, exp, seed, budget=scenarios),
-                store,
-                FakePool(2, seed=seed),
-                scenarios,
-                seed,
-                os.path.join(folder, name + ".ckpt"),
-                slots=4,
-                checkpoint_every=10**9,
+                CampaignConfig(
+                    name=name,
+                    experiment=exp,
+                    method=make_method(method, exp, seed, budget=scenarios),
+                    store=store,
+                    pool=FakePool(2, seed=seed),
+                    total=scenarios,
+                    seed=seed,
+                    checkpoint=os.path.join(folder, name + ".ckpt"),
+                    slots=4,
+                    checkpoint_every=10**9,
+                )
             )
             c.start()
             c.run(poll_timeout=0.0)

@@ -100,3 +100,36 @@ CLIENT = [
         "(`stack/mode`), else true",
     ),
 ]
+
+#: The stand-in stack of the scene worker's tests and benchmarks (asg_sim/scripts/scripted_driver;
+#: docs/simulator.md quotes this table). It reads its parameters through this table, so that
+#: `~throttle: true` is refused by name instead of driving at float(True) = 1.0 (issue #80).
+SCRIPTED_DRIVER = [
+    Param(
+        "mode",
+        str,
+        "constant",
+        "-",
+        "constant: the fixed command below; goal: steer towards the goal at the scenario's speed, from "
+        "the odometry of the tick's own stamp; silent: acknowledge, never answer (to test the timeout)",
+        choices=("constant", "goal", "silent"),
+    ),
+    Param("throttle", float, 0.5, "-", "mode constant: the throttle of every command", 0.0, 1.0),
+    Param("steering", float, 0.0, "-", "mode constant: the steering of every command (left positive)", -1.0, 1.0),
+    Param("brake", float, 0.0, "-", "mode constant: the brake of every command", 0.0, 1.0),
+    Param("ack_name", str, "", "-", "the name its acknowledgements carry (empty: the node's name)"),
+]
+
+
+def registered_lockstep(mode) -> Optional[bool]:
+    """What a stack registration's `stack/mode` says of lockstep: None when unset, True for
+    'lockstep', False for 'free'; anything else is refused by name (issue #80: another string ran
+    free without a word). The C++ client words it the same (client_settings.hpp)."""
+    if mode is None:
+        return None
+    if isinstance(mode, str) and mode in ("lockstep", "free"):
+        return mode == "lockstep"
+    shown = (
+        f"'{mode}'" if isinstance(mode, str) else ("true" if mode is True else "false" if mode is False else str(mode))
+    )
+    raise ValueError(f"stack/mode = {shown}: must be 'lockstep' or 'free'")

@@ -34,7 +34,10 @@ def measure(seed: int, suffix: str, out: str):
         from asg_scenario.binaries import find_binary  # asg_sim: an exec_depend of asg_perception
 
         dataset = find_binary("asg_sim", "asg_sim_dataset")
-        cmd = [dataset, "--out", d, "--count", str(FRAMES), "--seed", str(seed), "--meshes", "juniper,barberry"]
+        from asg_scenario.catalogue import MESHES
+
+        # every class of the catalogue, in its order (the one source; issue #80: it named them)
+        cmd = [dataset, "--out", d, "--count", str(FRAMES), "--seed", str(seed), "--meshes", ",".join(MESHES)]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, env=env)
         cmd = [sys.executable, "-m", "asg_perception.evaluate", f"full={models}/full{suffix}.pt"]
         cmd += [f"flawed={models}/flawed{suffix}.pt", "--data", d, "--json", os.path.join(out, f"seed_{seed}.json")]

@@ -1,8 +1,10 @@
-"""The obstacle mesh catalogue shared by every tool.
+"""The obstacle mesh catalogue shared by every tool: its one source (issue #69).
 
-The C++ simulator builds the meshes (asg_sim_core, ``meshCatalogue()``); this module holds the
-figures that Python tools need without the simulator: footprint radius and height at scale 1.
-A test compares both sides (``asg_sim_catalogue`` prints the C++ figures).
+Each class's figures at scale 1 (height, collision radius, shadow opacity, colour) and the
+vehicle's half-width live here. asg_scenario.cpp_schema generates asg_sim's header
+(scene_schema.hpp, ``kCatalogue``) from this module, and the simulator's ``meshCatalogue()``
+reads that header; tests/test_scenario_schema.py checks the committed header is what this module
+generates, and tests/test_one_source.py that a new class is an entry here and a mesh function.
 """
 
 from dataclasses import dataclass

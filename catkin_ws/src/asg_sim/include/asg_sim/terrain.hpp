@@ -25,10 +25,11 @@ struct Hill {
 struct TerrainSpec {
   /// [m] largest height of the rolling ground, the mean of kTerrainWaves seeded plane waves
   /// cos(2 pi (d . p) / lambda + phase); 0: no rolling ground.
-  double amplitude_m = 0.0;
+  double amplitude_m = schema::kTerrainAmplitudeM.default_value;
   /// [m] typical wavelength; each wave's is drawn in [lambda / sqrt 2, lambda sqrt 2].
-  double wavelength_m = 40.0;
-  uint32_t seed = 0;  ///< [-] draws the waves' directions, wavelengths and phases
+  double wavelength_m = schema::kTerrainWavelengthM.default_value;
+  /// [-] draws the waves' directions, wavelengths and phases
+  uint32_t seed = static_cast<uint32_t>(schema::kTerrainSeed.default_value);
   std::vector<Hill> hills;
 };
 

@@ -14,11 +14,12 @@ import numpy as np
 from asg_agent.campaign.dispatch import Outcome, Pool
 from asg_agent.scoring.optimal_path import obstacle_discs, shortest_path
 from asg_agent.scoring.proxy import resample_path
+from asg_scenario.catalogue import VEHICLE_HALF_WIDTH
 
 
 def fake_run(request: dict, gain: float = 0.8) -> Outcome:
     op = request["operational"]
-    discs = obstacle_discs(request, 0.75)
+    discs = obstacle_discs(request, VEHICLE_HALF_WIDTH)  # [m] the catalogue's (issue #80: it was a literal)
     path = shortest_path((op["start_x"], op["start_y"]), (op["goal_x"], op["goal_y"]), op["goal_radius"], discs)
     pts = np.asarray(path.points if path.points else [(op["start_x"], op["start_y"])], np.float64)
     n = max(2, int(path.length / (op["speed"] / 60.0))) if math.isfinite(path.length) else 2

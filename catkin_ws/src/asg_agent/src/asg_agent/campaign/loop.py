@@ -18,30 +18,21 @@ import json
 import sys
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional
+from typing import Dict, List, Optional
 
 import numpy as np
 
 
-from asg_agent.campaign.policy import CANDIDATE_RULES, reference_setup  # noqa: F401 (CANDIDATE_RULES: its old home)
+from asg_agent.campaign.policy import reference_setup
 from asg_agent.campaign import tally
 from asg_agent.campaign.tally import Stages
-from asg_agent.campaign.dispatch import Dispatcher, Outcome, Pool, run_each  # noqa: F401 (Outcome, Pool, run_each: their old home)
-from asg_agent.records.experiment import Experiment
-from asg_agent.scoring.proxy import ProxyConfig, run_terms, term_values
-from asg_agent.search.base import SearchMethod
-from asg_agent.records.store import Store, kept_xy, provenance, scenario_row, unpack_trajectory  # noqa: F401 (kept_xy: its old home)
+from asg_agent.campaign.config import Callbacks, CampaignConfig
+from asg_agent.campaign.dispatch import Dispatcher, Outcome
+from asg_agent.scoring.proxy import run_terms, term_values
+from asg_agent.records.store import kept_xy, provenance, scenario_row, unpack_trajectory
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring import places, rewards
 from asg_agent.search.td3 import load_checked, save_atomic
-
-
-#: what a search can maximise (Campaign's `reward`, the campaign's --reward): scoring/rewards.py's
-#: registry, each entry declaring what it needs
-REWARDS = rewards.REWARDS
-#: rewards that read a reference run (the search waits for it)
-REFERENCE_REWARDS = tuple(r.name for r in rewards.REGISTRY.values() if r.waits)
-collision_reward = rewards.collision_reward  # its old home
 
 
 def run_place(request: dict, row: dict, xy) -> tuple:
@@ -78,53 +69,31 @@ class RefJob:
 
 
 class Campaign:
-    def __init__(
-        self,
-        name: str,
-        experiment: Experiment,
-        method: SearchMethod,
-        store: Store,
-        pool: Pool,
-        total: int,
-        seed: int,
-        checkpoint: str,
-        slots: int = 4,
-        max_attempts: int = 3,
-        checkpoint_every: int = 10,
-        proxy_config: ProxyConfig = ProxyConfig(),
-        progress: Optional[Callable[[dict], None]] = None,
-        settings: Optional[dict] = None,
-        early_dispatch: bool = True,
-        reference: Optional[Pool] = None,
-        reward: str = "proxy",
-        references: Optional[Dict[str, Pool]] = None,
-        candidates: Optional[str] = None,
-        collision_bonus: float = 2.0,
-        scalars: Optional[Callable[[int, dict, dict], None]] = None,
-    ):
+    def __init__(self, config: CampaignConfig):
+        c = config
+        name, experiment, method, store, pool = c.name, c.experiment, c.method, c.store, c.pool
+        total, seed, checkpoint, slots, max_attempts = c.total, c.seed, c.checkpoint, c.slots, c.max_attempts
+        references, candidates, reward, collision_bonus = c.references, c.candidates, c.reward, c.collision_bonus
+        self.config = c
         if total < 1 or slots < 1:
             raise ValueError("total and slots must be >= 1")
         self.name, self.exp, self.method, self.store, self.pool = name, experiment, method, store, pool
         self.total, self.seed, self.checkpoint_path, self.slots = total, seed, checkpoint, slots
-        self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, checkpoint_every, proxy_config
-        self.progress, self.settings = progress, settings or {}
-        # scalars(job, stored row, the method's update figures): called once per scenario as the
-        # search learns from it, in job order (tensorboard_log.TensorBoardLog.scenario).
-        self.scalars = scalars
-        self.early_dispatch = early_dispatch  # dispatch to freed workers before applying results
+        self.max_attempts, self.checkpoint_every, self.proxy_config = max_attempts, c.checkpoint_every, c.proxy_config
+        self.settings = dict(c.settings or {})
+        # the one way to follow it (campaign/config.py): progress, scenarios in job order, candidates' classes
+        self.callbacks = Callbacks(c.callbacks)
+        self.early_dispatch = c.early_dispatch  # dispatch to freed workers before applying results
         # Attribution (scoring/attribution.py): the scenarios the `candidates` rule picks run again
-        # on each reference stack, keyed by role (`reference` alone: round 3's single-reference
-        # mode, ground truth, every scenario). The reward is scoring/rewards.py's entry: one that
-        # reads the references waits for them before the search learns (a function of the seed).
-        references, candidates = reference_setup(reward, references, reference, candidates, collision_bonus)
+        # on each reference stack, keyed by role (ground truth alone with candidates "all": round 3's
+        # single-reference mode). The reward is scoring/rewards.py's entry: one that reads the
+        # references waits for them before the search learns (a function of the seed).
+        references, candidates = reference_setup(reward, references, candidates, collision_bonus)
         self.references, self.candidates = references, candidates
         self.reward, self.collision_bonus = reward, float(collision_bonus)
         # The single-reference mode stores each row with its reference run, as round 3 did.
         self.rule = rewards.REGISTRY[reward]
         self.wait_for_references = bool(references) and (self.rule.waits or candidates == "all")
-        # attributed(job, class, counts of every class): called as each candidate's references
-        # are in (tensorboard_log.TensorBoardLog.attribution); out of job order.
-        self.attributed: Optional[Callable[[int, str, dict], None]] = None
         self.ref_jobs: Dict[int, RefJob] = {}
         self.pending: Dict[int, Job] = {}  # proposed, not applied
         self.finished: Dict[int, dict] = {}  # stored rows waiting for their turn to be applied
@@ -141,6 +110,11 @@ class Campaign:
         self.t0 = time.time()
         self.done_at_start = 0
         self.stages = Stages()
+
+    def add_callback(self, callback) -> None:
+        """Follow the campaign with one more CampaignCallback (campaign/config.py), e.g. TensorBoard
+        once a resume has told it where to start."""
+        self.callbacks.add(callback)
 
     # -- setup ----------------------------------------------------------------------------------
     def start(self):
@@ -344,10 +318,8 @@ class Campaign:
         tally.attributed(self.stats, cls, proxy, tproxy)
         if self.wait_for_references and rj.job >= self.next_apply:
             self.finished[rj.job] = dict(row, reward=reward, attribution=cls, reference=legacy)
-        if self.attributed:
-            self.attributed(rj.job, cls, dict(self.stats["classes"]))
-        if self.progress:
-            self.progress(self.status())
+        self.callbacks.on_attributed(rj.job, cls, dict(self.stats["classes"]))
+        self.callbacks.on_progress(self.status())
 
     def _terms(self, request, o: Outcome):
         return run_terms(request, o, self.proxy_config)
@@ -375,8 +347,7 @@ class Campaign:
         if not (candidate and self.wait_for_references):
             self.finished[o.job] = row
         tally.scenario(self.stats, terms, label, candidate)
-        if self.progress:
-            self.progress(self.status())
+        self.callbacks.on_progress(self.status())
 
     def _apply_ready(self):
         while self.next_apply in self.finished:
@@ -407,8 +378,7 @@ class Campaign:
                 self.stages.add("update", t0)
                 if not done:
                     slot.update(step=job.step + 1, state=next_state)
-            if self.scalars:
-                self.scalars(job.job, row, dict(learnt or {}, **tally.found(self.stats)))
+            self.callbacks.on_scenario(job.job, row, dict(learnt or {}, **tally.found(self.stats)))
             if done:
                 self.episodes_done += 1
                 self._new_episode(job.slot)

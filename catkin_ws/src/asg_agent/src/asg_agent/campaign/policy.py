@@ -143,17 +143,13 @@ def registered_settings(exp) -> dict:
     }
 
 
-def reference_setup(reward, references, reference, candidates, collision_bonus):
+def reference_setup(reward, references, candidates, collision_bonus):
     """The campaign's reference stacks by role and its candidate rule, checked against the reward
-    (ValueError naming what does not fit); `reference` alone is round 3's single-reference mode."""
+    (ValueError naming what does not fit). Round 3's single-reference mode is ground truth alone
+    with candidates "all"."""
     if reward not in REWARDS:
         raise ValueError(f"reward {reward!r}: must be one of {', '.join(REWARDS)}")
     references = dict(references or {})
-    if reference is not None:
-        if references:
-            raise ValueError("give `reference` (ground truth, every scenario) or `references`, not both")
-        references = {attr.TRUTH: reference}
-        candidates = candidates or "all"
     unknown = sorted(set(references) - set(attr.ROLES))
     if unknown:
         raise ValueError(f"reference roles {unknown}: must be among {', '.join(attr.ROLES)}")

@@ -25,6 +25,7 @@ import json
 from typing import Optional
 
 from asg_agent.records.store import attribute
+from asg_agent.campaign.config import CampaignCallback
 
 AGENT_KEYS = {
     "critic_loss": "agent/critic_loss",
@@ -49,7 +50,9 @@ AGENT_KEYS = {
 }
 
 
-class TensorBoardLog:
+class TensorBoardLog(CampaignCallback):
+    """The campaign's TensorBoard scalars, a CampaignCallback (campaign/config.py)."""
+
     def __init__(self, logdir: str, purge_step: Optional[int] = None, prior_rows=()):
         try:
             from tensorboardX import SummaryWriter
@@ -98,10 +101,16 @@ class TensorBoardLog:
                 w.add_scalar(tag, v, job)
 
     def attribution(self, job: int, label: str, classes: dict):
-        """A candidate's references are in (Campaign's `attributed` hook): the running count of
+        """A candidate's references are in (the campaign's on_attributed): the running count of
         every attribution class, at the candidate's job (these come out of job order)."""
         for key, n in classes.items():
             self.writer.add_scalar(f"attribution/{key}", n, job)
+
+    def on_scenario(self, job, row, figures):
+        self.scenario(job, row, figures)
+
+    def on_attributed(self, job, cls, counts):
+        self.attribution(job, cls, counts)
 
     def close(self):
         self.writer.close()

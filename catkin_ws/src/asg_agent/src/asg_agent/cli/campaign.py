@@ -22,7 +22,10 @@ from asg_agent.blas import blas_identity, pin_blas
 
 pin_blas()  # before numpy and torch load OpenBLAS: the same kernel on every CPU (asg_agent/blas.py)
 
-from asg_agent.campaign.loop import CANDIDATE_RULES, REWARDS, Campaign  # noqa: E402
+from asg_agent.campaign.config import CampaignConfig, FunctionCallback  # noqa: E402
+from asg_agent.campaign.loop import Campaign  # noqa: E402
+from asg_agent.campaign.policy import CANDIDATE_RULES  # noqa: E402
+from asg_agent.scoring.rewards import REWARDS  # noqa: E402
 from asg_agent.campaign.policy import CampaignError, campaign_settings, reference_roles, worker_names  # noqa: E402
 from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collector  # noqa: E402
 from asg_agent.cli.signals import stop_on_signals  # noqa: E402
@@ -489,8 +492,7 @@ def run(a, c: Campaign, store: Store, name: str, bar, progress, collector, worke
             c.start()
         tb = None if a.no_tensorboard else open_tensorboard(a, store, name, c)
         if tb:
-            c.scalars = tb.scenario
-            c.attributed = tb.attribution
+            c.add_callback(tb)
         progress(c.status())
         t_wall, t_cpu = time.time(), time.process_time()
         c.run()
@@ -539,23 +541,25 @@ def main(argv=None):
     bar, progress = progress_bar(a)
     collector = stage_collector(exp, settings, workers, roles) if a.stage_report and not a.fake_workers else None
     c = Campaign(
-        name,
-        exp,
-        method,
-        store,
-        pool,
-        a.scenarios,
-        a.seed,
-        checkpoint_path(a.store, name),
-        slots=a.slots or 2 * len(workers),
-        checkpoint_every=a.checkpoint_every,
-        progress=progress,
-        settings=settings,
-        early_dispatch=not a.no_early_dispatch,
-        references=references,
-        candidates=candidates if references else None,
-        reward=a.reward,
-        collision_bonus=a.collision_bonus,
+        CampaignConfig(
+            name=name,
+            experiment=exp,
+            method=method,
+            store=store,
+            pool=pool,
+            total=a.scenarios,
+            seed=a.seed,
+            checkpoint=checkpoint_path(a.store, name),
+            slots=a.slots or 2 * len(workers),
+            checkpoint_every=a.checkpoint_every,
+            settings=settings,
+            early_dispatch=not a.no_early_dispatch,
+            references=references,
+            candidates=candidates if references else None,
+            reward=a.reward,
+            collision_bonus=a.collision_bonus,
+            callbacks=[FunctionCallback(progress=progress)],
+        )
     )
     return run(a, c, store, name, bar, progress, collector, workers, roles)
 

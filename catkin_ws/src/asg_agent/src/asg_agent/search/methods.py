@@ -30,7 +30,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from asg_agent.records.experiment import Experiment
-from asg_agent.search.base import SearchMethod, StateBuilder, _rng  # noqa: F401 (StateBuilder: its old home)
+from asg_agent.search.base import SearchMethod, _rng
 from asg_agent.search.td3 import TD3Agent, TD3Config
 from asg_scenario.layout import RouteFrame
 
@@ -276,9 +276,11 @@ class MapElites(SearchMethod):
     - `deviation`: the largest distance of the driven path from that segment, [0, `max_deviation`]
       in `deviation_bins` cells (beyond the range: the last cell): how far the stack swerved.
 
-    One candidate per job (`ask` of a one-solution batch), added to the archive when its result
-    is applied, in job order: the archive a proposal sees depends on the seed alone. An ERROR
-    run is no candidate. The state is ignored (as random search and CMA-ES ignore it)."""
+    One candidate per job (the emitter's `ask` of a one-solution batch), added to the archive and
+    told to the emitter when its result is applied, in job order (what ribs' Scheduler.tell does for
+    a batch; the Scheduler's strict ask-tell alternation cannot serve jobs in flight): the archive a
+    proposal sees depends on the seed alone. An ERROR run is no candidate. The state is ignored (as
+    random search and CMA-ES ignore it)."""
 
     name = "map-elites"
 
@@ -338,7 +340,16 @@ class MapElites(SearchMethod):
             * 0.5
             * self.exp.size
         )
-        self.archive.add_single(np.asarray(action, np.float64), float(reward), self.descriptors(action, path))
+        # What pyribs' Scheduler.tell does for a batch, for one result: the archive's add, then the
+        # emitter's tell with the add's info, so that an emitter that learns from its results
+        # (e.g. an evolution-strategy emitter) learns; IsoLineEmitter's tell does nothing, so the
+        # proposals are those of the add alone (issue #80). The Scheduler itself is not used: its
+        # ask and tell must alternate, and a campaign asks again while earlier jobs are in flight.
+        solution = np.asarray(action, np.float64)[None, :]
+        objective = np.array([float(reward)])
+        measures = self.descriptors(action, path)[None, :]
+        add_info = self.archive.add(solution, objective, measures)
+        self.emitter.tell(solution, objective, measures, add_info)
         self.added += 1
         st = self.archive.stats
         return {"qd_cells": int(st.num_elites), "qd_coverage": float(st.coverage), "qd_best": float(st.obj_max)}

@@ -118,9 +118,13 @@ class LockstepClient {
         read.shown = shown(value);
       }
     }
-    std::string mode;
-    const bool registered = ros::NodeHandle().getParam("stack/mode", mode);
-    return clientLockstep(read, registered ? &mode : nullptr);
+    // the registration's stack/mode, of any type: a value that is no string is refused by name
+    // (getParam into a string read it as unset, and the client ran in lockstep; issue #80)
+    XmlRpc::XmlRpcValue registered;
+    if (!ros::NodeHandle().getParam("stack/mode", registered)) return clientLockstep(read, nullptr);
+    if (registered.getType() != XmlRpc::XmlRpcValue::TypeString) throw badRegisteredMode(shown(registered));
+    const std::string mode = static_cast<std::string>(registered);
+    return clientLockstep(read, &mode);
   }
 
   /// ros::NodeHandle::subscribe's place for an input of the stack (a type with a header).

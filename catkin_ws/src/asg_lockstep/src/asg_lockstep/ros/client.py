@@ -28,7 +28,7 @@ from asg_msgs.msg import ScenarioInfo, StackAck, StackError, Tick
 from geometry_msgs.msg import Twist, TwistStamped
 
 from asg_lockstep.gate import TickGate, kind_of
-from asg_lockstep.params import CLIENT, read
+from asg_lockstep.params import CLIENT, read, registered_lockstep
 from asg_lockstep.stack_protocol import Run, StackProtocol
 
 WAIT_REPORT_S = 5.0  #: [s, wall] a tick still waiting for an input after this is reported
@@ -56,8 +56,9 @@ class LockstepClient:
         `lockstep`: default the private parameter `~lockstep` (true)."""
         self.node = node or rospy.get_name().rsplit("/", 1)[-1]
         if lockstep is None:  # the node's own parameter (params.CLIENT), else its stack's registration
-            registered = rospy.get_param("stack/mode", "lockstep") == "lockstep"
-            lockstep = read(CLIENT, lambda name, _: rospy.get_param("~" + name, registered))["lockstep"]
+            registered = registered_lockstep(rospy.get_param("stack/mode", None))
+            default = CLIENT[0].default if registered is None else registered
+            lockstep = read(CLIENT, lambda name, _: rospy.get_param("~" + name, default))["lockstep"]
         self.lockstep = bool(lockstep)
         self._on_run = on_run
         self._on_tick: List[Callable[[float], None]] = []
