@@ -333,6 +333,26 @@ def update_docs(path: str, tables: str):
         f.write(head + BEGIN + "\n" + tables.strip("\n") + "\n" + END + rest.split(END, 1)[1])
 
 
+def _check(manifest: str, docs: str) -> int:
+    """0 when the page's tables block is what `run` writes from the manifest's exports, else 1."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as out:
+        try:
+            run(manifest, out)
+            with open(os.path.join(out, "tables.md")) as f:
+                tables = f.read()
+            with open(docs) as f:
+                said = docs_block(f.read())
+        except (OSError, ValueError, KeyError) as e:
+            print(f"experiments: {e}", file=sys.stderr)
+            return 2
+    if said.strip("\n") != tables.strip("\n"):
+        print(f"experiments: {docs}: the tables block is stale", file=sys.stderr)
+        return 1
+    return 0
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="asg_analysis.experiments", description=__doc__.split("\n\n")[0])
     p.add_argument("--manifest", default=os.path.join(REPO, "results", "experiments.yaml"))
@@ -342,7 +362,12 @@ def main(argv=None):
         default=os.path.join(REPO, "docs", "studies", "2026-11-22-paper-table2.md"),
         help="rewrite the block between the tables markers of this file ('' to leave it)",
     )
+    p.add_argument(
+        "--check", action="store_true", help="write nothing; exit 1 when the --docs block is not what the exports give"
+    )
     a = p.parse_args(argv)
+    if a.check:
+        return _check(a.manifest, a.docs)
     try:
         run(a.manifest, a.out)
     except (OSError, ValueError, KeyError) as e:
