@@ -9,7 +9,7 @@ import pytest
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.search.methods import make_method
 from asg_agent.records.store import Store
 
@@ -75,7 +75,7 @@ def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_p
         bonus = 1.5 if job in (2, 5) else 0.0  # job 9: the reference collided too
         assert r["termination"] == ("COLLISION" if job in (2, 5, 9) else "SUCCESS")
         assert abs(r["reward"] - (r["proxy"] + bonus)) < 1e-12, job
-    from asg_agent.cli.campaign import parse
+    from asg_agent.testing.campaign import parse
 
     assert parse([EXP, "--fake-workers", "2", "--reward", "collision"]).collision_bonus == 2.0
     with pytest.raises(SystemExit):
@@ -337,7 +337,7 @@ def test_reward_auto_stands_for_what_the_references_can_see_and_is_stored_resolv
     regression with a release's, and (issue #78) the stack's own failures with none or ground
     truth alone; the parsed options (and so the store's record of the campaign) name the resolved
     reward."""
-    from asg_agent.cli.campaign import parse
+    from asg_agent.testing.campaign import parse
     from asg_agent.scoring import rewards
 
     assert rewards.for_roles(["full", "ground_truth"]) == "flaw"

@@ -82,7 +82,7 @@ def test_failure_modes_of_findings():
 
 
 def test_dense_rewards_see_how_close_a_run_came():
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store

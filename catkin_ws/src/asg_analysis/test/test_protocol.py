@@ -11,7 +11,7 @@ from asg_analysis import protocol as pr
 from asg_agent.records.export import export
 from asg_agent.cli.plan import cpu_event
 from asg_agent.records.experiment import load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store

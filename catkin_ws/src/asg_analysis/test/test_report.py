@@ -60,7 +60,7 @@ def test_the_report_shows_the_three_stack_classes(tmp_path):
 def test_the_report_agrees_with_the_store(tmp_path):
     from stand_ins import campaign
 
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
 
     c = campaign(tmp_path, "rep", FakePool(2, seed=8), total=30, method="random")
     c.start()

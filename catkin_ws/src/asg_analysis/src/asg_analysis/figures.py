@@ -83,7 +83,7 @@ def asp_effect(scenarios: int, seeds: int, experiment: str):
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.experiment import load_experiment
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
     from asg_agent.search.methods import make_method
 
     exp = load_experiment(experiment)
