@@ -221,7 +221,7 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     pr.coverage_figure(res, str(tmp_path / "cov.png"))
     assert (tmp_path / "cov.png").stat().st_size > 5000
     # how each arm spent its budget: every flaw finding of the default in its windows, every obstacle placed
-    from asg_analysis import flaw_budget as fb
+    from asg_analysis.studies import flaw_budget as fb
 
     spent = fb.read(str(tmp_path / "out"), 12, "v")
     assert set(spent) == {"default", "route-random"} and spent["default"]["seeds"] == 2
