@@ -41,10 +41,10 @@ SEEDS = [
     os.path.join(REPO, "scenarios", "corpus", "good", f)
     for f in sorted(os.listdir(os.path.join(REPO, "scenarios", "corpus", "good")))
 ]
-EXPERIMENTS = [  # experiment files (a study's protocol-*.yaml beside them is not one)
+EXPERIMENTS = [  # experiment files (a study's protocol-*.yaml or study-*.yaml beside them is not one)
     os.path.join(REPO, "experiments", f)
     for f in sorted(os.listdir(os.path.join(REPO, "experiments")))
-    if f.endswith(".yaml") and not f.startswith("protocol-")
+    if f.endswith(".yaml") and not f.startswith(("protocol-", "study-"))
 ]
 
 WEIRD = [

@@ -20,7 +20,7 @@ def proposals(tmp_path, name, coretype, native=False):
     cmd = [
         "/usr/bin/python3",
         "-m",
-        "asg_agent.cli.campaign",
+        "asg_agent.testing.campaign",
         os.path.join(REPO, "experiments", "exp1.yaml"),
         "--fake-workers",
         "3",

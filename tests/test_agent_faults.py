@@ -31,7 +31,7 @@ def cmd(store, name, *extra):
     return [
         sys.executable,
         "-m",
-        "asg_agent.cli.campaign",
+        "asg_agent.testing.campaign",
         EXP,
         "--fake-workers",
         "2",

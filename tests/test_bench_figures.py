@@ -256,3 +256,18 @@ def test_the_whole_stacks_seeded_campaign_is_the_same_on_the_xeon_and_the_epyc()
         assert abs(a[j]["proxy"] - b[j]["proxy"]) < 1e-9, j
     text = " ".join(_bench_doc().split())
     assert "the same results digest over its 300 jobs, ecc502be" in text
+
+
+def test_the_round_7_refactor_gives_round_6s_results_with_round_6s_reward():
+    # issue #80: the seeded 120-scenario campaign on the merged tree; with reward:=proxy (round 6's
+    # auto without attribution) round 6's digest, without it one other digest, the same twice
+    text = open(record("refactors-before-after"), encoding="utf-8").read()
+    block = text.split("<!-- r7-config digests: begin -->")[1].split("<!-- r7-config digests: end -->")[0]
+    d = {}
+    for side in ("before", "after", "proxy"):
+        n, sha = open(os.path.join(REPO, "results", "bench", f"r7-config-{side}-1.digest")).read().split()
+        assert f"r7-config-{side}-1.digest`, {n} results, {sha[:8]}" in block
+        d[side] = (n, sha)
+    r6 = tuple(open(os.path.join(REPO, "results", "bench", "r6-arch-after-1.digest")).read().split())
+    assert d["proxy"] == r6 and d["before"] == d["after"] != r6
+    assert "**With `reward:=proxy` the merged tree gives round 6's 120 results bit for bit**" in text

@@ -242,3 +242,27 @@ def test_a_failed_jobs_console_lines_are_its_failures_not_its_expected_errors(tm
     assert "FAILED (exit 1;" in out and "    FAILED tests/test_x.py::test_y - AssertionError: 1 != 2" in out
     assert "goal refused on purpose" not in out
     assert console_filter.shown("ERROR tests/test_x.py::test_z - RuntimeError")
+
+
+def test_ctest_knows_every_pytest_file_and_folder_and_run_parallel_leaves_them_to_pytest(tmp_path):
+    # issue #80 item 7: scripts/ci/pytest.cmake registers each package's pytest folder and each
+    # tests/ file with CTest (ctest -j and catkin_make run_tests see the whole suite); run_parallel,
+    # which runs them its own way, takes from CTest only the gtest binaries and rostests
+    import glob
+
+    build = os.path.join(REPO, "catkin_ws", "build")
+    out = subprocess.run(["ctest", "--show-only=json-v1"], cwd=build, capture_output=True, text=True, check=True)
+    names = {t["name"] for t in json.loads(out.stdout)["tests"]}
+    want = {
+        f"_ctest_asg_tests_pytest_{os.path.basename(f)[:-3]}"
+        for f in glob.glob(os.path.join(REPO, "tests", "test_*.py"))
+    }
+    want |= {
+        f"_ctest_{os.path.basename(os.path.dirname(t))}_pytest_test"
+        for t in glob.glob(os.path.join(REPO, "catkin_ws", "src", "*", "test"))
+        if glob.glob(os.path.join(t, "test_*.py"))
+    }
+    assert want <= names, sorted(want - names)
+    jobs = parallel().ctest_jobs(os.path.join(REPO, "catkin_ws"), str(tmp_path), {})
+    assert jobs and not [j.name for j in jobs if "pytest" in " ".join(map(str, j.cmd))]
+    assert len(jobs) == len([n for n in names if "_pytest_" not in n])

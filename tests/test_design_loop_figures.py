@@ -5,7 +5,7 @@ import json
 import os
 import re
 
-from asg_analysis import hardening as ah
+from asg_analysis.studies import hardening as ah
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 
@@ -47,11 +47,11 @@ def test_the_hardened_baseline_table_is_what_the_rows_say():
     assert [line.split("|")[1].strip() for line in lines] == ["flawed", "flawed_hf1", "flawed_hr1"]
 
 
-# -- section 4: the loop's campaigns (asg_analysis.loop_study) ------------------------------
+# -- section 4: the loop's campaigns (asg_analysis.studies.loop_study) ------------------------------
 
 
 def test_the_loop_table_is_what_the_exports_say():
-    from asg_analysis import loop_study as ls
+    from asg_analysis.studies import loop_study as ls
 
     s = ls.study()
     assert doc_table("loop") == ls.markdown(s)
@@ -83,7 +83,7 @@ def _rows(n, flaw=(), model=(), collide=()):
 
 
 def test_a_campaign_counts_flaw_and_model_findings_of_its_first_budget_scenarios():
-    from asg_analysis import loop_study as ls
+    from asg_analysis.studies import loop_study as ls
 
     c = ls.campaign_figures(_rows(12, flaw={1, 2, 11}, model={3}, collide={1, 11}), budget=10)
     assert (c["scenarios"], c["flaw"], c["model"], c["collisions"]) == (10, 2, 1, 1)
@@ -93,7 +93,7 @@ def test_a_campaign_counts_flaw_and_model_findings_of_its_first_budget_scenarios
 
 
 def test_the_target_needs_all_three_parts():
-    from asg_analysis import loop_study as ls
+    from asg_analysis.studies import loop_study as ls
 
     base = {"layouts": 300, "collisions": 5, "proxy_ge_3": 0}
     worse = {"layouts": 300, "collisions": 9, "proxy_ge_3": 0}
@@ -117,7 +117,7 @@ def test_a_short_export_is_not_complete_and_nothing_is_compared(tmp_path):
     import gzip
     import json
 
-    from asg_analysis import loop_study as ls
+    from asg_analysis.studies import loop_study as ls
 
     (tmp_path / "plan.txt").write_text(
         "# a plan\n"
@@ -173,7 +173,7 @@ def test_a_short_export_is_not_complete_and_nothing_is_compared(tmp_path):
 
 
 def test_round_two_reads_compound_only_with_its_interval_below_round_one():
-    from asg_analysis import loop_study as ls
+    from asg_analysis.studies import loop_study as ls
 
     r1 = {"flawed": [150.0, 110.0, 130.0], "hardened-findings": [26.0, 30.0, 22.0]}
     got = ls.read_round2(r1, {}, {ls.ROUND2: [8.0, 10.0, 6.0]}, {})
@@ -202,7 +202,7 @@ def test_every_committed_experiment_and_protocol_file_is_yaml():
 
 
 def test_the_loop_figure_draws_complete_campaigns_and_the_arms_means(tmp_path):
-    from asg_analysis import loop_study as ls
+    from asg_analysis.studies import loop_study as ls
 
     camp = {
         f"loop-{a}-s{s}": dict(arm=a, seed=s, **ls.campaign_figures(_rows(40, flaw=set(range(k + s))), 40))

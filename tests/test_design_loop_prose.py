@@ -13,7 +13,7 @@ import re
 import pytest
 import yaml
 
-from asg_analysis import hardening as ah
+from asg_analysis.studies import hardening as ah
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 HARD = os.path.join(REPO, "results", "hardening")
@@ -294,7 +294,7 @@ def test_the_baselines_in_words():
 
 @checks("positions 4, 3, 2, 1 and 0.5 s before the contact", "at least 50 pixels", "In the last 4 s before")
 def test_the_mechanisms_settings():
-    from asg_analysis import mechanism
+    from asg_analysis.studies import mechanism
 
     assert tuple(mechanism.SECONDS) == (4.0, 3.0, 2.0, 1.0, 0.5) and mechanism.MIN_HIT_PX == 50
     with open(os.path.join(HARD, "mechanism", "mechanism.json"), encoding="utf-8") as f:

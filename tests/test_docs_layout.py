@@ -77,3 +77,15 @@ def test_the_experiments_guide_figures_are_the_exports():
     s12 = [c for c in rows if c["campaign"] == "flaw3-default-s12"][0]
     said = f"seed 12: {s12['findings']} flaw findings at {s12['distinct']['2']} places 2 m apart"
     assert said in " ".join(page.split()), said
+
+
+def test_the_route_wide_files_say_which_layouts_are_not_reachable():
+    # issue #78: u covers only the route outside the safety radii; exp1-route-wide.yaml said every
+    # layout could be reached, and two other files pointed at a heading docs/agent.md does not have
+    for path in glob.glob(os.path.join(REPO, "experiments", "*route-wide*.yaml")):
+        text = " ".join(open(path, encoding="utf-8").read().split())
+        assert "every layout of the scene can be reached" not in text, path
+        assert '"Action spaces"' not in text, path
+    exp1 = " ".join(open(os.path.join(REPO, "experiments", "exp1-route-wide.yaml"), encoding="utf-8").read().split())
+    assert "Not every layout is reachable" in exp1
+    assert "| `action_space` |" in open(os.path.join(REPO, "docs", "agent.md"), encoding="utf-8").read()

@@ -8,7 +8,8 @@ import sys
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-from asg_analysis import campaign_metrics, experiments  # noqa: E402
+from asg_analysis import campaign_metrics  # noqa: E402
+from asg_analysis.studies import experiments  # noqa: E402
 from asg_agent.records.export import counts, read_export  # noqa: E402
 from asg_agent.records.store import Store  # noqa: E402
 from doc_pages import record  # noqa: E402
@@ -74,7 +75,7 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
     with open(record("paper-table2")) as f:
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")
-    assert quoted == generated, "the Table 2 record is stale: run `python3 -m asg_analysis.experiments`"
+    assert quoted == generated, "the Table 2 record is stale: run `python3 -m asg_analysis.studies.experiments`"
     # The differential campaigns, round 2's and round 3's: every count is the export's.
     diffs = list((summary.get("differentials") or {}).values())
     if "differential" in summary:
@@ -413,10 +414,11 @@ def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_
 def test_round3_seed_tables_are_the_exports_and_the_prose_holds():
     # Issue #37: the intervals and tests of docs/experiments.md "Round 3 over seeds" are generated;
     # the page's block is what the exports give now, and the prose beside it says what they say.
-    from asg_analysis import seed_tables, stats
+    from asg_analysis import stats
+    from asg_analysis.studies import seed_tables
     from asg_agent.records.export import read_export
 
-    assert seed_tables.main(["--check"]) == 0, "round 3's record: run python3 -m asg_analysis.seed_tables"
+    assert seed_tables.main(["--check"]) == 0, "round 3's record: run python3 -m asg_analysis.studies.seed_tables"
 
     rows = {
         (a, s): read_export(os.path.join(REPO, "results", "comparison", p.format(s) + ".jsonl.gz"))[1]

@@ -241,7 +241,7 @@ def test_the_v3_pilots_choice_in_the_prose_is_its_record():
 
 
 def test_the_v3_pilots_learned_sentence_is_what_its_exports_say():
-    # issue #67: recomputed here from the exports, apart from asg_analysis.learned: the share of
+    # issue #67: recomputed here from the exports, apart from asg_analysis.studies.learned: the share of
     # barberries within 2 m of the straight start-goal line among the obstacles proposed, and of
     # barberries among the obstacles flaw collisions hit, in each half of the 250-scenario budget
     import math

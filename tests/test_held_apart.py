@@ -175,11 +175,11 @@ def test_the_pages_block_says_what_was_found(found):
 
 
 def test_the_block_is_the_generators():
-    from asg_analysis import held_apart
+    from asg_analysis.studies import held_apart
 
     assert held_apart.in_doc(DOC) == held_apart.block(
         held_apart.measure()
-    ), "regenerate it: python3 -m asg_analysis.held_apart --doc docs/design-loop.md"
+    ), "regenerate it: python3 -m asg_analysis.studies.held_apart --doc docs/design-loop.md"
 
 
 def test_the_prose_about_the_twins(found):

@@ -14,7 +14,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from asg_analysis import mechanism
+from asg_analysis.studies import mechanism
 from doc_pages import record
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
@@ -61,7 +61,9 @@ def test_the_findings_are_every_flaw_contact_of_the_exports():
 def test_the_docs_table_is_generated_from_the_json():
     m = re.search(r"<!-- mechanism:begin[^>]*-->\n(.*?)\n<!-- mechanism:end -->", doc_text(), re.S)
     assert m, "docs/design-loop.md has no mechanism block"
-    assert m.group(1) == mechanism.markdown(load()), "regenerate it: python3 -m asg_analysis.mechanism ... --doc"
+    assert m.group(1) == mechanism.markdown(
+        load()
+    ), "regenerate it: python3 -m asg_analysis.studies.mechanism ... --doc"
 
 
 def test_the_prose_quotes_the_measured_shares():

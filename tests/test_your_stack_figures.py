@@ -75,7 +75,7 @@ def test_the_search_against_random_table_is_what_the_exports_say():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import stack_study
+    from asg_analysis.studies import stack_study
 
     s = stack_study.study(os.path.join(REPO, "results", "depth"), SEARCH, BASELINE)
     for arm in (SEARCH, BASELINE):
@@ -97,7 +97,7 @@ def test_the_seeds_table_is_what_the_exports_say():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import stack_study
+    from asg_analysis.studies import stack_study
 
     searches = [f"exp1-depth-td3-per-asp-s{k}" for k in (0, 1, 2)]
     baselines = [f"exp1-depth-random-s{k}" for k in (0, 1, 2)]
@@ -144,7 +144,7 @@ def test_the_gap_nav_study_is_what_its_exports_say():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import stack_study
+    from asg_analysis.studies import stack_study
 
     s = stack_study.study_seeds(GAP, GAP_SEARCH, GAP_RANDOM)
     assert all(c["scenarios"] == 350 and c["errors"] == 0 for c in s["campaigns"].values())
@@ -166,7 +166,7 @@ def test_the_gap_nav_spread_is_what_its_reruns_say():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import run_spread
+    from asg_analysis.studies import run_spread
 
     reruns = [os.path.join(GAP, "spread", f"r{k}.jsonl") for k in range(1, 6)]
     s = run_spread.spread(os.path.join(GAP, f"{GAP_SEARCH[0]}.jsonl.gz"), reruns)
@@ -188,7 +188,7 @@ def test_the_gap_nav_failures_are_where_the_prose_says():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import stack_study
+    from asg_analysis.studies import stack_study
 
     def collisions(names):
         out = []
@@ -218,7 +218,7 @@ def test_the_gap_nav_failures_are_where_the_prose_says():
 
 
 # Issue #68 item 11: what gap_nav's search adds over uniform layouts near the route, its failures'
-# modes and its reruns, recomputed here with code of this file's own (not asg_analysis.gap_nav_study's).
+# modes and its reruns, recomputed here with code of this file's own (not asg_analysis.studies.gap_nav_study's).
 DOC = os.path.join(REPO, "docs", "your-stack.md")
 GAP_BLOCK = "gap_nav what the search adds"
 
@@ -375,9 +375,9 @@ def test_the_gap_nav_study_block_and_json_are_in_step():
     import sys
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import gap_nav_study
+    from asg_analysis.studies import gap_nav_study
 
-    cmd = [sys.executable, "-m", "asg_analysis.gap_nav_study", "--doc", DOC, "--check"]
+    cmd = [sys.executable, "-m", "asg_analysis.studies.gap_nav_study", "--doc", DOC, "--check"]
     assert subprocess.run(cmd, cwd=REPO).returncode == 0
     with open(os.path.join(GAP, "study.json")) as f:
         assert json.load(f) == json.loads(json.dumps(gap_nav_study.study()))
@@ -426,7 +426,7 @@ def test_the_gap_nav_route_random_arm_is_what_its_exports_say():
     from scipy.stats import fisher_exact, mannwhitneyu
 
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
-    from asg_analysis import stack_study
+    from asg_analysis.studies import stack_study
 
     s = stack_study.study_seeds(GAP, GAP_SEARCH, GAP_ROUTE_RANDOM)
     text = open(DOC).read()

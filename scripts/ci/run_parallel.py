@@ -45,12 +45,15 @@ class Job:
 
 
 def ctest_jobs(ws, results, est):
-    """Every test catkin registered with CTest (gtest binaries, rostests), run by its own command:
-    catkin's run_tests.py, which writes a failing result file when the test wrote none."""
+    """Every gtest binary and rostest catkin registered with CTest, run by its own command:
+    catkin's run_tests.py, which writes a failing result file when the test wrote none. The pytest
+    files and folders registered too (scripts/ci/pytest.cmake, for ctest) are pytest_jobs'."""
     build = os.path.join(ws, "build")
     out = subprocess.run(["ctest", "--show-only=json-v1"], cwd=build, capture_output=True, text=True, check=True)
     jobs = []
     for t in json.loads(out.stdout)["tests"]:
+        if "_pytest_" in t["name"]:
+            continue
         cwd = next((p["value"] for p in t.get("properties", []) if p["name"] == "WORKING_DIRECTORY"), build)
         result = t["command"][3]  # run_tests.py RESULT_FILE [--return-code] COMMAND
         rel = os.path.relpath(result, results)

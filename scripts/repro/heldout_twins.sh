@@ -4,7 +4,7 @@
 # "Near twins"). The committed evaluation files pool the frames, so the set is rendered again as
 # it was built (the same export, classes, frame count, seed and training sources, at the
 # same-layout tolerance it was built at), and every arm of both rounds is evaluated on all of its
-# frames and on those of the scenes that are not twins (asg_analysis.held_apart finds them).
+# frames and on those of the scenes that are not twins (asg_analysis.studies.held_apart finds them).
 # Writes results/hardening/twins/ and the page's twins block. About 15 minutes on 2 cores.
 #   bash scripts/repro/heldout_twins.sh [WORK=runs/twins]
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
@@ -25,7 +25,7 @@ log "heldout-findings rendered again as built: $(field "['frames']") frames, see
     --out "$WORK/heldout-findings" --frames "$(field "['frames']")" --seed "$(field "['seed']")" \
     --apart-from "$(field "['made_from']['apart_from']")" --drop-shared --tol-m 0.01
 cp "$WORK/heldout-findings/hardening.json" "$OUT/heldout-findings.json"
-/usr/bin/python3 -m asg_analysis.held_apart --frames-without-twins "$WORK/heldout-findings/frames" "$WORK/twins-left-out"
+/usr/bin/python3 -m asg_analysis.studies.held_apart --frames-without-twins "$WORK/heldout-findings/frames" "$WORK/twins-left-out"
 ARMS=("flawed=$MODELS/flawed.pt" "full=$MODELS/full.pt")
 for r in 1 2; do ARMS+=("hardened-findings-$r=$MODELS/flawed_hf$r.pt" "hardened-random-$r=$MODELS/flawed_hr$r.pt"); done
 for k in rerendered twins-left-out; do
@@ -34,4 +34,4 @@ for k in rerendered twins-left-out; do
   [ -f "$OUT/evaluation-heldout-findings-$k.json" ] ||
     /usr/bin/python3 -m asg_perception.evaluate --data "$data" "${ARMS[@]}" --json "$OUT/evaluation-heldout-findings-$k.json"
 done
-/usr/bin/python3 -m asg_analysis.held_apart --doc docs/design-loop.md
+/usr/bin/python3 -m asg_analysis.studies.held_apart --doc docs/design-loop.md

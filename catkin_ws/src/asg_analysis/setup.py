@@ -1,4 +1,4 @@
 from catkin_pkg.python_setup import generate_distutils_setup
 from setuptools import setup
 
-setup(**generate_distutils_setup(packages=["asg_analysis"], package_dir={"": "src"}))
+setup(**generate_distutils_setup(packages=["asg_analysis", "asg_analysis.studies"], package_dir={"": "src"}))

@@ -3,7 +3,7 @@ that dies mid-episode as a killed process would (not a test module)."""
 
 import os
 
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
@@ -34,6 +34,29 @@ def campaign(tmp_path, name, pool, total=40, method="td3-per-asp", seed=7, store
             checkpoint_every=1,
         )
     )
+
+
+def refused(exp, store, reward, references, name="g"):
+    """The ValueError a 4-scenario campaign with this reward and these reference roles raises
+    when it is built (None when it is not refused)."""
+    try:
+        Campaign(
+            CampaignConfig(
+                name=name,
+                experiment=exp,
+                method=make_method("random", exp, 1),
+                store=store,
+                pool=FakePool(1),
+                total=4,
+                seed=1,
+                checkpoint="/x",
+                reward=reward,
+                references={role: FakePool(1) for role in references},
+            )
+        )
+    except ValueError as e:
+        return e
+    return None
 
 
 class Interrupt(Exception):

@@ -9,7 +9,7 @@ import os
 import pytest
 
 from asg_agent.records.experiment import load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig, FunctionCallback
 from asg_agent.records.store import Store
@@ -177,68 +177,30 @@ def test_a_resume_reruns_the_references_still_out_and_the_search_ignores_them(tm
     assert store.content_digest("p") == store.content_digest("r")
 
 
-def test_reference_roles_and_rules_are_checked():
+@pytest.mark.parametrize(
+    "references, extra, match",
+    [
+        ({attr.FULL: 1}, dict(slots=2), "ground_truth"),
+        ({"mine": 1}, dict(slots=2), "roles"),
+        ({attr.TRUTH: 1}, dict(candidates="some"), "candidates"),
+        ({attr.TRUTH: 1}, dict(reward="differential"), "every scenario"),
+    ],
+)
+def test_reference_roles_and_rules_are_checked(references, extra, match):
     exp = load_experiment(EXP)
-    m = make_method("random", exp, 0, budget=4)
-    kw = dict(slots=2)
-    with pytest.raises(ValueError, match="ground_truth"):
+    with pytest.raises(ValueError, match=match):
         Campaign(
             CampaignConfig(
                 name="x",
                 experiment=exp,
-                method=m,
+                method=make_method("random", exp, 0, budget=4),
                 store=None,
                 pool=FakePool(1),
                 total=4,
                 seed=0,
                 checkpoint="/tmp/x",
-                references={attr.FULL: FakePool(1)},
-                **kw,
-            )
-        )
-    with pytest.raises(ValueError, match="roles"):
-        Campaign(
-            CampaignConfig(
-                name="x",
-                experiment=exp,
-                method=m,
-                store=None,
-                pool=FakePool(1),
-                total=4,
-                seed=0,
-                checkpoint="/tmp/x",
-                references={"mine": FakePool(1)},
-                **kw,
-            )
-        )
-    with pytest.raises(ValueError, match="candidates"):
-        Campaign(
-            CampaignConfig(
-                name="x",
-                experiment=exp,
-                method=m,
-                store=None,
-                pool=FakePool(1),
-                total=4,
-                seed=0,
-                checkpoint="/tmp/x",
-                references={attr.TRUTH: FakePool(1)},
-                candidates="some",
-            )
-        )
-    with pytest.raises(ValueError, match="every scenario"):
-        Campaign(
-            CampaignConfig(
-                name="x",
-                experiment=exp,
-                method=m,
-                store=None,
-                pool=FakePool(1),
-                total=4,
-                seed=0,
-                checkpoint="/tmp/x",
-                references={attr.TRUTH: FakePool(1)},
-                reward="differential",
+                references={role: FakePool(n) for role, n in references.items()},
+                **extra,
             )
         )
 

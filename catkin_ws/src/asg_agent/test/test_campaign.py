@@ -11,7 +11,7 @@ import time
 import pytest
 
 from asg_agent.records.experiment import ExperimentError, load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.records.store import Store, StoreError, park, unpark
 
 
@@ -165,7 +165,7 @@ def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
     cmd = [
         sys.executable,
         "-m",
-        "asg_agent.cli.campaign",
+        "asg_agent.testing.campaign",
         EXP,
         "--fake-workers",
         "2",

@@ -15,7 +15,7 @@ import pytest
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig, FunctionCallback
 from asg_agent.records.experiment import ExperimentError, load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.search.methods import make_method
 from asg_agent.records.store import Store
 from asg_agent.search.td3 import TD3Config
@@ -375,7 +375,7 @@ def test_a_signal_ends_the_campaign_as_ctrl_c_does_even_in_the_background(tmp_pa
         + os.pathsep
         + os.environ.get("PYTHONPATH", ""),
     )
-    cmd = [sys.executable, "-m", "asg_agent.cli.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
+    cmd = [sys.executable, "-m", "asg_agent.testing.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
     cmd += ["--store", str(tmp_path / "s.sqlite"), "--name", "s", "--no-progress"]
     store = Store(str(tmp_path / "s.sqlite"))
     p = subprocess.Popen(

@@ -9,7 +9,7 @@ import pytest
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.search.methods import make_method
 from asg_agent.records.store import Store
 
@@ -75,7 +75,7 @@ def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_p
         bonus = 1.5 if job in (2, 5) else 0.0  # job 9: the reference collided too
         assert r["termination"] == ("COLLISION" if job in (2, 5, 9) else "SUCCESS")
         assert abs(r["reward"] - (r["proxy"] + bonus)) < 1e-12, job
-    from asg_agent.cli.campaign import parse
+    from asg_agent.testing.campaign import parse
 
     assert parse([EXP, "--fake-workers", "2", "--reward", "collision"]).collision_bonus == 2.0
     with pytest.raises(SystemExit):
@@ -189,16 +189,9 @@ def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):
     assert digests[0] == digests[1]
 
 
-def test_attribution_counts_perception_and_stack_findings(tmp_path):
-    """--reference-workers with the proxy reward (the default): the search learns from the stack
-    under test's proxy, every scenario also runs on the reference stand-in, and the progress
-    figures, the store's summary and a resumed campaign all count a finding (proxy >= 3) as the
-    perception's when the reference stays below 2 and as the stack's when it reaches 3."""
-    import json as _json
-
-    store = Store(str(tmp_path / "a.sqlite"))
-    exp = load_experiment(EXP)
-    c = Campaign(
+def _attributed_campaign(exp, store, tmp_path):
+    """60 random scenarios on a stand-in that wiggles much, each also run on a calmer reference."""
+    return Campaign(
         CampaignConfig(
             name="a",
             experiment=exp,
@@ -213,6 +206,18 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
             candidates="all",
         )
     )
+
+
+def test_attribution_counts_perception_and_stack_findings(tmp_path):
+    """--reference-workers with the proxy reward (the default): the search learns from the stack
+    under test's proxy, every scenario also runs on the reference stand-in, and the progress
+    figures, the store's summary and a resumed campaign all count a finding (proxy >= 3) as the
+    perception's when the reference stays below 2 and as the stack's when it reaches 3."""
+    import json as _json
+
+    store = Store(str(tmp_path / "a.sqlite"))
+    exp = load_experiment(EXP)
+    c = _attributed_campaign(exp, store, tmp_path)
     c.start()
     c.run(poll_timeout=0.0)
     rows = list(store.rows("a"))
@@ -263,21 +268,7 @@ def test_attribution_counts_perception_and_stack_findings(tmp_path):
     assert next(x for x in store.rows("a") if x["job"] == 20)["termination"] == "SUCCESS"
     assert store.summary("a")["plr_below_0999"] == base + 1  # job 20, not the collision of job 0
     # A resumed campaign takes its counts from the store.
-    again = Campaign(
-        CampaignConfig(
-            name="a",
-            experiment=exp,
-            method=make_method("random", exp, 3, budget=60),
-            store=store,
-            pool=FakePool(2, seed=1, gain=6.0),
-            total=60,
-            seed=3,
-            checkpoint=str(tmp_path / "a.ckpt"),
-            slots=4,
-            references={"ground_truth": FakePool(2, seed=11, gain=1.5, prefix="fake_ref")},
-            candidates="all",
-        )
-    )
+    again = _attributed_campaign(exp, store, tmp_path)
     again.resume()
     assert (again.status()["perception"], again.status()["stack"]) == (perception, stack)
     with pytest.raises(ValueError, match="needs a reference stack"):
@@ -337,7 +328,7 @@ def test_reward_auto_stands_for_what_the_references_can_see_and_is_stored_resolv
     regression with a release's, and (issue #78) the stack's own failures with none or ground
     truth alone; the parsed options (and so the store's record of the campaign) name the resolved
     reward."""
-    from asg_agent.cli.campaign import parse
+    from asg_agent.testing.campaign import parse
     from asg_agent.scoring import rewards
 
     assert rewards.for_roles(["full", "ground_truth"]) == "flaw"

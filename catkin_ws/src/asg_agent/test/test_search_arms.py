@@ -8,6 +8,7 @@ import pytest
 
 from asg_agent.records.experiment import load_experiment
 from asg_agent.search.methods import make_method
+from stand_ins import refused
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
@@ -82,7 +83,7 @@ def test_failure_modes_of_findings():
 
 
 def test_dense_rewards_see_how_close_a_run_came():
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store
@@ -130,21 +131,7 @@ def test_dense_rewards_see_how_close_a_run_came():
         rows = list(store.rows(reward))
         assert len(rows) == 12 and all(r["reward"] >= r["proxy"] for r in rows)
         assert any(r["reward"] > r["proxy"] for r in rows)
-    with pytest.raises(ValueError, match="every scenario"):
-        Campaign(
-            CampaignConfig(
-                name="g",
-                experiment=exp,
-                method=make_method("random", exp, 1),
-                store=store,
-                pool=FakePool(1),
-                total=4,
-                seed=1,
-                checkpoint="/x",
-                reward="regret",
-                references={attr.FULL: FakePool(1), attr.TRUTH: FakePool(1)},
-            )
-        )
+    assert "every scenario" in str(refused(exp, store, "regret", [attr.FULL, attr.TRUTH], "g"))
     c = Campaign(
         CampaignConfig(
             name="g",

@@ -67,7 +67,7 @@ def test_campaign_times_its_own_stages(tmp_path):
         [
             sys.executable,
             "-m",
-            "asg_agent.cli.campaign",
+            "asg_agent.testing.campaign",
             exp,
             "--fake-workers",
             "2",

@@ -1,8 +1,8 @@
-"""asg_analysis.candidates: the check of the candidate rule against full re-runs."""
+"""asg_analysis.studies.candidates: the check of the candidate rule against full re-runs."""
 
 
 def test_the_candidate_check_counts_what_the_rule_missed():
-    from asg_analysis.candidates import check
+    from asg_analysis.studies.candidates import check
 
     rows = [
         {"job": 0, "termination": "COLLISION", "proxy": 0.8, "attribution": "flaw"},

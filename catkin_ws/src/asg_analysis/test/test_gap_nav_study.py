@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from asg_analysis import gap_nav_study as g
+from asg_analysis.studies import gap_nav_study as g
 
 
 def layout(*xy):

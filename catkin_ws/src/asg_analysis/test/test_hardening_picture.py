@@ -1,4 +1,4 @@
-"""asg_analysis.hardening picture: a suite scene with the paths driven before and after, drawn
+"""asg_analysis.studies.hardening picture: a suite scene with the paths driven before and after, drawn
 from `suite run --json` results (the suite is the agent's stand-in one, built as its tests do)."""
 
 import json
@@ -10,7 +10,7 @@ sys.path.insert(0, AGENT_TEST)
 
 from test_suite import campaign_export, export_run_record_and_regress  # noqa: E402,F401  (a fixture)
 
-from asg_analysis import hardening  # noqa: E402
+from asg_analysis.studies import hardening  # noqa: E402
 
 
 def test_the_picture_draws_a_failure_before_and_after(tmp_path, campaign_export, capsys):  # noqa: F811

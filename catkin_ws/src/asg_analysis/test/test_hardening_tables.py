@@ -1,4 +1,4 @@
-"""asg_analysis.hardening: the design loop's tables from evaluations and recorded suite runs."""
+"""asg_analysis.studies.hardening: the design loop's tables from evaluations and recorded suite runs."""
 
 import os
 
@@ -11,7 +11,7 @@ def test_hardening_table_reads_evaluations_and_recorded_suite_outcomes(tmp_path)
 
     import yaml
 
-    from asg_analysis import hardening as ah
+    from asg_analysis.studies import hardening as ah
 
     fig = {"iou": {"non_traversable": 0.5}, "shadow_false_obstacle_rate": 0.1, "shadow_away_false_obstacle_rate": 0.05}
     for name, rnd in (("test", 1), ("heldout-findings", 1)):

@@ -1,9 +1,9 @@
-"""asg_analysis.learned (issue #67): each obstacle attribute's share among proposed layouts, flaw
+"""asg_analysis.studies.learned (issue #67): each obstacle attribute's share among proposed layouts, flaw
 findings and the obstacles they hit, early and late in the budget."""
 
 import numpy as np
 
-from asg_analysis import learned
+from asg_analysis.studies import learned
 
 MESHES = ["juniper"] * 4 + ["barberry"] * 4
 

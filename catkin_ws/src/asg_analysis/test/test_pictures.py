@@ -1,4 +1,4 @@
-"""asg_analysis.pictures: the variants of a scenario and the panel composed from rendered images
+"""asg_analysis.studies.pictures: the variants of a scenario and the panel composed from rendered images
 (the renderer itself is asg_sim's, tested there)."""
 
 import os
@@ -8,7 +8,7 @@ import pytest
 import yaml
 from PIL import Image
 
-from asg_analysis import pictures
+from asg_analysis.studies import pictures
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 

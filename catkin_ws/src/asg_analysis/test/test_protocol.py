@@ -11,7 +11,7 @@ from asg_analysis import protocol as pr
 from asg_agent.records.export import export
 from asg_agent.cli.plan import cpu_event
 from asg_agent.records.experiment import load_experiment
-from asg_agent.campaign.fake_pool import FakePool
+from asg_agent.testing.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store
@@ -221,7 +221,7 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     pr.coverage_figure(res, str(tmp_path / "cov.png"))
     assert (tmp_path / "cov.png").stat().st_size > 5000
     # how each arm spent its budget: every flaw finding of the default in its windows, every obstacle placed
-    from asg_analysis import flaw_budget as fb
+    from asg_analysis.studies import flaw_budget as fb
 
     spent = fb.read(str(tmp_path / "out"), 12, "v")
     assert set(spent) == {"default", "route-random"} and spent["default"]["seeds"] == 2

@@ -60,7 +60,7 @@ def test_the_report_shows_the_three_stack_classes(tmp_path):
 def test_the_report_agrees_with_the_store(tmp_path):
     from stand_ins import campaign
 
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
 
     c = campaign(tmp_path, "rep", FakePool(2, seed=8), total=30, method="random")
     c.start()
@@ -77,3 +77,19 @@ def test_the_report_agrees_with_the_store(tmp_path):
     assert f"<b>{d['distinct'][2.0]}</b> at 2 m" in page
     assert page.count("rosrun asg_agent replay") == 3 + min(3, len(d["first_at_each_place"]))
     assert os.path.isfile(tmp_path / "report" / "curves.png")
+
+
+def test_the_figure_command_draws_the_jobs_named_and_names_a_missing_one(tmp_path, capsys):
+    from stand_ins import campaign
+
+    from asg_agent.testing.fake_pool import FakePool
+    from asg_analysis import figures
+
+    c = campaign(tmp_path, "fig", FakePool(2, seed=8), total=6, method="random")
+    c.start()
+    c.run()
+    out = tmp_path / "pics"
+    assert figures.main(["figure", c.store.path, "fig", "--job", "2", "--job", "4", "--out", str(out)]) == 0
+    assert sorted(os.listdir(out)) == ["fig_job2.png", "fig_job4.png"]
+    assert figures.main(["figure", c.store.path, "fig", "--job", "99", "--out", str(out)]) == 2
+    assert "campaign 'fig' has no job 99" in capsys.readouterr().err

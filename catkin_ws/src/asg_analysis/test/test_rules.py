@@ -110,7 +110,7 @@ def test_the_command_line_learns_from_exports_and_names_bad_input(tmp_path, caps
 
 
 def test_learn_reads_the_store_campaign_that_ran_last(tmp_path, capsys):
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from asg_analysis import run_spread
+from asg_analysis.studies import run_spread
 
 
 def export(path, outcomes):

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from asg_analysis import stack_study
+from asg_analysis.studies import stack_study
 
 
 def export(path, name, outcomes):

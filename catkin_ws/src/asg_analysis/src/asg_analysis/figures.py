@@ -83,7 +83,7 @@ def asp_effect(scenarios: int, seeds: int, experiment: str):
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.experiment import load_experiment
-    from asg_agent.campaign.fake_pool import FakePool
+    from asg_agent.testing.fake_pool import FakePool
     from asg_agent.search.methods import make_method
 
     exp = load_experiment(experiment)
@@ -130,6 +130,7 @@ def main(argv=None):
     fg.add_argument("store")
     fg.add_argument("campaign")
     fg.add_argument("--top", type=int, default=1)
+    fg.add_argument("--job", type=int, action="append", default=[], help="this job instead of the top-k (repeatable)")
     fg.add_argument("--out", default="figures", help="folder for CAMPAIGN_jobN.png")
     args = p.parse_args(argv)
     if args.cmd == "figure":
@@ -139,9 +140,14 @@ def main(argv=None):
             print(f"error: {e}", file=sys.stderr)
             return 2
         os.makedirs(args.out, exist_ok=True)
-        for r in store.summary(args.campaign, top=args.top)["top"]:
-            path = os.path.join(args.out, f"{args.campaign}_job{r['job']}.png")
-            top_down(store, args.campaign, r["job"], path)
+        jobs = args.job or [r["job"] for r in store.summary(args.campaign, top=args.top)["top"]]
+        for job in jobs:
+            path = os.path.join(args.out, f"{args.campaign}_job{job}.png")
+            try:
+                top_down(store, args.campaign, job, path)
+            except ValueError as e:
+                print(f"error: {e}", file=sys.stderr)
+                return 2
             print(path)
         return 0
     return asp_effect_main(args)

@@ -671,8 +671,8 @@ def result_markdown(p: dict, res: dict, figure: str = "", budget: str = "", budg
         ]
     if figure:
         lines += ["", f"![{plural} by failure mode, per arm (the coverage map)]({figure})"]
-    if budget:  # the why: how each arm spends its budget (asg_analysis.flaw_budget)
-        lines += ["", "How each arm spends its budget (`asg_analysis.flaw_budget`):", "", budget]
+    if budget:  # the why: how each arm spends its budget (asg_analysis.studies.flaw_budget)
+        lines += ["", "How each arm spends its budget (`asg_analysis.studies.flaw_budget`):", "", budget]
     if budget_figure:
         lines += [
             "",
@@ -735,7 +735,7 @@ def status(p: dict, folder: str, choice_path: str = "") -> dict:
     regressions), beside the other classes of the attribution."""
     from asg_agent.records import failure_modes as fm
     from asg_agent.records.export import read_export
-    from asg_analysis.stack_study import exact_interval
+    from asg_analysis.studies.stack_study import exact_interval
 
     cs = campaigns(p, "pilot")
     choice_path = choice_path or os.path.join(folder, "pilot_choice.json")
@@ -885,7 +885,7 @@ def main(argv=None) -> int:
             if not args.doc:
                 print(block)
                 return 0
-            from asg_analysis.seed_tables import rewrite_block
+            from asg_analysis.studies.seed_tables import rewrite_block
 
             return rewrite_block(args.doc, *markers(p)[:2], block, args.check, "protocol status")
         if args.cmd == "choose":
@@ -952,14 +952,14 @@ def report_analysis(p: dict, args, res: dict) -> int:
         if os.path.basename(figure).endswith("coverage.png") and os.path.basename(figure) != "flaw_study_coverage.png":
             budget_png = figure[: -len("coverage.png")] + "budget.png"  # a study of its own: its own pair of figures
         if complete:
-            from asg_analysis import flaw_budget
+            from asg_analysis.studies import flaw_budget
 
             spent = flaw_budget.read(args.folder, p["budget"], p["name"], p["endpoint"]["class"])
             budget = flaw_budget.markdown(spent, list(p["arms"]))
             if not args.check:
                 coverage_figure(res, figure)
                 flaw_budget.figure(spent, list(p["arms"]), budget_png)
-        from asg_analysis.seed_tables import rewrite_block
+        from asg_analysis.studies.seed_tables import rewrite_block
 
         block = result_markdown(
             p,

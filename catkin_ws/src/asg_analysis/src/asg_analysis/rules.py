@@ -214,8 +214,9 @@ def markdown(learnt: Dict, checked: Optional[Dict] = None, top: int = 5) -> str:
     protocol checked (the file's first), its precision on fresh samples against the base rate."""
     rows = [
         "| rule | in-sample: distinct findings / scenarios (precision, lift) | share of distinct findings | "
-        "fresh samples: findings / scenarios (precision, 95 % CI) | base rate (95 % CI) | ratio | Fisher p |",
-        "|---|---|---|---|---|---|---|",
+        "fresh samples: findings / scenarios (precision, 95 % CI) | base rate (95 % CI) | ratio | Fisher p | "
+        "a finding it holds (campaign, job) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for i, r in enumerate(learnt["rules"][:top]):
         fresh = base = ratio = p = "not checked"
@@ -226,7 +227,8 @@ def markdown(learnt: Dict, checked: Optional[Dict] = None, top: int = 5) -> str:
             ratio, p = f"{c['ratio']:.2f}x", f"{c['fisher_p']:.3f}"
         rows.append(
             f"| `{r['text']}` | {r['distinct']} / {r['support']} ({100 * r['precision']:.0f} %, {r['lift']:.1f}x) | "
-            f"{100 * r['share_of_distinct']:.0f} % | {fresh} | {base} | {ratio} | {p} |"
+            f"{100 * r['share_of_distinct']:.0f} % | {fresh} | {base} | {ratio} | {p} | "
+            f"{r['example']['campaign']} {r['example']['job']} |"
         )
     return "\n".join(rows) + "\n"
 

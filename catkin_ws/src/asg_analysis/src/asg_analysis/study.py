@@ -30,10 +30,16 @@ Each entry of `report:`:
       base: results/STUDY/RANDOM-GLOB.jsonl.gz             # the same sampler without the rule
       target: flaw
 
+    - page: ...
+      block: ...
+      table: digests                           # seeded results digests, one line each
+      digests: {"before (COMMIT)": results/bench/TAG-before-1.digest, ...}
+
     - table: command                           # a generator of its own that writes its block(s)
       module: asg_analysis.protocol            # run as python3 -m MODULE ARGS (from the repository)
       args: [status, experiments/protocol-NAME.yaml, results/STUDY, --doc, docs/studies/DATE-NAME.md]
       check: [--check]                          # added with --check (the default)
+      blocks: [NAME, ...]                      # the blocks it writes (what the record tests match)
 
 The statistics are the library's (asg_analysis.endpoints, asg_analysis.stats); an entry names
 only what to read and where to write. An entry whose exports match nothing is named and its block
@@ -50,7 +56,7 @@ import yaml
 
 from asg_agent.paths import REPO
 
-TABLES = ("campaigns", "arms", "rules")
+TABLES = ("campaigns", "arms", "rules", "digests")
 KINDS = TABLES + ("command",)
 
 
@@ -71,6 +77,8 @@ def render(entry: Dict) -> str:
     target = None if target == "failure" else target
     if kind == "rules":
         return _rules(entry, target)
+    if kind == "digests":
+        return _digests(entry["digests"])
     if kind == "campaigns":
         paths = _paths(entry["exports"])
         if not paths:
@@ -99,6 +107,17 @@ def _rules(entry: Dict, target) -> str:
         if fresh and base:
             checked = rules.check(read_rows(fresh, "", "")[0], read_rows(base, "", "")[0], target)
     return rules.markdown(learnt, checked)
+
+
+def _digests(digests: Dict[str, str]) -> str:
+    """One line a digest file (`N SHA256`, what bench_before_after.sh writes): its label, path, the
+    number of results and the digest's first eight hex digits."""
+    lines = []
+    for label, path in digests.items():
+        with open(os.path.join(REPO, path), encoding="utf-8") as f:
+            n, sha = f.read().split()
+        lines.append(f"- {label}: `{path}`, {n} results, {sha[:8]}")
+    return "\n".join(lines) + "\n"
 
 
 def block_text(page: str, block: str) -> str:

@@ -5,8 +5,8 @@
 
 Workers are the namespaces /worker_0 .. /worker_{N-1} (or a comma-separated list of
 namespaces), started by `roslaunch launch/worker.launch ns:=worker_i ...` on this host or any
-other host of the same ROS master, or by launch/train.launch. `--fake-workers N` runs an
-in-process stand-in instead (no ROS, no simulator: a smoke test of the loop). Prints a progress
+other host of the same ROS master, or by launch/train.launch (the tests run it on an in-process
+stand-in: asg_agent.testing.campaign). Prints a progress
 bar and ends with a summary: the findings of its reward, their distinct places and the replay
 command of the best of them first (issue #78), then the attribution and the paper's proxy counts.
 """
@@ -52,10 +52,15 @@ def open_tensorboard(a, store, name, c):
         return None
 
 
-def parse(argv):
+def parse(argv, stand_in: bool = False):
+    """The parsed arguments; `stand_in` (asg_agent.testing.campaign) adds --fake-workers."""
     p = argparse.ArgumentParser(prog="campaign", description=__doc__.split("\n\n")[0])
     _search_options(p)
     _run_options(p)
+    if stand_in:
+        p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
+    else:
+        p.set_defaults(fake_workers=0)
     a = p.parse_args(argv)
     _check(p, a)
     return a
@@ -119,8 +124,7 @@ def _search_options(p):
 
 
 def _run_options(p):
-    """How it runs: stand-in workers, references and attribution, the reward, reports and outputs."""
-    p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
+    """How it runs: references and attribution, the reward, reports and outputs."""
     p.add_argument(
         "--reference-workers",
         default="",
@@ -519,8 +523,9 @@ def run(a, c: Campaign, store: Store, name: str, bar, progress, collector, worke
     return 0
 
 
-def main(argv=None):
-    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv)
+def main(argv=None, stand_in=None):
+    """`stand_in(a, roles)` -> (pool, references): the tests' pools instead of ROS workers."""
+    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv, stand_in is not None)
     stop_on_signals()
     try:
         exp = load_experiment(a.experiment)
@@ -529,7 +534,7 @@ def main(argv=None):
         roles = reference_roles(a, workers)
         candidates = a.candidates or ("all" if a.reference_workers else "failures")
         store = open_store(a, name)
-        pool, references = make_pools(a, exp, workers, roles)
+        pool, references = stand_in(a, roles) if a.fake_workers else make_pools(a, exp, workers, roles)
         method = make_search(a, exp)
         settings = campaign_settings(a, exp, workers, roles, candidates)
         settings["agent_blas"] = blas_identity()  # the search's arithmetic (asg_agent/blas.py)

@@ -9,7 +9,8 @@ launch worker.launch with it), prints pass or fail per scenario with the reason,
 outcomes recorded under --against (a regression: passed there, fails now; changed: the same
 verdict but another trajectory), writes JUnit XML and JSON, and exits 1 on a regression, a change,
 or (without --against) any failing scenario. `--record LABEL` stores this run's outcomes in the
-suite under LABEL (and, without --against, exits 0: its failures are what it records). `--fake-workers N` runs the in-process stand-in (no ROS).
+suite under LABEL (and, without --against, exits 0: its failures are what it records). The tests
+run it on an in-process stand-in (asg_agent.testing.suite).
 """
 
 import argparse
@@ -20,7 +21,8 @@ import sys
 from asg_agent.campaign.suite import SuiteError, compare, export_suite, junit, load_suite, record, run_suite
 
 
-def main(argv=None) -> int:
+def main(argv=None, stand_in=None) -> int:
+    """`stand_in(n)`: the tests' pool of n stand-in workers (adds --fake-workers to `run`)."""
     p = argparse.ArgumentParser(prog="suite", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("export")
@@ -38,7 +40,10 @@ def main(argv=None) -> int:
     r = sub.add_parser("run")
     r.add_argument("suite")
     r.add_argument("--workers", default="1", help="worker count N (/worker_0..) or namespaces, comma-separated")
-    r.add_argument("--fake-workers", type=int, default=0)
+    if stand_in is not None:
+        r.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
+    else:
+        r.set_defaults(fake_workers=0)
     r.add_argument("--against", default="", help="compare with the outcomes recorded under this label")
     r.add_argument("--record", default="", help="store this run's outcomes under this label")
     r.add_argument("--junit", default="")
@@ -64,9 +69,7 @@ def main(argv=None) -> int:
         print(f"suite: {err}", file=sys.stderr)
         return 2
     if a.fake_workers:
-        from asg_agent.campaign.fake_pool import FakePool
-
-        pool = FakePool(a.fake_workers)
+        pool = stand_in(a.fake_workers)
     else:
         import rospy
 

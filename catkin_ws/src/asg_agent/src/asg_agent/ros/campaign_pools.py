@@ -2,23 +2,15 @@
 stack, and the checks that the running workers are the experiment's stack (rospy)."""
 
 import sys
-import time
 
 from asg_agent.campaign.policy import CampaignError
 from asg_agent.scoring import attribution as attr
 
 
 def make_pools(a, exp, workers, roles):
-    """The pool of workers under test and one pool per reference role: ROS workers, or the
-    in-process stand-in with --fake-workers. ROS workers must run the experiment's planner."""
+    """The pool of ROS workers under test and one pool per reference role. ROS workers must run
+    the experiment's planner."""
     references = {}
-    if a.fake_workers:
-        from asg_agent.campaign.fake_pool import FakePool
-
-        pool = FakePool(a.fake_workers, seed=int(time.time()))
-        for k, (role, ws) in enumerate(roles.items()):  # stand-in reference stacks that wiggle less
-            references[role] = FakePool(len(ws), seed=int(time.time()) + 1 + k, gain=0.3, prefix=f"fake_{role}")
-        return pool, references
     from asg_agent.ros.pool import WorkerPool
 
     from asg_agent.ros.node import init_node

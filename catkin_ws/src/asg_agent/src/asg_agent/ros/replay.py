@@ -452,7 +452,7 @@ def run_replay(a, request, row, settings) -> int:
             f"RERUN of a free-running stack ({settings.get('stack', '?')}): its runs are not reproducible bit "
             f"for bit, so this is a run of the scenario, not a check of the stored one; {o.termination} "
             f"({'as' if o.termination == row['termination'] else 'unlike'} the stored {row['termination']}). "
-            "How often a verdict repeats: asg_agent.ros.rerun and asg_analysis.run_spread (docs/your-stack.md)"
+            "How often a verdict repeats: asg_agent.ros.rerun and asg_analysis.studies.run_spread (docs/your-stack.md)"
         )
         return 0 if o.termination != "ERROR" else 1
     print("REPRODUCED" if ok else "NOT REPRODUCED")

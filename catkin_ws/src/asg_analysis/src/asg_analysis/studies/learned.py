@@ -13,7 +13,7 @@ the scene says of each obstacle, computed here apart from any search method's ow
 - `class, beside`: both at once (every layout holds each class in the scenario's counts, so a
   class's share among the obstacles of any layout is fixed; where each class stands is not).
 
-    python3 -m asg_analysis.learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
+    python3 -m asg_analysis.studies.learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
         [--budget 250] [--target flaw] [--json out.json] [--markdown] [--figure out.png]
 
 Each campaign is split at half its budget (jobs below budget / 2: early; the rest: late), or at

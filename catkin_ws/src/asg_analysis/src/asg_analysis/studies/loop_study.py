@@ -19,9 +19,9 @@ bootstrap intervals apart, "saturate" otherwise.
 A campaign whose export is missing or short is listed as not complete; nothing is computed from a
 partial export.
 
-    python3 -m asg_analysis.loop_study            # rewrites both blocks in docs/design-loop.md
-    python3 -m asg_analysis.loop_study --check    # exit 1 when a block is stale
-    python3 -m asg_analysis.loop_study --json results/hardening/loop.json --figure docs/images/design_loop.png
+    python3 -m asg_analysis.studies.loop_study            # rewrites both blocks in docs/design-loop.md
+    python3 -m asg_analysis.studies.loop_study --check    # exit 1 when a block is stale
+    python3 -m asg_analysis.studies.loop_study --json results/hardening/loop.json --figure docs/images/design_loop.png
 """
 
 import argparse
@@ -65,7 +65,7 @@ def plan_campaigns(plan: str) -> Dict[tuple, str]:
 
 def campaign_figures(rows: List[dict], budget: int) -> Dict:
     """One campaign's endpoint over its first `budget` scenarios."""
-    from asg_analysis.stack_study import exact_interval
+    from asg_analysis.studies.stack_study import exact_interval
 
     keep = [r for r in rows if r["job"] < budget]
     flaw = sum(r.get("attribution") == "flaw" for r in keep)
@@ -327,7 +327,7 @@ def main(argv=None) -> int:
         write_json(a.json, s)
     if a.figure:
         figure(s, a.figure)
-    from asg_analysis.seed_tables import rewrite_block
+    from asg_analysis.studies.seed_tables import rewrite_block
 
     rc = rewrite_block(DOC, BEGIN, END, f"{BEGIN}\n{markdown(s)}\n{END}", a.check, "loop_study")
     return max(rc, rewrite_block(DOC, BEGIN2, END2, f"{BEGIN2}\n{markdown_round2(s)}\n{END2}", a.check, "loop_study"))

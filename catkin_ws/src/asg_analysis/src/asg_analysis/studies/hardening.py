@@ -2,8 +2,8 @@
 figures on held-apart frames (evaluation-SET-ROUND.json of scripts/repro/harden.sh) and the pass
 rate on each suite from the outcomes recorded in it.
 
-    python3 -m asg_analysis.hardening results/hardening [--json OUT] [--markdown]
-    python3 -m asg_analysis.hardening picture SUITE SCENARIO OUT.png LABEL=RESULTS.json ...
+    python3 -m asg_analysis.studies.hardening results/hardening [--json OUT] [--markdown]
+    python3 -m asg_analysis.studies.hardening picture SUITE SCENARIO OUT.png LABEL=RESULTS.json ...
 
 `picture`: one suite scenario as each stack drove it (the results are `suite run --json` files),
 the paths on the scene top-down: a failure before and after hardening.

@@ -20,7 +20,7 @@ from asg_analysis.campaign_metrics import (
     elapsed_hours,
     fmt,
 )
-from asg_analysis.dynamics import rank_figures
+from asg_analysis.studies.dynamics import rank_figures
 
 
 #: The scores of an attributed campaign (issue #25), each counted and counted distinct: (key, label, predicate)

@@ -10,7 +10,7 @@ verdict equals the stored one. Reported: scenarios, repetitions, the share that 
 exact 95 % interval), the stored failures that fail again in every repetition, in some, in none,
 and each scenario's proxy range over the stored run and its repetitions.
 
-    python3 -m asg_analysis.run_spread EXPORT.jsonl.gz r1.jsonl r2.jsonl ... [--json OUT] [--markdown]
+    python3 -m asg_analysis.studies.run_spread EXPORT.jsonl.gz r1.jsonl r2.jsonl ... [--json OUT] [--markdown]
 """
 
 import argparse
@@ -22,7 +22,7 @@ import numpy as np
 
 from asg_agent.records.export import read_export
 from asg_agent.scoring.attribution import RunOutcome
-from asg_analysis.stack_study import exact_interval
+from asg_analysis.studies.stack_study import exact_interval
 from asg_analysis.files import write_json
 
 

@@ -10,7 +10,7 @@ beats another in general. Secondary, descriptive: each arm's proxy distribution 
 percentile, largest, the share of scenarios at or above CANDIDATE) and the Mann-Whitney U test
 of the proxies of the two arms' scenarios.
 
-    python3 -m asg_analysis.stack_study results/depth exp1-depth-td3-per-asp-s0 exp1-depth-random-s0 \\
+    python3 -m asg_analysis.studies.stack_study results/depth exp1-depth-td3-per-asp-s0 exp1-depth-random-s0 \\
         [--json results/depth/comparison.json] [--markdown]
 
 Several seeds an arm (comma-separated campaign names, one per seed; results/depth/plan-seeds.txt):
@@ -19,7 +19,7 @@ the round-4 protocol compares arms (asg_analysis.stats.compare: each arm's mean 
 bootstrap 95 % interval, the ratio of the means, the Mann-Whitney U test of the per-seed rates),
 with Fisher's exact test of the pooled counts beside it.
 
-    python3 -m asg_analysis.stack_study results/depth \\
+    python3 -m asg_analysis.studies.stack_study results/depth \\
         exp1-depth-td3-per-asp-s0,exp1-depth-td3-per-asp-s1,exp1-depth-td3-per-asp-s2 \\
         exp1-depth-random-s0,exp1-depth-random-s1,exp1-depth-random-s2 --json results/depth/seeds.json --markdown
 """

@@ -16,7 +16,7 @@ camera image. Per frame, on four sets of pixels:
 
 Shares are pooled over pixels, by the class (mesh) of the obstacle hit. Frames where the hit
 obstacle covers fewer than MIN_HIT_PX pixels (behind the camera, hidden) count only for the
-ground rows. `python3 -m asg_analysis.mechanism EXPORT... --out results/hardening/mechanism`
+ground rows. `python3 -m asg_analysis.studies.mechanism EXPORT... --out results/hardening/mechanism`
 writes `mechanism.json`; `--doc docs/design-loop.md` writes its table between the
 `<!-- mechanism:begin -->` markers (tests/test_mechanism.py checks both against the exports).
 """
@@ -212,7 +212,7 @@ def markdown(result: dict) -> str:
     return "\n".join(lines)
 
 
-BEGIN = "<!-- mechanism:begin (python3 -m asg_analysis.mechanism; tests/test_mechanism.py) -->"
+BEGIN = "<!-- mechanism:begin (python3 -m asg_analysis.studies.mechanism; tests/test_mechanism.py) -->"
 END = "<!-- mechanism:end -->"
 
 
@@ -232,7 +232,7 @@ def write_doc(doc: str, table: str) -> None:
 def main(argv=None) -> int:
     from asg_perception.segmenter_node import resolve_model
 
-    ap = argparse.ArgumentParser(prog="python3 -m asg_analysis.mechanism", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python3 -m asg_analysis.studies.mechanism", description=__doc__.split("\n")[0])
     ap.add_argument("exports", nargs="+", help="campaign exports (CAMPAIGN.jsonl.gz) of the stack under test")
     ap.add_argument("--out", required=True, help="folder for scenarios, poses, frames and mechanism.json")
     ap.add_argument("--under-test", default="flawed", help="the stack under test's U-Net (name or .pt)")

@@ -4,7 +4,7 @@ it learns, and what its warm-up costs), where it places obstacles relative to th
 lateral offset of every obstacle, and of the obstacle each flaw collision hit), and the share of
 its scenarios that are candidates re-run on the references (what attribution costs it).
 
-    python3 -m asg_analysis.flaw_budget results/flaw_study --figure docs/images/flaw_study_budget.png
+    python3 -m asg_analysis.studies.flaw_budget results/flaw_study --figure docs/images/flaw_study_budget.png
 
 Read by `protocol analyse --doc` once every confirmatory campaign is in (it writes the table and
 the figure beside the result)."""

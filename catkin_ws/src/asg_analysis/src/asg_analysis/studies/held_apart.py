@@ -8,8 +8,8 @@ per-pixel evaluation files pool the frames, so the frame set is rendered again a
 evaluated with and without the twins' frames (scripts/repro/heldout_twins.sh writes
 results/hardening/twins/; the block shows those columns once they are there).
 
-    python3 -m asg_analysis.held_apart [results/hardening] [--doc docs/design-loop.md] [--check]
-    python3 -m asg_analysis.held_apart --frames-without-twins SET/frames OUT   # a dataset without them
+    python3 -m asg_analysis.studies.held_apart [results/hardening] [--doc docs/design-loop.md] [--check]
+    python3 -m asg_analysis.studies.held_apart --frames-without-twins SET/frames OUT   # a dataset without them
 
 `--doc` rewrites the page's `<!-- twins:begin -->` block; `--check` exits 1 when it is not in
 step (tests/test_held_apart.py checks it too, with code of its own).
@@ -29,7 +29,7 @@ from asg_agent.paths import REPO
 HARD = os.path.join(REPO, "results", "hardening")
 SET = "heldout-findings"
 SUITE = "suite-r4pilot"
-BEGIN = "<!-- twins:begin (python3 -m asg_analysis.held_apart --doc docs/design-loop.md; tests/test_held_apart.py) -->"
+BEGIN = "<!-- twins:begin (python3 -m asg_analysis.studies.held_apart --doc docs/design-loop.md; tests/test_held_apart.py) -->"
 END = "<!-- twins:end -->"
 #: what rebuilds the sets at the radius (scripts/repro/harden.sh skips an output that exists)
 TWINS = "twins"  # results/hardening/twins: the set rendered again, evaluated with and without the twins
@@ -75,7 +75,7 @@ def measure(folder: str = HARD, tol_m: float = None) -> dict:
     from asg_agent.campaign import overlap
     from asg_agent.records.export import read_export
 
-    from asg_analysis.hardening import suite_passes
+    from asg_analysis.studies.hardening import suite_passes
 
     tol = overlap.TOL_M if tol_m is None else tol_m
     sets, made = held_apart_sets(folder)
@@ -178,7 +178,7 @@ def without_twins(frames: str, out: str, folder: str = HARD) -> int:
 
 
 def _arms(result: dict) -> List[str]:
-    from asg_analysis.hardening import _order
+    from asg_analysis.studies.hardening import _order
 
     return sorted(result[SUITE]["passed"], key=_order)
 
@@ -271,7 +271,9 @@ def write_doc(doc: str, text: str) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python3 -m asg_analysis.held_apart", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(
+        prog="python3 -m asg_analysis.studies.held_apart", description=__doc__.split("\n\n")[0]
+    )
     ap.add_argument("folder", nargs="?", default=HARD, help="results/hardening")
     ap.add_argument("--tol-m", type=float, default=None, help="[m] (default: overlap's, the augmentation's radius)")
     ap.add_argument("--doc", help="a Markdown file whose twins block to rewrite")

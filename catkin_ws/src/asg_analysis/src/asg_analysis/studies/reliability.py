@@ -1,7 +1,7 @@
 """docs/reliability.md's soak table, generated from the soak's report (results/reliability/soak.json,
 written by asg_agent.cli.soak through asg_agent.campaign.soak_check; no ROS):
 
-    python3 -m asg_analysis.reliability results/reliability/soak.json --doc docs/reliability.md [--check]
+    python3 -m asg_analysis.studies.reliability results/reliability/soak.json --doc docs/reliability.md [--check]
 
 One row: scenarios run, kills (SIGKILL) by node type, agent restarts, re-queues, lost, duplicates,
 stored as ERROR, SQLite integrity, and for three-stack attribution the classes and the candidates
@@ -62,7 +62,7 @@ def main(argv=None) -> int:
     if not a.doc:
         print(block)
         return 0
-    from asg_analysis.seed_tables import rewrite_block
+    from asg_analysis.studies.seed_tables import rewrite_block
 
     return rewrite_block(a.doc, BEGIN, END, block, a.check, "reliability")
 

@@ -2,7 +2,7 @@
 both reference stacks whatever they were (`rerun run EXPORT --select first --top N`, once per
 stack), classed by the one rule of scoring/attribution.py, against what the campaign stored.
 
-    python3 -m asg_analysis.candidates EXPORT.jsonl.gz FULL.jsonl GROUND_TRUTH.jsonl [--json OUT]
+    python3 -m asg_analysis.studies.candidates EXPORT.jsonl.gz FULL.jsonl GROUND_TRUTH.jsonl [--json OUT]
 
 Prints, for the candidates, whether the full re-run gives each the class the campaign stored
 (the runs are deterministic, so it must), and for the scenarios that were not candidates, the

@@ -7,7 +7,7 @@ from typing import Dict
 
 import numpy as np
 
-from asg_analysis.attributed_tables import ATTRIBUTED_SCORES
+from asg_analysis.studies.attributed_tables import ATTRIBUTED_SCORES
 from asg_analysis.campaign_metrics import _perception_collision, _ref, attribute_value, fmt, obstacles_hit
 
 
