@@ -176,16 +176,24 @@ def test_the_rules_check_prose_is_its_exports_counted_by_a_plain_loop():
         return [r for r in rows if r.get("attribution") == "flaw"], len(rows)
 
     fresh, n1 = counts([os.path.join(d4, "dist4-rule-top-s40.jsonl.gz")])
-    base, n0 = counts(sorted(glob.glob(os.path.join(d4, "dist4-random-own-s3?.jsonl.gz"))))
     learnt = json.load(open(os.path.join(d4, "rules-ops-wide.json")))["rules"][0]
     barberry = sum(r["meshes"][r["collision_with"]] == "barberry" for r in fresh if r.get("collision_with") is not None)
-    p = fisher_exact([[len(fresh), n1 - len(fresh)], [len(base), n0 - len(base)]])[1]
     text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
+
+    def against(pattern):
+        base, n0 = counts(sorted(glob.glob(os.path.join(d4, pattern))))
+        p = fisher_exact([[len(fresh), n1 - len(fresh)], [len(base), n0 - len(base)]])[1]
+        return len(fresh) / n1 / (len(base) / n0), p
+
+    ratio, p = against("dist4-random-own-s3?.jsonl.gz")  # every block's base run so far
     said = (
         f"{100 * len(fresh) / n1:.0f} % of its layouts were flaw findings against {100 * learnt['precision']:.0f} % "
-        f"in the campaigns it was learnt from, and {len(fresh) / n1 / (len(base) / n0):.2f}x the base rate "
-        f"(Fisher p = {p:.3f})"
+        f"in the campaigns it was learnt from, and {ratio:.2f}x the base rate of the random-own campaigns of the "
+        f"blocks run so far (Fisher p = {p:.3f}; "
     )
     assert said in text, said
+    ratio0, p0 = against("dist4-random-own-s30.jsonl.gz")
+    assert f"against block 0's alone it was {ratio0:.2f}x, p = {p0:.3f}" in text
+    assert ("do not separate the rule from the base rate at 5 %" in text) == (p >= 0.05)
     assert f"{barberry} of the rule's {len(fresh)} fresh findings hit a barberry" in text
     assert learnt["text"] == "barberry d<2m q3 >= 3"
