@@ -116,3 +116,19 @@ def test_the_suite_side_by_side_against_one_at_a_time_and_round_5_on_one_cpu():
     assert f"each file took {grew:.2f}x as long" in text
     assert f"{wall_s(lanes) / wall_s(r5):.2f}x round 5's end" in text
     assert f"{wall_s(one) / wall_s(r5):.2f}x before" in text
+
+
+def test_round_7_against_round_6s_end_back_to_back_is_what_the_records_say():
+    r7, r6 = record("r7-a67df1c-epyc-avx2.json"), record("r6-c6378da-epyc-avx2.json")
+    assert r7["cpu_class"] == r6["cpu_class"]
+    text = prose()
+    assert f"`r7-a67df1c-epyc-avx2.json` took {wall_s(r7):,} s for {len(r7['files'])} files" in text
+    assert f"`r6-c6378da-epyc-avx2.json` (round 6's last commit) {wall_s(r6):,} s for {len(r6['files'])} files" in text
+    ratio = wall_s(r7) / wall_s(r6)
+    assert f"{ratio:.2f}x, **slower by {wall_s(r7) - wall_s(r6)} s" in text and ratio > 1.0
+    both = set(r7["files"]) & set(r6["files"])
+    new = set(r7["files"]) - set(r6["files"])
+    assert (
+        f"The {len(both)} files both ran took {sum(r6['files'][k] for k in both):,.0f} s of job time before and "
+        f"{sum(r7['files'][k] for k in both):,.0f} s after, the {len(new)} new files {sum(r7['files'][k] for k in new):.0f} s"
+    ) in text
