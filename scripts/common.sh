@@ -34,9 +34,11 @@ APT_PACKAGES=(
 # that scripts/test.sh runs (ruff.toml; a static binary). ONNX Runtime, OpenVINO and onnx (for
 # int8 quantization) are measured beside torch in issue #24's backend table
 # (python3 -m asg_perception.runtimes); the versions are the last built for numpy 1, and the
-# segmenter node does not use them.
+# segmenter node does not use them. orjson parses the campaign exports (asg_agent.records.export;
+# the same values as the standard library's json, two to three times as fast: the analysis and
+# its tests read each export several times).
 PIP_PACKAGES=(tensorboardX==2.6.2.2 cma==3.3.0 numpy-groupies==0.11.2 ribs==0.7.1 ruff==0.8.4
-  onnxruntime==1.19.2 openvino==2024.4.0 onnx==1.16.2)
+  onnxruntime==1.19.2 openvino==2024.4.0 onnx==1.16.2 orjson==3.10.12)
 
 log() { printf '\033[1m[asg]\033[0m %s\n' "$*"; }
 

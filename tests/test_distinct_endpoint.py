@@ -54,7 +54,8 @@ def test_the_issue_table_by_a_plain_loop_and_by_the_library(arm):
 
     paths = sorted(glob.glob(os.path.join(V3, f"flaw3-{arm}-s1[0-4].jsonl.gz")))
     assert len(paths) == 5
-    plain = {r: [_plain_distinct(_rows(p), float(r)) for p in paths] for r in ("1", "2", "5")}
+    rows = [_rows(p) for p in paths]
+    plain = {r: [_plain_distinct(x, float(r)) for x in rows] for r in ("1", "2", "5")}
     lib = [endpoints.campaign(*read_export(p), budget=300) for p in paths]
     for r in ("1", "2", "5"):
         assert [c["distinct"][r] for c in lib] == plain[r]

@@ -29,7 +29,7 @@ MODULE_KEYS = {
     "tqdm": "python3-tqdm",
 }
 #: wheels from PyPI, pinned by scripts/common.sh (no rosdep key)
-PIP = {"cma", "ribs", "tensorboardX", "onnxruntime", "openvino"}
+PIP = {"cma", "ribs", "tensorboardX", "onnxruntime", "openvino", "orjson"}
 BINARY = re.compile(r"find_binary\(\s*\"(\w+)\"\s*,\s*\"(\w+)\"")
 
 

@@ -340,3 +340,22 @@ def test_reward_auto_stands_for_what_the_references_can_see_and_is_stored_resolv
     assert rewards.GRADED_CAP > rewards.failure_reward("SUCCESS", 0.5) > rewards.failure_reward("SUCCESS", 3.0) > 0.0
     assert rewards.failure_reward("SUCCESS", 9.0) == 0.0 and rewards.REGISTRY["failure"].finding_at == 1.0
     assert rewards.AUTO not in rewards.REWARDS  # a name for a choice, never a reward of its own
+
+
+@pytest.mark.parametrize("name", ["flaw_study3/flaw3-default-s10", "distinct_v4/dist4-route-random-s30"])
+def test_read_export_gives_the_standard_librarys_values(name):
+    """read_export parses with orjson: every value, type and float bit of a committed export is
+    what json.loads gives (an attributed flaw-reward campaign and a proxy one)."""
+    import gzip
+    import json
+
+    from asg_agent.paths import REPO
+    from asg_agent.records.export import read_export
+
+    path = os.path.join(REPO, "results", name + ".jsonl.gz")
+    campaign_, rows = read_export(path)
+    with gzip.open(path, "rt", encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    assert json.loads(lines[0])["campaign"] == campaign_ and len(rows) == len(lines) - 1 > 100
+    # dumps writes each float by repr (its shortest round trip) and keeps int apart from float
+    assert json.dumps(rows) == json.dumps([json.loads(line) for line in lines[1:]])

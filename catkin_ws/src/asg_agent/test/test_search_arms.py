@@ -82,6 +82,37 @@ def test_failure_modes_of_findings():
     assert fm.coverage([m, m1], ["juniper", "barberry"]) == 2 / 56
 
 
+def test_shadow_ahead_is_the_point_by_point_answer():
+    """shadow_ahead asks about its 20 x 11 grid at once (asg_scenario.votes.shadow_mask): the
+    same answer as asking in_cast_shadow point by point, on random layouts, suns and trajectories."""
+    from asg_agent.records.scenes import shadow_ahead
+    from asg_scenario.layout import with_positions
+    from asg_scenario.votes import in_cast_shadow
+
+    def by_point(req, xy, i):
+        j = min(len(xy) - 1, i + 10)
+        h = xy[j] - xy[i] if j > i else xy[i] - xy[max(0, i - 10)]
+        if np.linalg.norm(h) < 1e-6:
+            return False
+        h = h / np.linalg.norm(h)
+        n = np.array([-h[1], h[0]])
+        return any(
+            in_cast_shadow(req, *(xy[i] + a * h + b * n)) for a in np.arange(1.0, 20.5) for b in np.arange(-5.0, 5.5)
+        )
+
+    exp = load_experiment(EXP)
+    rng = np.random.default_rng(3)
+    answers = []
+    for _ in range(60):
+        req = with_positions(exp.scenario, rng.uniform(0.0, 100.0, (exp.position_dim // 2, 2)).tolist())
+        req["textural"].update(sun_inclination_deg=float(rng.uniform(3, 60)), sun_yaw_deg=float(rng.uniform(0, 360)))
+        xy = np.cumsum(rng.normal(0.3, 0.4, (80, 2)), axis=0) + 20.0
+        for i in (0, 40, 79):
+            answers.append(shadow_ahead(req, xy, i))
+            assert answers[-1] is by_point(req, xy, i)
+    assert 0 < sum(answers) < len(answers)
+
+
 def test_dense_rewards_see_how_close_a_run_came():
     from asg_agent.testing.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign

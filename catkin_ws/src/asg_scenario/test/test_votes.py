@@ -3,7 +3,7 @@
 import os
 
 from asg_scenario import load_scenario
-from asg_scenario.votes import in_cast_shadow, phantom_votes, shadow_votes
+from asg_scenario.votes import in_cast_shadow, phantom_votes, shadow_mask, shadow_votes
 
 SHADOWS = os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "scenarios", "shadows.yaml")
 
@@ -38,3 +38,18 @@ def test_phantom_and_shadow_votes():
     # Not placed (removed by the worker), the juniper explains nothing and casts no shadow.
     assert phantom_votes(s, votes, 1.0, {(0, 0)}) == 3
     assert shadow_votes(s, votes, 1.0, {(0, 0)}) == 0
+
+
+def test_shadow_mask_is_in_cast_shadow_point_by_point():
+    """The array form gives in_cast_shadow's answer at every point of a 0.1 m grid around the
+    juniper (edges included), under three suns and with the obstacle removed."""
+    import numpy as np
+
+    xs, ys = np.meshgrid(np.arange(25.0, 60.0, 0.1), np.arange(35.0, 55.0, 0.1))
+    for inc, yaw, removed in ((18.0, 10.0, frozenset()), (3.0, 200.0, frozenset()), (45.0, 95.0, {(0, 0)})):
+        s = load_scenario(SHADOWS)
+        s["textural"].update(sun_inclination_deg=inc, sun_yaw_deg=yaw)
+        mask = shadow_mask(s, xs, ys, removed)
+        want = np.array([[in_cast_shadow(s, x, y, 0.0, removed) for x, y in zip(rx, ry)] for rx, ry in zip(xs, ys)])
+        assert mask.shape == xs.shape and np.array_equal(mask, want)
+        assert removed or 100 < want.sum() < want.size  # the shadow is on the grid, and not all of it

@@ -55,6 +55,30 @@ def in_cast_shadow(
     return False
 
 
+def shadow_mask(scenario: dict, xs, ys, removed: Set[Tuple[int, int]] = frozenset()):
+    """in_cast_shadow (margin 0) of many ground points at once: a boolean array shaped as xs.
+    The same arithmetic in the same order, element by element, so the same answer point by
+    point (test_votes.py compares them); numpy, for the callers that ask about a grid of points
+    (asg_agent.records.scenes.shadow_ahead)."""
+    import numpy as np
+
+    xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
+    out = np.zeros(xs.shape, dtype=bool)
+    tex = scenario["textural"]
+    inc = math.radians(max(float(tex["sun_inclination_deg"]), MIN_SUN_DEG))
+    yaw = math.radians(float(tex["sun_yaw_deg"]))
+    dx, dy = -math.cos(yaw), -math.sin(yaw)
+    for mesh, inst in _placed(scenario, removed):
+        if not inst["cast_shadow"]:
+            continue
+        length = mesh.height * inst["scale"] / math.tan(inc)
+        radius = mesh.collision_radius * inst["scale"]
+        px, py = xs - inst["x"], ys - inst["y"]
+        t = px * dx + py * dy
+        out |= (0.0 <= t) & (t <= length) & (np.abs(px * dy - py * dx) <= radius * (1.0 - t / length) + 0.0)
+    return out
+
+
 def shadow_votes(
     scenario: dict, votes: Iterable[dict], cell: float, removed: Set[Tuple[int, int]] = frozenset()
 ) -> int:

@@ -134,11 +134,16 @@ def export(store: Store, campaign: str, out: str, hz: float = 10.0) -> int:
 
 
 def read_export(path: str):
+    """(campaign, rows) of an export. orjson parses it (scripts/common.sh pins it): the same
+    values as json.loads, numbers included (test_campaign_outputs.py compares them), in less
+    than half the time."""
     import gzip
 
-    with gzip.open(path, "rt", encoding="utf-8") as f:
-        head = json.loads(f.readline())
-        rows = [json.loads(line) for line in f]
+    import orjson
+
+    with gzip.open(path, "rb") as f:
+        head = orjson.loads(f.readline())
+        rows = [orjson.loads(line) for line in f]
     return head["campaign"], rows
 
 

@@ -37,7 +37,7 @@ def scenario_of(campaign: dict, row: dict) -> dict:
 def shadow_ahead(req: dict, xy: np.ndarray, i: int, reach: float = 20.0, half_width: float = 5.0) -> bool:
     """Whether an obstacle's cast shadow lies in the corridor `reach` m ahead of trajectory point i
     (heading from the point 1 s later), `half_width` m to either side: ground the camera sees."""
-    from asg_scenario.votes import in_cast_shadow
+    from asg_scenario.votes import shadow_mask
 
     j = min(len(xy) - 1, i + 10)
     h = xy[j] - xy[i] if j > i else xy[i] - xy[max(0, i - 10)]
@@ -45,8 +45,7 @@ def shadow_ahead(req: dict, xy: np.ndarray, i: int, reach: float = 20.0, half_wi
         return False
     h = h / np.linalg.norm(h)
     n = np.array([-h[1], h[0]])
-    return any(
-        in_cast_shadow(req, *(xy[i] + a * h + b * n))
-        for a in np.arange(1.0, reach + 0.5, 1.0)
-        for b in np.arange(-half_width, half_width + 0.5, 1.0)
-    )
+    a = np.arange(1.0, reach + 0.5, 1.0)[:, None, None]
+    b = np.arange(-half_width, half_width + 0.5, 1.0)[None, :, None]
+    p = xy[i] + a * h + b * n  # the grid of points, each as (xy[i] + a h) + b n
+    return bool(shadow_mask(req, p[..., 0], p[..., 1]).any())
