@@ -30,13 +30,14 @@ def _rows(path):
         return sorted((json.loads(line) for line in f), key=lambda r: r["job"])[:300]
 
 
-def _plain_distinct(rows, radius):
-    """The definition, read from the issue and written out: each flaw finding's place is the
-    obstacle it hit (class, position) or, without contact, where it ended; it is distinct when no
-    earlier distinct one of its class lies closer than `radius`."""
+def _plain_distinct(rows, radius, finding="flaw"):
+    """The definition, read from the issue and written out: each flaw finding's place (or a
+    pair's regression's, finding="regression") is the obstacle it hit (class, position) or,
+    without contact, where it ended; it is distinct when no earlier distinct one of its class lies
+    closer than `radius`."""
     kept = []
     for r in rows:
-        if r.get("attribution") != "flaw":
+        if r.get("attribution") != finding:
             continue
         if r["termination"] == "COLLISION" and r.get("collision_with") is not None:
             cls, (x, y) = r["meshes"][r["collision_with"]], r["positions"][r["collision_with"]]
@@ -198,3 +199,23 @@ def test_the_rules_check_prose_is_its_exports_counted_by_a_plain_loop():
     assert ("do not separate the rule from the base rate at 5 %" in text) == (p >= 0.05)
     assert f"{barberry} of the rule's {len(fresh)} fresh findings hit a barberry" in text
     assert learnt["text"] == "barberry d<2m q3 >= 3"
+
+
+def test_round_6s_depth_pair_recounted_at_2_m_collapsed_as_the_record_says():
+    """The v4 record's depth transfer section: round 6's depth pair (seeds 49-51, 200 scenarios)
+    recounted by the plain loop, regressions distinct at 2 m."""
+    folder = os.path.join(REPO, "results", "regression_depth_rc4")
+    per, found = {}, {}
+    for arm in ("default", "route-random"):
+        paths = sorted(glob.glob(os.path.join(folder, f"depth-pair4-{arm}-s[45]?.jsonl.gz")))
+        assert len(paths) == 3
+        rows = [_rows(p)[:200] for p in paths]
+        per[arm] = 1000 * sum(_plain_distinct(x, 2.0, "regression") for x in rows) / 600
+        found[arm] = sum(1 for x in rows for r in x if r.get("attribution") == "regression")
+    ratio = found["default"] / found["route-random"]
+    text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
+    said = (
+        f"its default found {ratio:.2f}x route-random's regressions and fewer distinct ones, "
+        f"{per['default']:.1f} against {per['route-random']:.1f} per 1,000"
+    )
+    assert said in text and per["default"] < per["route-random"], said

@@ -30,17 +30,20 @@ def test_a_block_holds_one_seed_of_every_arm_in_an_order_drawn_from_its_seed():
 
 
 def test_the_transfer_plans_are_the_protocols_with_the_launchs_false():
-    """protocol v4's transfer (Exp. 3, Exp. 6, gap_nav): each committed plan is the protocol's block,
-    and gap_nav's `attribution: false` is written as the launch reads it (it wrote "False")."""
-    for scene in ("exp3", "exp6", "gapnav"):
+    """protocol v4's transfer (Exp. 3, Exp. 6, gap_nav, the depth pair): each committed plan is the
+    protocol's block, and gap_nav's `attribution: false` is written as the launch reads it (it
+    wrote "False"); the depth pair runs with its release beside it."""
+    attribution = {}
+    for scene in ("exp3", "exp6", "gapnav", "depth"):
         with open(os.path.join(REPO, "experiments", f"protocol-distinct-v4-{scene}.yaml")) as f:
             protocol = yaml.safe_load(f)
         for k in range(3):
             cs = blocks.block(protocol, {}, k)
             with open(os.path.join(REPO, "results", "distinct_v4_transfer", f"{scene}-block-{k}.txt")) as f:
                 assert f.read() == blocks.plan_text(cs, k)
-    gap = [a for c in cs for a in c["args"] if a.startswith("attribution:=")]
-    assert gap == ["attribution:=false"] * 2
+        attribution[scene] = [a for c in cs for a in c["args"] if a.startswith("attribution:=")]
+    assert attribution["gapnav"] == ["attribution:=false"] * 2
+    assert attribution["depth"] == ["attribution:=release"] * 2
 
 
 def test_a_block_past_the_seeds_is_refused(capsys, tmp_path):

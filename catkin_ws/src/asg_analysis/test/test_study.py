@@ -51,7 +51,7 @@ def test_a_bad_entry_or_a_protocol_without_report_is_named(tmp_path, capsys):
 
 
 def test_the_v4_record_is_what_its_protocols_generate():
-    for name in ("distinct-v4", "distinct-v4-exp3", "distinct-v4-exp6", "distinct-v4-gapnav"):
+    for name in ("distinct-v4", "distinct-v4-exp3", "distinct-v4-exp6", "distinct-v4-gapnav", "distinct-v4-depth"):
         assert (
             study.run(os.path.join(REPO, "experiments", f"protocol-{name}.yaml"), check=True, out=open(os.devnull, "w"))
             == 0

@@ -153,10 +153,12 @@ def line(c: Dict) -> str:
     )
 
 
-def markdown(cs: List[Dict]) -> str:
-    """A table of campaigns' endpoints, one row each (what docs/experiments.md's blocks hold)."""
+def markdown(cs: List[Dict], target: Optional[str] = "flaw") -> str:
+    """A table of campaigns' endpoints, one row each (what docs/experiments.md's blocks hold); the
+    findings column names the target class (a failure where target is None)."""
     out = [
-        "| campaign | scenarios | flaw findings | distinct at 1 / 2 / 5 m | distinct per 1,000 (2 m) | distinct layouts | modes |",
+        f"| campaign | scenarios | {target or 'failure'} findings | distinct at 1 / 2 / 5 m | distinct per 1,000 (2 m) "
+        "| distinct layouts | modes |",
         "|---|---|---|---|---|---|---|",
     ]
     for c in cs:
@@ -206,9 +208,9 @@ def main(argv=None) -> int:
             return 0
         cs = [campaign(*read_export(path), budget=a.budget, target=target) for path in sorted(a.exports)]
         if a.doc:
-            write_block(a.doc[0], a.doc[1], markdown(cs))
+            write_block(a.doc[0], a.doc[1], markdown(cs, target))
         elif cs:
-            print(markdown(cs) if a.markdown else "\n".join(line(c) for c in cs))
+            print(markdown(cs, target) if a.markdown else "\n".join(line(c) for c in cs))
     except (OSError, ValueError) as e:
         print(f"endpoints: {e}", file=sys.stderr)
         return 2

@@ -83,7 +83,9 @@ def render(entry: Dict) -> str:
         paths = _paths(entry["exports"])
         if not paths:
             raise FileNotFoundError(f"no export matches {entry['exports']}")
-        return endpoints.markdown([endpoints.campaign(*read_export(p), budget=budget, target=target) for p in paths])
+        return endpoints.markdown(
+            [endpoints.campaign(*read_export(p), budget=budget, target=target) for p in paths], target
+        )
     arms = {name: _paths(pattern) for name, pattern in entry["arms"].items()}
     empty = [name for name, ps in arms.items() if not ps]
     if empty:
