@@ -32,6 +32,20 @@ def phantom_votes(
     return len(_unexplained(scenario, list(votes), cell, removed))
 
 
+def _shadows(scenario: dict, removed: Set[Tuple[int, int]]):
+    """(dx, dy, [(x, y, length, radius)]): the direction along every shadow (away from the sun)
+    and each shadow-casting obstacle's foot [m], shadow length [m] and radius at its foot [m]."""
+    tex = scenario["textural"]
+    inc = math.radians(max(float(tex["sun_inclination_deg"]), MIN_SUN_DEG))
+    yaw = math.radians(float(tex["sun_yaw_deg"]))
+    casters = [
+        (inst["x"], inst["y"], mesh.height * inst["scale"] / math.tan(inc), mesh.collision_radius * inst["scale"])
+        for mesh, inst in _placed(scenario, removed)
+        if inst["cast_shadow"]
+    ]
+    return -math.cos(yaw), -math.sin(yaw), casters
+
+
 def in_cast_shadow(
     scenario: dict, x: float, y: float, margin: float = 0.0, removed: Set[Tuple[int, int]] = frozenset()
 ) -> bool:
@@ -39,16 +53,9 @@ def in_cast_shadow(
     shadow of a conifer-like shape, a strip from the obstacle's foot away from the sun, as long
     as height / tan(inclination) and as wide as the obstacle at its foot, narrowing to its
     tip; margin widens it."""
-    tex = scenario["textural"]
-    inc = math.radians(max(float(tex["sun_inclination_deg"]), MIN_SUN_DEG))
-    yaw = math.radians(float(tex["sun_yaw_deg"]))
-    dx, dy = -math.cos(yaw), -math.sin(yaw)  # along the shadow
-    for mesh, inst in _placed(scenario, removed):
-        if not inst["cast_shadow"]:
-            continue
-        length = mesh.height * inst["scale"] / math.tan(inc)
-        radius = mesh.collision_radius * inst["scale"]
-        px, py = x - inst["x"], y - inst["y"]
+    dx, dy, casters = _shadows(scenario, removed)
+    for ox, oy, length, radius in casters:
+        px, py = x - ox, y - oy
         t = px * dx + py * dy
         if 0.0 <= t <= length and abs(px * dy - py * dx) <= radius * (1.0 - t / length) + margin:
             return True
@@ -64,16 +71,9 @@ def shadow_mask(scenario: dict, xs, ys, removed: Set[Tuple[int, int]] = frozense
 
     xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
     out = np.zeros(xs.shape, dtype=bool)
-    tex = scenario["textural"]
-    inc = math.radians(max(float(tex["sun_inclination_deg"]), MIN_SUN_DEG))
-    yaw = math.radians(float(tex["sun_yaw_deg"]))
-    dx, dy = -math.cos(yaw), -math.sin(yaw)
-    for mesh, inst in _placed(scenario, removed):
-        if not inst["cast_shadow"]:
-            continue
-        length = mesh.height * inst["scale"] / math.tan(inc)
-        radius = mesh.collision_radius * inst["scale"]
-        px, py = xs - inst["x"], ys - inst["y"]
+    dx, dy, casters = _shadows(scenario, removed)
+    for ox, oy, length, radius in casters:
+        px, py = xs - ox, ys - oy
         t = px * dx + py * dy
         out |= (0.0 <= t) & (t <= length) & (np.abs(px * dy - py * dx) <= radius * (1.0 - t / length) + 0.0)
     return out
