@@ -5,6 +5,7 @@ import glob
 import os
 import re
 
+import pytest
 import yaml
 
 from asg_analysis import endpoints, study
@@ -168,3 +169,27 @@ def test_the_digests_table_quotes_each_file(tmp_path):
     d.write_text("120 0e0d360e6744453582c881296539cd8148258ccd4d60695b9713ba6403f30068\n")
     text = study.render({"block": "b", "table": "digests", "digests": {"before (x)": str(d)}})
     assert text == f"- before (x): `{d}`, 120 results, 0e0d360e\n"
+
+
+def test_exports_of_one_experiment_may_differ_in_its_comments_only(tmp_path):
+    """read_rows takes campaigns whose stored experiment files differ in comments alone (a header
+    reworded between two blocks of a study) and refuses one whose keys differ."""
+    import gzip
+    import json
+
+    from asg_analysis.exports import read_rows
+
+    def export(name, text):
+        path = tmp_path / f"{name}.jsonl.gz"
+        with gzip.open(path, "wt") as f:
+            f.write(json.dumps({"campaign": {"name": name, "experiment_text": text}}) + "\n")
+            f.write(json.dumps({"job": 0, "termination": "SUCCESS"}) + "\n")
+        return str(path)
+
+    a = export("a", "# the old header\nname: e\nsim_timeout: 60.0\n")
+    b = export("b", "# the new header,\n# two lines\nname: e\nsim_timeout: 60.0\n")
+    c = export("c", "# the old header\nname: e\nsim_timeout: 30.0\n")
+    rows, camp = read_rows([a, b])
+    assert [r["_campaign"] for r in rows] == ["a", "b"] and camp["name"] == "a"
+    with pytest.raises(ValueError, match="another experiment than"):
+        read_rows([a, c])

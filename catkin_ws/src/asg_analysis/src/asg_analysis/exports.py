@@ -28,11 +28,20 @@ def read_rows(exports: List[str], store: str = "", campaign: str = "") -> Tuple[
     rows, camp = [], None
     for path in exports:
         c, r = read_export(path)
-        if camp is not None and c.get("experiment_text") != camp.get("experiment_text"):
+        if camp is not None and not same_experiment(c, camp):
             raise ValueError(f"{path}: another experiment than {exports[0]}'s")
         camp = camp or c
         rows += [dict(x, _campaign=c.get("name", path)) for x in r]
     return rows, camp
+
+
+def same_experiment(a: dict, b: dict) -> bool:
+    """Whether two campaigns ran the same experiment: the same keys and values of the experiment
+    file they stored (its comments aside: a reworded header is the same experiment)."""
+    import yaml
+
+    ta, tb = a.get("experiment_text"), b.get("experiment_text")
+    return ta == tb or (ta is not None and tb is not None and yaml.safe_load(ta) == yaml.safe_load(tb))
 
 
 def latest_campaign(store: str) -> str:
