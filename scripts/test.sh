@@ -45,8 +45,11 @@ if [ "${ASG_TEST_RUNNER:-parallel}" = ctest ]; then
   # CTest runs every registered test (gtest, rostest, and the pytest files and folders that
   # scripts/ci/pytest.cmake registers), ordered by the costs it learnt in this build folder
   log "gtest + rostest + pytest by ctest -j ${ASG_TEST_JOBS:-$(nproc)} (log in build/test_logs/ctest.log)"
+  # ctest's own verdict counts too: a test that could not even start writes no JUnit file
+  ctest_rc=0
   (cd "$WS/build" && ctest -j "${ASG_TEST_JOBS:-$(nproc)}" --timeout 2400 --output-log "$WS/build/test_logs/ctest.log" \
-      | grep -E '^ *[0-9]+/[0-9]+ Test|tests passed|tests failed') || true
+      > "$WS/build/test_logs/ctest.out" 2>&1) || ctest_rc=$?
+  grep -E '^ *[0-9]+/[0-9]+ Test|tests passed|tests failed' "$WS/build/test_logs/ctest.out" || true
 else
   log "gtest + rostest + pytest, ${ASG_TEST_JOBS:-$(nproc)} side by side (logs in build/test_logs/)"
   /usr/bin/python3 "$REPO/scripts/ci/run_parallel.py" "$WS" "$REPO" "$RESULTS" "$WS/build/test_logs" \
@@ -54,3 +57,7 @@ else
 fi
 
 /usr/bin/python3 "$REPO/scripts/ci/summarize_tests.py" "$RESULTS"
+if [ "${ctest_rc:-0}" -ne 0 ]; then
+  log "ctest failed (exit $ctest_rc): see $WS/build/test_logs/ctest.log"
+  exit "$ctest_rc"
+fi

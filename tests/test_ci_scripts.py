@@ -266,3 +266,21 @@ def test_ctest_knows_every_pytest_file_and_folder_and_run_parallel_leaves_them_t
     jobs = parallel().ctest_jobs(os.path.join(REPO, "catkin_ws"), str(tmp_path), {})
     assert jobs and not [j.name for j in jobs if "pytest" in " ".join(map(str, j.cmd))]
     assert len(jobs) == len([n for n in names if "_pytest_" not in n])
+
+
+def test_a_registered_pytest_runs_as_ctest_runs_it_and_writes_its_result(tmp_path):
+    """The command CTest holds for a registered pytest folder runs through catkin's run_tests.py
+    (which takes each command as one string: registered as separate words, every pytest folder
+    and file failed at once, with no result file) and writes its JUnit file; scripts/test.sh's
+    ctest branch fails when ctest does."""
+    build = os.path.join(REPO, "catkin_ws", "build")
+    out = subprocess.run(["ctest", "--show-only=json-v1"], cwd=build, capture_output=True, text=True, check=True)
+    test = next(t for t in json.loads(out.stdout)["tests"] if t["name"] == "_ctest_asg_lockstep_pytest_test")
+    xml = test["command"][3]
+    cmd = [str(tmp_path / "r.xml") if c == xml else c.replace(xml, str(tmp_path / "r.xml")) for c in test["command"]]
+    cwd = next(p["value"] for p in test["properties"] if p["name"] == "WORKING_DIRECTORY")
+    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
+    assert 'failures="0"' in (tmp_path / "r.xml").read_text() and "testcase" in (tmp_path / "r.xml").read_text()
+    script = open(os.path.join(REPO, "scripts", "test.sh"), encoding="utf-8").read()
+    assert "|| ctest_rc=$?" in script and 'exit "$ctest_rc"' in script

@@ -10,8 +10,10 @@ get_filename_component(ASG_REPO "${CMAKE_CURRENT_LIST_DIR}/../.." REALPATH)
 
 function(asg_add_pytest name)
   set(xml "${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/pytest-${name}.xml")
+  # run_tests.py takes each command as one shell string (its own options would take pytest's)
+  string(REPLACE ";" " " args "${ARGN}")
   catkin_run_tests_target("pytest" ${name} "pytest-${name}.xml"
-    COMMAND /usr/bin/python3 -m pytest -q -p no:cacheprovider --junitxml=${xml} ${ARGN}
+    COMMAND "/usr/bin/python3 -m pytest -q -p no:cacheprovider --junitxml=${xml} ${args}"
     WORKING_DIRECTORY ${ASG_REPO})
   set_tests_properties(_ctest_${PROJECT_NAME}_pytest_${name} PROPERTIES LABELS pytest)
 endfunction()
