@@ -132,3 +132,23 @@ def test_round_7_against_round_6s_end_back_to_back_is_what_the_records_say():
         f"The {len(both)} files both ran took {sum(r6['files'][k] for k in both):,.0f} s of job time before and "
         f"{sum(r7['files'][k] for k in both):,.0f} s after, the {len(new)} new files {sum(r7['files'][k] for k in new):.0f} s"
     ) in text
+
+
+def test_the_suite_after_the_speed_ups_is_what_its_record_says():
+    r7, r6 = record("r7-9bb0cbc-epyc-avx2.json"), record("r6-c6378da-epyc-avx2.json")
+    assert r7["cpu_class"] == r6["cpu_class"]
+    both = set(r7["files"]) & set(r6["files"])
+    text = prose()
+    assert (
+        f"{wall_s(r7):,} s for {len(r7['files'])} files, {wall_s(r7) / wall_s(r6):.2f}x round 6's end's "
+        f"{wall_s(r6):,} s; the {len(both)} files both ran took {sum(r7['files'][k] for k in both):,.0f} s of job "
+        f"time against {sum(r6['files'][k] for k in both):,.0f} s"
+    ) in text
+
+
+def test_ctest_against_run_parallel_is_what_the_records_say():
+    c, p = record("r7-1acf8cf+ctest-epyc-avx2.json"), record("r7-9bb0cbc-epyc-avx2.json")
+    assert c["cpu_class"] == p["cpu_class"] and c["runner"] == "ctest -j 2"
+    text = prose()
+    assert f"took {wall_s(c):,} s (`r7-1acf8cf+ctest-epyc-avx2.json`, 866 tests) against" in text
+    assert f"run_parallel's {wall_s(p):,} s: {wall_s(c) / wall_s(p):.2f}x" in text
