@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: a short campaign of the adversarial scene generator (train.launch's default: the
-# flaw study v3's winner, surrogate-ts in Exp. 1's route-wide action space on the flaw reward;
-# issue #67) on the
+# distinct-failures study's best arm, novelty-ts in Exp. 1's route-wide action space on the flaw
+# reward; issue #78) on the
 # paper's Exp. 1 with the flawed U-Net in the loop, two scene workers on this machine. Installs what is
 # missing and builds first; prints a progress bar, then the summary (the findings, their distinct
 # places and the replay command of the best), the rules its failures have in common, and where the

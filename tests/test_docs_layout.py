@@ -61,22 +61,34 @@ def test_every_relative_link_of_the_docs_resolves():
 
 
 def test_the_experiments_guide_figures_are_the_exports():
-    """The "search today" block regenerates from the flaw study v3's exports, and the sentence
-    under it quotes its seed 12 row."""
+    """The "search today" block regenerates from protocol v4's confirmatory exports (every block run
+    so far: one seed of each of the four arms), and the sentence under it quotes the row of round
+    6's default with the fewest places."""
     from asg_agent.records.export import read_export
     from asg_analysis import endpoints
 
     paths = []
-    for arm in ("default", "route-random", "map-elites"):
-        paths += sorted(glob.glob(os.path.join(REPO, "results", "flaw_study3", f"flaw3-{arm}-s1?.jsonl.gz")))
-    assert len(paths) == 15
+    for arm in ("default", "route-random", "random-own", "round6"):
+        paths += sorted(glob.glob(os.path.join(REPO, "results", "distinct_v4", f"dist4-{arm}-s3?.jsonl.gz")))
+    assert len(paths) >= 12 and len(paths) % 4 == 0, paths
     rows = sorted((endpoints.campaign(*read_export(p), budget=300) for p in paths), key=lambda c: c["campaign"])
     page = open(guide("experiments.md"), encoding="utf-8").read()
     block = page.split("<!-- search today: begin -->\n", 1)[1].split("<!-- search today: end -->", 1)[0]
     assert block.strip() == endpoints.markdown(rows).strip()
-    s12 = [c for c in rows if c["campaign"] == "flaw3-default-s12"][0]
-    said = f"seed 12: {s12['findings']} flaw findings at {s12['distinct']['2']} places 2 m apart"
-    assert said in " ".join(page.split()), said
+    old = min(
+        (c for c in rows if c["campaign"].startswith("dist4-round6-")), key=lambda c: (c["distinct"]["2"], c["campaign"])
+    )
+    seed = old["campaign"].rsplit("-s", 1)[1]
+    said = f"seed {seed}: {old['findings']} flaw findings at {old['distinct']['2']} places 2 m apart"
+    text = " ".join(page.split())
+    assert said in text, said
+    # "more distinct flaw findings than route-random in every block so far, but fewer flaw modes"
+    by = {c["campaign"]: c for c in rows}
+    seeds = sorted(c["campaign"].rsplit("-s", 1)[1] for c in rows if c["campaign"].startswith("dist4-default-"))
+    more = all(by[f"dist4-default-s{k}"]["distinct"]["2"] > by[f"dist4-route-random-s{k}"]["distinct"]["2"] for k in seeds)
+    modes = [sum(by[f"dist4-{arm}-s{k}"]["modes"] for k in seeds) for arm in ("default", "route-random")]
+    assert more and modes[0] < modes[1], (more, modes)
+    assert "more distinct flaw findings than route-random in every block so far, but fewer flaw modes" in text
 
 
 def test_the_route_wide_files_say_which_layouts_are_not_reachable():

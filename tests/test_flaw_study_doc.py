@@ -381,9 +381,9 @@ def test_the_per_cpu_hour_sensitivity_to_the_machines_is_what_the_exports_say():
     assert min(a) > max(b)
 
 
-def test_the_v3_winner_is_train_launchs_default_and_its_figures_stay_off_the_readme():
+def test_the_v3_winner_then_v4s_choice_is_train_launchs_default_and_figures_stay_off_the_readme():
     # issue #67: version 3's winner (the most flaw findings per CPU-hour, recomputed here from the
-    # exports) is what `bash scripts/train.sh` runs; issue #68 item 7: the README quotes it beside
+    # exports) was what `bash scripts/train.sh` ran, until issue #78's protocol v4 chose novelty-ts; issue #68 item 7: the README quotes it beside
     # its nearest competitor and route-random, with the exact p values, every number from the exports
     per_1000, per_hour = {}, {}
     for arm in ("default", "route-random", "map-elites"):
@@ -402,9 +402,17 @@ def test_the_v3_winner_is_train_launchs_default_and_its_figures_stay_off_the_rea
     choice = json.load(open(os.path.join(REPO, "results", "flaw_study3", "pilot_choice.json"), encoding="utf-8"))
     launch = open(os.path.join(REPO, "launch", "train.launch"), encoding="utf-8").read()
     default = dict(re.findall(r'<arg name="(\w+)" default="([^"]*)"', launch))
-    assert default["method"] == choice["method"] and default["experiment"].endswith(choice["experiment"].split("/")[-1])
-    # reward:=auto stands for flaw under the default three-stack attribution (the campaign stores it so)
-    assert choice["reward"] == "flaw" and default["reward"] == "auto" and default["attribution"] == "three"
+    # issue #78: version 3's winner was train.launch's default until protocol v4's best arm (its
+    # pilot's choice) replaced it; both search the same experiment on the same reward
+    v4 = json.load(open(os.path.join(REPO, "results", "distinct_v4", "pilot_choice.json"), encoding="utf-8"))
+    from asg_agent.scoring.places import PRIMARY_RADIUS_M
+
+    assert choice["method"] == "surrogate-ts" and default["method"] == v4["method"] == "novelty-ts"
+    assert default["tabu"] == "" and v4["tabu_m"] == PRIMARY_RADIUS_M  # the campaign's default radius
+    for c in (choice, v4):
+        assert default["experiment"].endswith(c["experiment"].split("/")[-1])
+        # reward:=auto stands for flaw under the default three-stack attribution (the campaign stores it so)
+        assert c["reward"] == "flaw" and default["reward"] == "auto" and default["attribution"] == "three"
     others = [a for a in mean if a != "default"]
     nearest = max(others, key=lambda a: mean[a][1])
     assert nearest == "map-elites"
