@@ -76,7 +76,8 @@ def test_the_experiments_guide_figures_are_the_exports():
     block = page.split("<!-- search today: begin -->\n", 1)[1].split("<!-- search today: end -->", 1)[0]
     assert block.strip() == endpoints.markdown(rows).strip()
     old = min(
-        (c for c in rows if c["campaign"].startswith("dist4-round6-")), key=lambda c: (c["distinct"]["2"], c["campaign"])
+        (c for c in rows if c["campaign"].startswith("dist4-round6-")),
+        key=lambda c: (c["distinct"]["2"], c["campaign"]),
     )
     seed = old["campaign"].rsplit("-s", 1)[1]
     said = f"seed {seed}: {old['findings']} flaw findings at {old['distinct']['2']} places 2 m apart"
@@ -85,7 +86,9 @@ def test_the_experiments_guide_figures_are_the_exports():
     # "more distinct flaw findings than route-random in every block so far, but fewer flaw modes"
     by = {c["campaign"]: c for c in rows}
     seeds = sorted(c["campaign"].rsplit("-s", 1)[1] for c in rows if c["campaign"].startswith("dist4-default-"))
-    more = all(by[f"dist4-default-s{k}"]["distinct"]["2"] > by[f"dist4-route-random-s{k}"]["distinct"]["2"] for k in seeds)
+    more = all(
+        by[f"dist4-default-s{k}"]["distinct"]["2"] > by[f"dist4-route-random-s{k}"]["distinct"]["2"] for k in seeds
+    )
     modes = [sum(by[f"dist4-{arm}-s{k}"]["modes"] for k in seeds) for arm in ("default", "route-random")]
     assert more and modes[0] < modes[1], (more, modes)
     assert "more distinct flaw findings than route-random in every block so far, but fewer flaw modes" in text
