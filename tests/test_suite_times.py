@@ -152,3 +152,19 @@ def test_ctest_against_run_parallel_is_what_the_records_say():
     text = prose()
     assert f"took {wall_s(c):,} s (`r7-1acf8cf+ctest-epyc-avx2.json`, 866 tests) against" in text
     assert f"run_parallel's {wall_s(p):,} s: {wall_s(c) / wall_s(p):.2f}x" in text
+
+
+def test_round_7_against_round_6s_end_back_to_back_after_the_speed_ups():
+    """Issue #80: the pair run again back to back (round 6's end first), each alone on one machine."""
+    r6 = record("r6-c6378da-b-epyc-avx2.json")
+    r7 = record("r7-d1a8db5-epyc-avx2.json")
+    assert r7["cpu_class"] == r6["cpu_class"]
+    both = set(r7["files"]) & set(r6["files"])
+    text = prose()
+    assert f"`r6-c6378da-b-epyc-avx2.json` took {wall_s(r6):,} s for {len(r6['files'])} files" in text
+    assert f"`r7-d1a8db5-epyc-avx2.json` {wall_s(r7):,} s for {len(r7['files'])} files" in text
+    assert f"{wall_s(r7) / wall_s(r6):.2f}x" in text
+    assert (
+        f"the {len(both)} files both ran took {sum(r6['files'][k] for k in both):,.0f} s of job time before and "
+        f"{sum(r7['files'][k] for k in both):,.0f} s after"
+    ) in text
