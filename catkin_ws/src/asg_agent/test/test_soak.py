@@ -131,3 +131,20 @@ def test_the_report_counts_lost_and_doubled_scenarios(tmp_path):
     store.db.commit()
     res = soak_check.report(store.path, "soak", 20, str(kills), str(log), 0.0, 7200.0)
     assert res["lost"] == 1 and not soak_check.passed(res)
+
+
+def test_retries_are_sorted_by_the_workers_current_wording():
+    """Round 7's soak counted 16 of its 26 re-queues as "other": since issue #68 the worker names a
+    stack node whose process changed ("planner: restarted or gone ...") before what its protocol saw."""
+    lines = [
+        "[campaign] job 176 failed on /worker_0 (segmenter: restarted or gone during the run (the master's URI"
+        " for it changed); no labels for the camera frame at t = 6.867 s within 10.0 s (wall clock)); retrying elsewhere",
+        "[campaign] job 2208 failed on /worker_0 (planner: restarted or gone during the run (the master's URI for"
+        " it changed); no command for control tick t = 8.600 s within 10.0 s (wall clock)); retrying elsewhere",
+        "[campaign] job 9 failed on /worker_1 (full reference: planner: restarted or gone during the run); retrying elsewhere",
+        "[campaign] job 117 failed on /worker_2 (full reference: /worker_2: goal ended LOST without a result); retrying elsewhere",
+        "[campaign] job 5 failed on /worker_1 (segmenter: no labels for the camera frame); retrying elsewhere",
+    ]
+    reasons = [soak_check.reason(line) for line in lines]
+    assert reasons == ["segmenter restarted", "planner restarted", "planner restarted", "goal lost", "segmenter silent"]
+    assert soak_check.reason("[campaign] job 1 failed on /worker_0 (something new); retrying elsewhere") == "other"

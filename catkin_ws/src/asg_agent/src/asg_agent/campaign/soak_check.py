@@ -13,12 +13,21 @@ from asg_agent.scoring.attribution import FINDING
 
 REASONS = [
     ("scene worker died", r"scene worker died"),
+    # since issue #68 the worker names a stack node whose process changed before what its protocol saw
+    ("planner restarted", r"planner: restarted or gone"),
+    ("segmenter restarted", r"segmenter: restarted or gone"),
     ("planner silent", r"planner: no command"),
     ("segmenter silent", r"segmenter: no labels"),
     ("goal lost", r"goal ended LOST"),
     ("no answer in time", r"did not answer"),
     ("never acknowledged", r"never acknowledged"),
 ]
+
+
+def reason(line: str) -> str:
+    """What the pool saw, for one "retrying elsewhere" line of the agent's log: the first of REASONS
+    whose pattern it holds, else "other"."""
+    return next((k for k, pat in REASONS if re.search(pat, line)), "other")
 
 
 def report(store_path: str, name: str, n: int, kills_path: str, log_path: str, start: float, end: float) -> dict:
@@ -32,7 +41,7 @@ def report(store_path: str, name: str, n: int, kills_path: str, log_path: str, s
     retries = [line for line in log if "retrying elsewhere" in line]
     by_reason = collections.Counter()
     for line in retries:
-        by_reason[next((k for k, pat in REASONS if re.search(pat, line)), "other")] += 1
+        by_reason[reason(line)] += 1
     camp = s.campaign(name)
     res = {
         "campaign": name,
