@@ -187,11 +187,11 @@ def test_the_rules_check_prose_is_its_exports_counted_by_a_plain_loop():
         p = fisher_exact([[len(fresh), n1 - len(fresh)], [len(base), n0 - len(base)]])[1]
         return len(fresh) / n1 / (len(base) / n0), p
 
-    ratio, p = against("dist4-random-own-s3?.jsonl.gz")  # every block's base run so far
+    ratio, p = against("dist4-random-own-s3?.jsonl.gz")  # the five blocks' base runs
     said = (
         f"{100 * len(fresh) / n1:.0f} % of its layouts were flaw findings against {100 * learnt['precision']:.0f} % "
         f"in the campaigns it was learnt from, and {ratio:.2f}x the base rate of the random-own campaigns of the "
-        f"blocks run so far (Fisher p = {p:.3f}; "
+        f"five blocks (Fisher p = {p:.3f}; "
     )
     assert said in text, said
     ratio0, p0 = against("dist4-random-own-s30.jsonl.gz")
@@ -199,6 +199,77 @@ def test_the_rules_check_prose_is_its_exports_counted_by_a_plain_loop():
     assert ("do not separate the rule from the base rate at 5 %" in text) == (p >= 0.05)
     assert f"{barberry} of the rule's {len(fresh)} fresh findings hit a barberry" in text
     assert learnt["text"] == "barberry d<2m q3 >= 3"
+
+
+def test_the_v4_answer_is_its_five_blocks_counted_by_a_plain_loop():
+    """The v4 record's answer: its table of targets and why the ratio is not 2x, recounted from the
+    five blocks' exports by the plain loop (flaw findings, distinct at 2 m and 5 m), with the flaw
+    modes from the library and the exact test with ties (asg_analysis.stats)."""
+    from asg_agent.records.export import read_export
+    from asg_analysis import endpoints
+    from asg_analysis.stats import mann_whitney
+
+    d4 = os.path.join(REPO, "results", "distinct_v4")
+    got = {}
+    for arm in ("default", "route-random"):
+        paths = sorted(glob.glob(os.path.join(d4, f"dist4-{arm}-s3?.jsonl.gz")))
+        assert len(paths) == 5, paths
+        rows = [_rows(p) for p in paths]
+        assert all(len(x) == 300 for x in rows)
+        got[arm] = {
+            "flaw": sum(r.get("attribution") == "flaw" for x in rows for r in x),
+            "2": [_plain_distinct(x, 2.0) for x in rows],
+            "5": [_plain_distinct(x, 5.0) for x in rows],
+            "modes": [endpoints.campaign(*read_export(p), budget=300)["modes"] for p in paths],
+        }
+    d, r = got["default"], got["route-random"]
+    text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
+    per = {k: {w: 1000 * sum(v[w]) / 1500 for w in ("2", "5")} for k, v in got.items()}
+    ratio = per["default"]["2"] / per["route-random"]["2"]
+    p2, p5, pm = (mann_whitney(d[k], r[k])["p"] for k in ("2", "5", "modes"))
+    rows = [
+        f"| >= 2x route-random's distinct flaw findings (2 m) per 1,000 | {per['default']['2']:.1f} against "
+        f"{per['route-random']['2']:.1f}: {ratio:.2f}x (",
+        f"| exact p < 0.01 over 5 seeds a side | p = {p2:.3f} | {'yes' if p2 < 0.01 else 'no'} |",
+        f"| at least as many flaw modes as route-random | {sum(d['modes'])} against {sum(r['modes'])} over the five "
+        f"seeds (exact p = {pm:.3f}) | {'yes' if sum(d['modes']) >= sum(r['modes']) else 'no'} |",
+        f"| reported beside it: distinct at 5 m per 1,000 | {per['default']['5']:.1f} against "
+        f"{per['route-random']['5']:.1f} (exact p = {p5:.3f}) | - |",
+    ]
+    for said in rows:
+        assert said in text, said
+    assert ratio < 2.0 and "Every target of the issue is missed on Exp. 1" in text
+    assert all(a > b for a, b in zip(d["2"], r["2"])) and "than route-random in every block" in text
+    said = (
+        f"({sum(d['2'])} of the default's {d['flaw']} flaw findings, {sum(r['2'])} of route-random's {r['flaw']}), "
+        f"so the ratio at 2 m is the ratio of how often each finds the flaw at all: {1000 * d['flaw'] / 1500:.1f} "
+        f"flaw findings per 1,000 against route-random's {1000 * r['flaw'] / 1500:.1f}."
+    )
+    assert said in text, said
+    assert per["route-random"]["5"] > per["default"]["5"] and sum(r["modes"]) > sum(d["modes"])
+
+
+def test_the_defaults_first_seed_replays_every_flaw_finding():
+    """Issue #78 item 6: the record of replay_findings.sh holds every flaw finding of the default's
+    first confirmatory seed (read here from the export), each REPRODUCED, and the page's block is
+    that record."""
+    import re
+
+    from asg_analysis import replays
+
+    d4 = os.path.join(REPO, "results", "distinct_v4")
+    records = replays.read(d4)
+    assert [r["campaign"] for r in records] == ["dist4-default-s30"]
+    flaw = sorted(
+        str(r["job"]) for r in _rows(os.path.join(d4, "dist4-default-s30.jsonl.gz")) if r.get("attribution") == "flaw"
+    )
+    assert sorted(records[0]["jobs"]) == flaw
+    assert all(j["verdict"] == "REPRODUCED" for j in records[0]["jobs"].values())
+    begin, end = replays.markers(os.path.join("results", "distinct_v4"))
+    page = open(record("distinct-failures-v4"), encoding="utf-8").read()
+    block = re.search(re.escape(begin) + r"\n(.*?)\n" + re.escape(end), page, re.S)
+    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis.replays"
+    assert f"every one of its {len(flaw)} flaw findings" in " ".join(page.split())
 
 
 def test_round_6s_depth_pair_recounted_at_2_m_collapsed_as_the_record_says():

@@ -83,7 +83,7 @@ def test_the_experiments_guide_figures_are_the_exports():
     said = f"seed {seed}: {old['findings']} flaw findings at {old['distinct']['2']} places 2 m apart"
     text = " ".join(page.split())
     assert said in text, said
-    # "more distinct flaw findings than route-random in every block so far, but fewer flaw modes"
+    # "distinct flaw findings than route-random in every one of the five blocks, but fewer flaw modes"
     by = {c["campaign"]: c for c in rows}
     seeds = sorted(c["campaign"].rsplit("-s", 1)[1] for c in rows if c["campaign"].startswith("dist4-default-"))
     more = all(
@@ -91,7 +91,14 @@ def test_the_experiments_guide_figures_are_the_exports():
     )
     modes = [sum(by[f"dist4-{arm}-s{k}"]["modes"] for k in seeds) for arm in ("default", "route-random")]
     assert more and modes[0] < modes[1], (more, modes)
-    assert "more distinct flaw findings than route-random in every block so far, but fewer flaw modes" in text
+    assert len(seeds) == 5, seeds
+    at = {
+        w: [sum(by[f"dist4-{arm}-s{k}"]["distinct"][w] for k in seeds) for arm in ("default", "route-random")]
+        for w in "25"
+    }
+    assert at["5"][0] < at["5"][1] and "and fewer distinct at 5 m" in text
+    assert f"{at['2'][0] / at['2'][1]:.2f}x route-random at 2 m" in text
+    assert "distinct flaw findings than route-random in every one of the five blocks, but fewer flaw modes" in text
 
 
 def test_the_route_wide_files_say_which_layouts_are_not_reachable():
