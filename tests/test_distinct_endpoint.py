@@ -249,6 +249,33 @@ def test_the_v4_answer_is_its_five_blocks_counted_by_a_plain_loop():
     assert per["route-random"]["5"] > per["default"]["5"] and sum(r["modes"]) > sum(d["modes"])
 
 
+def test_the_defaults_repeats_came_while_the_finding_they_repeat_was_in_flight():
+    """The v4 record's "the tabu lags": every flaw finding of the default within 2 m of an earlier
+    distinct one of its class came within `slots` jobs of it (read from the exports' settings)."""
+    d4 = os.path.join(REPO, "results", "distinct_v4")
+    gaps, slots = [], set()
+    for path in sorted(glob.glob(os.path.join(d4, "dist4-default-s3?.jsonl.gz"))):
+        with gzip.open(path, "rt") as f:
+            settings = json.loads(f.readline())["campaign"]["settings"]
+            slots.add((json.loads(settings) if isinstance(settings, str) else settings)["slots"])
+        kept = []
+        for r in _rows(path):
+            if r.get("attribution") != "flaw":
+                continue
+            if r["termination"] == "COLLISION" and r.get("collision_with") is not None:
+                cls, (x, y) = r["meshes"][r["collision_with"]], r["positions"][r["collision_with"]]
+            else:
+                cls, (x, y) = "none", r["trajectory_xy"][-1]
+            first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
+            if first:
+                gaps.append(r["job"] - first[0])
+            else:
+                kept.append((cls, x, y, r["job"]))
+    assert slots == {6} and gaps and max(gaps) < 6, (slots, gaps)
+    text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
+    assert f"each of the default's {len(gaps)} repeats" in text and "came within six jobs" in text
+
+
 def test_the_defaults_first_seed_replays_every_flaw_finding():
     """Issue #78 item 6: the record of replay_findings.sh holds every flaw finding of the default's
     first confirmatory seed (read here from the export), each REPRODUCED, and the page's block is
