@@ -30,6 +30,15 @@ def _rows(path):
         return sorted((json.loads(line) for line in f), key=lambda r: r["job"])[:300]
 
 
+def _plain_place(r):
+    """(class, x, y) of a row: the obstacle it hit or, without contact, where it ended."""
+    if r["termination"] == "COLLISION" and r.get("collision_with") is not None:
+        (x, y) = r["positions"][r["collision_with"]]
+        return r["meshes"][r["collision_with"]], x, y
+    x, y = r["trajectory_xy"][-1]
+    return "none", x, y
+
+
 def _plain_distinct(rows, radius, finding="flaw"):
     """The definition, read from the issue and written out: each flaw finding's place (or a
     pair's regression's, finding="regression") is the obstacle it hit (class, position) or,
@@ -39,10 +48,7 @@ def _plain_distinct(rows, radius, finding="flaw"):
     for r in rows:
         if r.get("attribution") != finding:
             continue
-        if r["termination"] == "COLLISION" and r.get("collision_with") is not None:
-            cls, (x, y) = r["meshes"][r["collision_with"]], r["positions"][r["collision_with"]]
-        else:
-            cls, (x, y) = "none", r["trajectory_xy"][-1]
+        cls, x, y = _plain_place(r)
         if all(c != cls or math.hypot(x - a, y - b) >= radius for c, a, b in kept):
             kept.append((cls, x, y))
     return len(kept)
@@ -262,10 +268,7 @@ def test_the_defaults_repeats_came_while_the_finding_they_repeat_was_in_flight()
         for r in _rows(path):
             if r.get("attribution") != "flaw":
                 continue
-            if r["termination"] == "COLLISION" and r.get("collision_with") is not None:
-                cls, (x, y) = r["meshes"][r["collision_with"]], r["positions"][r["collision_with"]]
-            else:
-                cls, (x, y) = "none", r["trajectory_xy"][-1]
+            cls, x, y = _plain_place(r)
             first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
             if first:
                 gaps.append(r["job"] - first[0])
