@@ -320,3 +320,89 @@ def test_round_6s_depth_pair_recounted_at_2_m_collapsed_as_the_record_says():
         f"{per['default']:.1f} against {per['route-random']:.1f} per 1,000"
     )
     assert said in text and per["default"] < per["route-random"], said
+
+
+#: the transfer scenes of issue #78 item 5: (the record's name of the scene, the finding class
+#: (None: a failed run of the stack under test), what the answer sentence counts)
+TRANSFER = {
+    "gapnav": ("gap_nav", None, "failures of gap_nav"),
+    "exp3": ("Exp. 3", "flaw", "flaw findings"),
+    "exp6": ("Exp. 6", "flaw", "flaw findings"),
+    "depth": ("The depth pair", "regression", "regressions"),
+}
+
+
+def _is_found(r, finding):
+    return r["termination"] not in ("SUCCESS", "ERROR") if finding is None else r.get("attribution") == finding
+
+
+@pytest.mark.parametrize("scene", sorted(TRANSFER))
+def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
+    """The v4 record answers a transfer scene only when both arms have their three seeds, and then
+    with the figures the plain loop counts from the exports: distinct findings at 2 m and 5 m per
+    1,000 (200 scenarios a campaign), the ratio of means, the exact test with ties, and the modes
+    (the library's); for gap_nav also the tabu's lag (repeats within the six jobs in flight)."""
+    from asg_agent.records.export import read_export
+    from asg_analysis import endpoints
+    from asg_analysis.stats import mann_whitney
+
+    label, finding, what = TRANSFER[scene]
+    folder = os.path.join(REPO, "results", "distinct_v4_transfer")
+    paths = {
+        a: sorted(glob.glob(os.path.join(folder, f"dist4{scene}-{a}-s6?.jsonl.gz")))
+        for a in ("default", "route-random")
+    }
+    text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
+    head = f"**{label}, answered (3 seeds a side): the target is "
+    if min(len(p) for p in paths.values()) < 3:
+        assert head not in text, f"{label} has fewer than three seeds an arm: progress, not an answer"
+        return
+    got = {}
+    for arm, ps in paths.items():
+        rows = [_rows(p)[:200] for p in ps]
+        assert len(ps) == 3 and all(len(x) == 200 for x in rows), ps
+        per = {}
+        for radius in (2.0, 5.0):
+            counts = []
+            for x in rows:
+                kept = []
+                for r in x:
+                    if not _is_found(r, finding):
+                        continue
+                    cls, px, py = _plain_place(r)
+                    if all(c != cls or math.hypot(px - a, py - b) >= radius for c, a, b in kept):
+                        kept.append((cls, px, py))
+                counts.append(len(kept))
+            per[radius] = counts
+        modes = sum(endpoints.campaign(*read_export(p), budget=200, target=finding)["modes"] for p in ps)
+        got[arm] = (per, modes)
+    (d, md), (r, mr) = got["default"], got["route-random"]
+    mean = {k: {w: 1000 * sum(v[w]) / 600 for w in (2.0, 5.0)} for k, v in (("d", d), ("r", r))}
+    p = mann_whitney(d[2.0], r[2.0])["p"]
+    seeds = {k: ", ".join(f"{1000 * c / 200:.1f}" for c in v[2.0]) for k, v in (("d", d), ("r", r))}
+    met = mean["d"][2.0] >= mean["r"][2.0]
+    said = [
+        head + ("met" if met else "missed"),
+        f"found {mean['d'][2.0]:.1f} distinct {what} per 1,000 at 2 m ({seeds['d']} by seed) against "
+        f"route-random's {mean['r'][2.0]:.1f} ({seeds['r']}): {mean['d'][2.0] / mean['r'][2.0]:.2f}x",
+        f"exact p = {p:.3f}",
+        f"At 5 m it found {mean['d'][5.0]:.1f} against {mean['r'][5.0]:.1f} per 1,000",
+        f"{md} against {mr} over the three seeds",
+    ]
+    for s in said:
+        assert s in text, s
+    if scene == "gapnav":
+        gaps = []
+        for path in paths["default"]:
+            kept = []
+            for row in _rows(path)[:200]:
+                if not _is_found(row, None):
+                    continue
+                cls, x, y = _plain_place(row)
+                first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
+                if first:
+                    gaps.append(row["job"] - first[0])
+                else:
+                    kept.append((cls, x, y, row["job"]))
+        s = f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs"
+        assert s in text, s
