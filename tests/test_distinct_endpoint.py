@@ -406,3 +406,9 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
                     kept.append((cls, x, y, row["job"]))
         s = f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs"
         assert s in text, s
+        guide = " ".join(open(os.path.join(REPO, "docs", "your-stack.md"), encoding="utf-8").read().split())
+        s = (
+            f"{mean['d'][2.0]:.1f} distinct failures per 1,000 at 2 m against route-random's "
+            f"{mean['r'][2.0]:.1f}, {mean['d'][2.0] / mean['r'][2.0]:.2f}x"
+        )
+        assert s in guide, s
