@@ -54,6 +54,27 @@ def _plain_distinct(rows, radius, finding="flaw"):
     return len(kept)
 
 
+def _is_found(r, finding):
+    """A finding of class `finding`, or with None a failed run (not SUCCESS, not ERROR)."""
+    return r["termination"] not in ("SUCCESS", "ERROR") if finding is None else r.get("attribution") == finding
+
+
+def _repeat_lags(rows, finding):
+    """For each finding within 2 m of an earlier distinct one of its class (a repeat): its job
+    minus the job of the first such distinct finding."""
+    kept, lags = [], []
+    for r in rows:
+        if not _is_found(r, finding):
+            continue
+        cls, x, y = _plain_place(r)
+        first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
+        if first:
+            lags.append(r["job"] - first[0])
+        else:
+            kept.append((cls, x, y, r["job"]))
+    return lags
+
+
 @pytest.mark.parametrize("arm", sorted(ISSUE))
 def test_the_issue_table_by_a_plain_loop_and_by_the_library(arm):
     from asg_agent.records.export import read_export
@@ -264,16 +285,7 @@ def test_the_defaults_repeats_came_while_the_finding_they_repeat_was_in_flight()
         with gzip.open(path, "rt") as f:
             settings = json.loads(f.readline())["campaign"]["settings"]
             slots.add((json.loads(settings) if isinstance(settings, str) else settings)["slots"])
-        kept = []
-        for r in _rows(path):
-            if r.get("attribution") != "flaw":
-                continue
-            cls, x, y = _plain_place(r)
-            first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
-            if first:
-                gaps.append(r["job"] - first[0])
-            else:
-                kept.append((cls, x, y, r["job"]))
+        gaps += _repeat_lags(_rows(path), "flaw")
     assert slots == {6} and gaps and max(gaps) < 6, (slots, gaps)
     text = " ".join(open(record("distinct-failures-v4"), encoding="utf-8").read().split())
     assert f"each of the default's {len(gaps)} repeats" in text and "came within six jobs" in text
@@ -332,10 +344,6 @@ TRANSFER = {
 }
 
 
-def _is_found(r, finding):
-    return r["termination"] not in ("SUCCESS", "ERROR") if finding is None else r.get("attribution") == finding
-
-
 @pytest.mark.parametrize("scene", sorted(TRANSFER))
 def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
     """The v4 record answers a transfer scene only when both arms have their three seeds, and then
@@ -392,18 +400,7 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
     for s in said:
         assert s in text, s
     if scene == "gapnav":
-        gaps = []
-        for path in paths["default"]:
-            kept = []
-            for row in _rows(path)[:200]:
-                if not _is_found(row, None):
-                    continue
-                cls, x, y = _plain_place(row)
-                first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
-                if first:
-                    gaps.append(row["job"] - first[0])
-                else:
-                    kept.append((cls, x, y, row["job"]))
+        gaps = [g for path in paths["default"] for g in _repeat_lags(_rows(path)[:200], None)]
         s = f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs"
         assert s in text, s
         guide = " ".join(open(os.path.join(REPO, "docs", "your-stack.md"), encoding="utf-8").read().split())
