@@ -46,7 +46,7 @@ def _plain_distinct(rows, radius, finding="flaw"):
     closer than `radius`."""
     kept = []
     for r in rows:
-        if r.get("attribution") != finding:
+        if not _is_found(r, finding):
             continue
         cls, x, y = _plain_place(r)
         if all(c != cls or math.hypot(x - a, y - b) >= radius for c, a, b in kept):
@@ -371,17 +371,7 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
         assert len(ps) == 3 and all(len(x) == 200 for x in rows), ps
         per = {}
         for radius in (2.0, 5.0):
-            counts = []
-            for x in rows:
-                kept = []
-                for r in x:
-                    if not _is_found(r, finding):
-                        continue
-                    cls, px, py = _plain_place(r)
-                    if all(c != cls or math.hypot(px - a, py - b) >= radius for c, a, b in kept):
-                        kept.append((cls, px, py))
-                counts.append(len(kept))
-            per[radius] = counts
+            per[radius] = [_plain_distinct(x, radius, finding) for x in rows]
         modes = sum(endpoints.campaign(*read_export(p), budget=200, target=finding)["modes"] for p in ps)
         got[arm] = (per, modes)
     (d, md), (r, mr) = got["default"], got["route-random"]
