@@ -217,4 +217,11 @@ def test_a_campaign_tells_its_search_each_place_and_counts_distinct_findings_in_
         assert f["place"] == [t[1] for t in told if t[0] == f["job"]][0]
     d = distinct_summary(found)
     assert c.status()["findings"] == len(flaw) and c.status()["distinct"] == d["distinct"][2.0]
+    from asg_agent.cli.campaign import bar_text
+
+    text = bar_text(c.status())  # the bar names the reward whose findings it counts, then its classes
+    assert text.startswith(f"flaw findings {len(flaw)} distinct {d['distinct'][2.0]} (2 m) ")
+    assert f" flaw {len(flaw)} model " in text
+    proxy = dict(c.status(), reward="proxy", findings=0, distinct=0)  # route-random's reward:=proxy
+    assert bar_text(proxy).startswith("proxy findings 0 distinct 0 (2 m) ") and f" flaw {len(flaw)} " in bar_text(proxy)
     assert d["distinct"][1.0] >= d["distinct"][2.0] >= d["distinct"][5.0] >= 1

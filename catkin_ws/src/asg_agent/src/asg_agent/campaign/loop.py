@@ -403,6 +403,9 @@ class Campaign:
 
     def status(self) -> dict:
         stored = self.store.count(self.name)
-        return tally.status(
-            self.stats, stored, self.total, stored - self.done_at_start, time.time() - self.t0, self.references
+        return dict(
+            tally.status(
+                self.stats, stored, self.total, stored - self.done_at_start, time.time() - self.t0, self.references
+            ),
+            reward=self.rule.name,
         )

@@ -443,6 +443,31 @@ def make_search(a, exp):
         raise CampaignError(str(e)) from e
 
 
+def bar_text(st: dict) -> str:
+    """The progress bar's text from Campaign.status(): the findings of the campaign's reward, named
+    (`flaw findings 3 distinct 2 (2 m)`; a route-random campaign on `reward:=proxy` reads `proxy
+    findings 0 ... flaw 17`, not a bare `findings 0` beside its flaw class), then the rate, the
+    attribution classes and the best proxy."""
+    best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
+    diff = ""
+    cl = st.get("classes")
+    if cl and attr.FULL in st.get("roles", ()):
+        rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+        diff = f" flaw {cl['flaw']} model {cl['model']} stack {cl['stack']} rerun {rerun}"
+    elif cl and attr.RELEASE in st.get("roles", ()):
+        rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
+        diff = f" regression {cl['regression']} shared {cl['shared']} rerun {rerun}"
+    elif st.get("perception") is not None:
+        diff = f" perception {st['perception']} stack {st['stack']}"
+    if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
+        diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
+    return (
+        f"{st['reward']} findings {st['findings']} distinct {st['distinct']} ({st['distinct_radius_m']:g} m)"
+        f" {st['rate_per_hour']:.0f}/h{diff} best proxy {best} >=3 {st['ge3']}"
+        + (f" err {st['errors']}" if st["errors"] else "")
+    )
+
+
 def progress_bar(a):
     """(bar, progress callback): a tqdm bar on stderr, or none with --no-progress."""
     bar = None
@@ -455,25 +480,7 @@ def progress_bar(a):
         if bar is None:
             return
         bar.n = st["done"]
-        best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
-        diff = ""
-        cl = st.get("classes")
-        if cl and attr.FULL in st.get("roles", ()):
-            rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
-            diff = f" flaw {cl['flaw']} model {cl['model']} stack {cl['stack']} rerun {rerun}"
-        elif cl and attr.RELEASE in st.get("roles", ()):
-            rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
-            diff = f" regression {cl['regression']} shared {cl['shared']} rerun {rerun}"
-        elif st.get("perception") is not None:
-            diff = f" perception {st['perception']} stack {st['stack']}"
-        if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
-            diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
-        bar.set_postfix_str(
-            f"findings {st['findings']} distinct {st['distinct']} ({st['distinct_radius_m']:g} m)"
-            f" {st['rate_per_hour']:.0f}/h{diff} best proxy {best} >=3 {st['ge3']}"
-            + (f" err {st['errors']}" if st["errors"] else ""),
-            refresh=True,
-        )
+        bar.set_postfix_str(bar_text(st), refresh=True)
 
     return bar, progress
 
