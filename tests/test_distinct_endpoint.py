@@ -349,7 +349,8 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
     """The v4 record answers a transfer scene only when both arms have their three seeds, and then
     with the figures the plain loop counts from the exports: distinct findings at 2 m and 5 m per
     1,000 (200 scenarios a campaign), the ratio of means, the exact test with ties, and the modes
-    (the library's); for gap_nav also the tabu's lag (repeats within the six jobs in flight)."""
+    (the library's), the tabu's lag (repeats within the six jobs in flight), and for a flaw scene
+    the range of places 5 m apart a campaign."""
     from asg_agent.records.export import read_export
     from asg_analysis import endpoints
     from asg_analysis.stats import mann_whitney
@@ -387,12 +388,18 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
         f"At 5 m it found {mean['d'][5.0]:.1f} against {mean['r'][5.0]:.1f} per 1,000",
         f"{md} against {mr} over the three seeds",
     ]
+    gaps = [g for path in paths["default"] for g in _repeat_lags(_rows(path)[:200], finding)]
+    said.append(f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs")
+    if finding == "flaw":  # the places 5 m apart of each campaign, both arms, as the record gives them
+        fives = [c for v in (d, r) for c in v[5.0]]
+        said.append(f"fall in {min(fives)} to {max(fives)} places 5 m apart a campaign")
     for s in said:
         assert s in text, s
+    status = text[text.index("**Status (") :].split(".**", 1)[0]  # the record's opening status
+    assert f"{mean['d'][2.0] / mean['r'][2.0]:.2f}x" in status, f"the status gives {label}'s ratio"
+    if finding == "flaw":
+        assert f"{mean['d'][5.0] / mean['r'][5.0]:.2f}x at 5 m" in status, f"the status gives {label}'s 5 m ratio"
     if scene == "gapnav":
-        gaps = [g for path in paths["default"] for g in _repeat_lags(_rows(path)[:200], None)]
-        s = f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs"
-        assert s in text, s
         guide = " ".join(open(os.path.join(REPO, "docs", "your-stack.md"), encoding="utf-8").read().split())
         s = (
             f"{mean['d'][2.0]:.1f} distinct failures per 1,000 at 2 m against route-random's "
