@@ -399,6 +399,11 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
     assert f"{mean['d'][2.0] / mean['r'][2.0]:.2f}x" in status, f"the status gives {label}'s ratio"
     if finding == "flaw":
         assert f"{mean['d'][5.0] / mean['r'][5.0]:.2f}x at 5 m" in status, f"the status gives {label}'s 5 m ratio"
+    guide = " ".join(open(os.path.join(REPO, "docs", "experiments.md"), encoding="utf-8").read().split())
+    today = guide[guide.index("## Today's figures") : guide.index("## What a finding is")]
+    assert f"{mean['d'][2.0] / mean['r'][2.0]:.2f}x" in today, f"docs/experiments.md gives {label}'s ratio"
+    if finding == "flaw":
+        assert f"{mean['d'][5.0] / mean['r'][5.0]:.2f}x at 5 m" in today, f"docs/experiments.md: {label} at 5 m"
     if scene == "gapnav":
         guide = " ".join(open(os.path.join(REPO, "docs", "your-stack.md"), encoding="utf-8").read().split())
         s = (
