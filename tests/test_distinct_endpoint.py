@@ -89,6 +89,28 @@ def _repeat_lags(rows, finding):
     return lags
 
 
+def _late_banned(rows, finding, window=6, known=20):
+    """(later repeats, those of them the tabu bans): a repeat (as _repeat_lags) that came `window`
+    or more jobs after the distinct finding it repeats is *later*; it is one the tabu bans when its
+    layout put an obstacle of the repeat's class within 2 m of a distinct place of that class found
+    `known` or more jobs before it (long after that verdict was in). novelty-ts proposes such a
+    layout only when every candidate of its draw was banned."""
+    kept, late, banned = [], 0, 0
+    for r in rows:
+        if not _is_found(r, finding):
+            continue
+        cls, x, y = _plain_place(r)
+        first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
+        if not first:
+            kept.append((cls, x, y, r["job"]))
+        elif r["job"] - first[0] >= window:
+            late += 1
+            old = [(a, b) for c, a, b, j in kept if c == cls and j <= r["job"] - known]
+            mine = [xy for m, xy in zip(r["meshes"], r["positions"]) if m == cls]
+            banned += any(math.hypot(u - a, v - b) < 2.0 for u, v in mine for a, b in old)
+    return late, banned
+
+
 @pytest.mark.parametrize("arm", sorted(ISSUE))
 def test_the_issue_table_by_a_plain_loop_and_by_the_library(arm):
     from asg_agent.records.export import read_export
@@ -309,6 +331,34 @@ def test_the_defaults_repeats_came_while_the_finding_they_repeat_was_in_flight()
     assert f"each of the default's {len(gaps)} repeats" in text and "came within six jobs" in text
 
 
+def test_late_banned_counts_a_later_repeat_whose_layout_sits_on_an_old_place():
+    """_late_banned on hand-made rows: a repeat within six jobs is not later; a later repeat is
+    banned only when an obstacle of its class lay within 2 m of a place found 20 or more jobs
+    before it; another class's obstacle there does not count."""
+
+    def row(job, hit, positions, meshes=("a", "b")):
+        return dict(
+            job=job,
+            attribution="flaw",
+            termination="COLLISION",
+            collision_with=hit,
+            meshes=list(meshes),
+            positions=[list(p) for p in positions],
+            trajectory_xy=[[0, 0]],
+        )
+
+    rows = [
+        row(0, 0, [(10, 10), (50, 50)]),  # distinct: class a at (10, 10)
+        row(3, 0, [(10.5, 10), (50, 50)]),  # a repeat 3 jobs later: not later
+        row(30, 0, [(11, 10), (80, 80)]),  # later, its a on the place found 30 jobs before: banned
+        row(31, 1, [(90, 90), (50, 50)]),  # distinct: class b at (50, 50)
+        row(40, 1, [(10, 10.5), (51, 50)]),  # later (9 jobs), but b's place is 9 jobs old: not banned
+    ]
+    assert _late_banned(rows, "flaw") == (2, 1)
+    assert _late_banned(rows, "flaw", known=5) == (2, 2)
+    assert _late_banned(rows, "flaw", window=2) == (3, 1)
+
+
 def test_the_defaults_first_seed_replays_every_flaw_finding():
     """Issue #78 item 6: the record of replay_findings.sh holds every flaw finding of the default's
     first confirmatory seed (read here from the export), each REPRODUCED, and the page's block is
@@ -409,6 +459,9 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
     ]
     gaps = [g for path in paths["default"] for g in _repeat_lags(_rows(path)[:200], finding)]
     said.append(f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs")
+    late = [_late_banned(_rows(path)[:200], finding) for path in paths["default"]]
+    if sum(n for n, _ in late) >= 5:  # a pattern the record explains: how many the tabu bans
+        said.append(f"{sum(b for _, b in late)} of the {sum(n for n, _ in late)} later ones put")
     if finding == "flaw":  # the places 5 m apart of each campaign, both arms, as the record gives them
         fives = [c for v in (d, r) for c in v[5.0]]
         said.append(f"fall in {min(fives)} to {max(fives)} places 5 m apart a campaign")
