@@ -73,41 +73,41 @@ def _pooled_modes(paths, budget, finding):
     return fm.distinct(modes)
 
 
-def _repeat_lags(rows, finding):
-    """For each finding within 2 m of an earlier distinct one of its class (a repeat): its job
-    minus the job of the first such distinct finding."""
-    kept, lags = [], []
+def _repeats(rows, finding):
+    """Each finding within 2 m of an earlier distinct one of its class (a repeat), in job order, as
+    (row, its class, the job of the first such distinct finding, the distinct ones so far as
+    (class, x, y, job))."""
+    kept = []
     for r in rows:
         if not _is_found(r, finding):
             continue
         cls, x, y = _plain_place(r)
         first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
         if first:
-            lags.append(r["job"] - first[0])
+            yield r, cls, first[0], kept
         else:
             kept.append((cls, x, y, r["job"]))
-    return lags
+
+
+def _repeat_lags(rows, finding):
+    """For each repeat (_repeats): its job minus the job of the first distinct finding it repeats."""
+    return [r["job"] - first for r, _, first, _ in _repeats(rows, finding)]
 
 
 def _late_banned(rows, finding, window=6, known=20):
-    """(later repeats, those of them the tabu bans): a repeat (as _repeat_lags) that came `window`
-    or more jobs after the distinct finding it repeats is *later*; it is one the tabu bans when its
-    layout put an obstacle of the repeat's class within 2 m of a distinct place of that class found
-    `known` or more jobs before it (long after that verdict was in). novelty-ts proposes such a
-    layout only when every candidate of its draw was banned."""
-    kept, late, banned = [], 0, 0
-    for r in rows:
-        if not _is_found(r, finding):
+    """(later repeats, those of them the tabu bans): a repeat that came `window` or more jobs after
+    the distinct finding it repeats is *later*; it is one the tabu bans when its layout put an
+    obstacle of the repeat's class within 2 m of a distinct place of that class found `known` or
+    more jobs before it (long after that verdict was in). novelty-ts proposes such a layout only
+    when every candidate of its draw was banned."""
+    late = banned = 0
+    for r, cls, first, kept in _repeats(rows, finding):
+        if r["job"] - first < window:
             continue
-        cls, x, y = _plain_place(r)
-        first = [j for c, a, b, j in kept if c == cls and math.hypot(x - a, y - b) < 2.0]
-        if not first:
-            kept.append((cls, x, y, r["job"]))
-        elif r["job"] - first[0] >= window:
-            late += 1
-            old = [(a, b) for c, a, b, j in kept if c == cls and j <= r["job"] - known]
-            mine = [xy for m, xy in zip(r["meshes"], r["positions"]) if m == cls]
-            banned += any(math.hypot(u - a, v - b) < 2.0 for u, v in mine for a, b in old)
+        late += 1
+        old = [(a, b) for c, a, b, j in kept if c == cls and j <= r["job"] - known]
+        mine = [xy for m, xy in zip(r["meshes"], r["positions"]) if m == cls]
+        banned += any(math.hypot(u - a, v - b) < 2.0 for u, v in mine for a, b in old)
     return late, banned
 
 
@@ -457,9 +457,10 @@ def test_a_transfer_answer_is_its_three_seeds_counted_by_a_plain_loop(scene):
         f"{mdp} against {mrp} over the three seeds pooled",
         f"by campaign {md} against {mr}",
     ]
-    gaps = [g for path in paths["default"] for g in _repeat_lags(_rows(path)[:200], finding)]
+    rows = [_rows(path)[:200] for path in paths["default"]]
+    gaps = [g for x in rows for g in _repeat_lags(x, finding)]
     said.append(f"{sum(g < 6 for g in gaps)} of the default's {len(gaps)} repeats came within six jobs")
-    late = [_late_banned(_rows(path)[:200], finding) for path in paths["default"]]
+    late = [_late_banned(x, finding) for x in rows]
     if sum(n for n, _ in late) >= 5:  # a pattern the record explains: how many the tabu bans
         said.append(f"{sum(b for _, b in late)} of the {sum(n for n, _ in late)} later ones put")
     if finding is not None:  # the places 5 m apart of each campaign, both arms, as the record gives them
