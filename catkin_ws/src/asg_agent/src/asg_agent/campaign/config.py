@@ -109,4 +109,7 @@ class CampaignConfig:
     references: Dict[str, Pool] = field(default_factory=dict)  #: role -> the pool of that reference stack
     candidates: Optional[str] = None  #: which scenarios the references re-run (policy.CANDIDATE_RULES)
     collision_bonus: float = 2.0  #: [-] the collision reward's bonus
+    #: the failure atlas of the campaign's identity (scoring.atlas.Atlas), or None: what of it the
+    #: findings cover is counted live (progress bar, TensorBoard) and at the end
+    atlas: Optional[object] = None
     callbacks: Sequence[CampaignCallback] = ()

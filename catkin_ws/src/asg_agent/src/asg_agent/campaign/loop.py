@@ -107,6 +107,7 @@ class Campaign:
         self.next_episode = 0
         self.episodes_done = 0
         self.stats = tally.new()  # campaign/tally.py
+        self.atlas = c.atlas  # scoring.atlas.Atlas or None: the coverage the tally counts
         self.t0 = time.time()
         self.done_at_start = 0
         self.stages = Stages()
@@ -369,7 +370,7 @@ class Campaign:
                 place = run_place(job.request, row, traj[:, 1:3])
                 finding = float(reward) >= self.rule.finding_at
                 if finding:
-                    tally.finding(self.stats, place)
+                    tally.finding(self.stats, place, self.atlas)
                 self.method.outcome(job.job, place, finding)
                 next_state = self.method.states.build(job.action, traj[:, 1:3], job.step + 1)
                 learnt = self.method.observe(
@@ -378,7 +379,7 @@ class Campaign:
                 self.stages.add("update", t0)
                 if not done:
                     slot.update(step=job.step + 1, state=next_state)
-            self.callbacks.on_scenario(job.job, row, dict(learnt or {}, **tally.found(self.stats)))
+            self.callbacks.on_scenario(job.job, row, dict(learnt or {}, **tally.found(self.stats, self.atlas)))
             if done:
                 self.episodes_done += 1
                 self._new_episode(job.slot)
@@ -405,7 +406,13 @@ class Campaign:
         stored = self.store.count(self.name)
         return dict(
             tally.status(
-                self.stats, stored, self.total, stored - self.done_at_start, time.time() - self.t0, self.references
+                self.stats,
+                stored,
+                self.total,
+                stored - self.done_at_start,
+                time.time() - self.t0,
+                self.references,
+                self.atlas,
             ),
             reward=self.rule.name,
         )

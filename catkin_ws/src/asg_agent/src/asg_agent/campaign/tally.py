@@ -7,6 +7,7 @@ import math
 import time
 
 from asg_agent.scoring import attribution as attr
+from asg_agent.scoring.atlas import Coverage
 from asg_agent.scoring.places import PRIMARY_RADIUS_M, DistinctPlaces
 
 
@@ -15,7 +16,8 @@ def new() -> dict:
     reward (proxy - ground-truth proxy), its largest and how often it reached 1; perception/stack:
     findings (proxy >= 3) with the reference below 2 / at least 3; findings/places: the campaign's
     findings (its reward's, rewards.Reward.finding_at) and their distinct places at
-    PRIMARY_RADIUS_M (scoring/places.py), counted in job order."""
+    PRIMARY_RADIUS_M (scoring/places.py), counted in job order; coverage: with a failure atlas,
+    which of its places the findings cover and the new places beyond it (scoring/atlas.py)."""
     return {
         "best": -math.inf,
         "ge3": 0,
@@ -29,16 +31,28 @@ def new() -> dict:
         "classes": attr.count_classes(()),
         "findings": 0,
         "places": DistinctPlaces(PRIMARY_RADIUS_M).state_dict(),
+        "coverage": {"covered": [], "new": []},
     }
 
 
-def finding(stats: dict, place) -> bool:
-    """A finding of the campaign's reward applied, in job order: True when its place is distinct."""
+def finding(stats: dict, place, atlas=None) -> bool:
+    """A finding of the campaign's reward applied, in job order: True when its place is distinct.
+    With `atlas` (scoring.atlas.Atlas of the campaign's identity) it also counts what it covers."""
     seen = DistinctPlaces.from_state(stats["places"])
     new = seen.add(place)
     stats["findings"] += 1
     stats["places"] = seen.state_dict()
+    if atlas is not None:
+        cov = _coverage(stats, atlas)
+        cov.add(place)
+        stats["coverage"] = cov.state_dict()
     return new
+
+
+def _coverage(stats: dict, atlas) -> Coverage:
+    cov = Coverage(atlas)
+    cov.load_state_dict(stats.get("coverage") or {"covered": [], "new": []})
+    return cov
 
 
 def scenario(stats: dict, terms, label, candidate: bool):
@@ -83,13 +97,19 @@ def from_summary(stats: dict, summary: dict):
     )
 
 
-def found(stats: dict) -> dict:
-    """The running findings and their distinct places (the progress bar's and TensorBoard's)."""
-    return {"findings": stats["findings"], "distinct": len(DistinctPlaces.from_state(stats["places"]))}
+def found(stats: dict, atlas=None) -> dict:
+    """The running findings and their distinct places (the progress bar's and TensorBoard's); with
+    an atlas, the places of it they cover (`covered`, of `known`) and the new ones beyond it."""
+    out = {"findings": stats["findings"], "distinct": len(DistinctPlaces.from_state(stats["places"]))}
+    if atlas is not None:
+        c = _coverage(stats, atlas).counts()
+        out.update(covered=c["covered"], known=c["known"], coverage_new=c["new"])
+    return out
 
 
-def status(stats: dict, stored: int, total: int, new_here: int, elapsed: float, roles) -> dict:
-    """What the progress bar and summary show: `new_here` scenarios stored in `elapsed` [s]."""
+def status(stats: dict, stored: int, total: int, new_here: int, elapsed: float, roles, atlas=None) -> dict:
+    """What the progress bar and summary show: `new_here` scenarios stored in `elapsed` [s];
+    `coverage` (scoring.atlas.Coverage.counts) with an atlas, else None."""
     truth = attr.TRUTH in roles
     return {
         "done": stored,
@@ -97,6 +117,7 @@ def status(stats: dict, stored: int, total: int, new_here: int, elapsed: float, 
         "rate_per_hour": new_here / max(1e-6, elapsed) * 3600,
         **found(stats),
         "distinct_radius_m": stats["places"]["radius"],
+        "coverage": _coverage(stats, atlas).counts() if atlas is not None else None,
         "best": stats["best"],
         "ge3": stats["ge3"],
         "ge4": stats["ge4"],

@@ -6,7 +6,8 @@
 
 Per scenario (x axis: the job, in the order the search learnt from them): first what the campaign
 searched for, `findings/distinct` (its findings' distinct places at protocol v4's radius,
-scoring/places.py) and `findings/of_reward` (its reward's findings); then `scenario/proxy`,
+scoring/places.py) and `findings/of_reward` (its reward's findings), with a failure atlas
+`coverage/covered` (its places the findings cover) and `coverage/new` (places beyond it); then `scenario/proxy`,
 `scenario/reward`, `scenario/yaw_term`, `scenario/plr`, `scenario/reference_proxy` (attribution),
 and the running counts `findings/proxy_ge3`, `findings/perception`, `findings/stack`; with named
 reference stacks, `attribution/CLASS` (flaw, model, stack, ..., not_candidate, pending) as each
@@ -44,9 +45,13 @@ AGENT_KEYS = {
     "qd_coverage": "search/qd_coverage",
     "qd_best": "search/qd_best",
     "novelty_archive": "search/novelty_archive",
+    "coverage_found": "search/coverage_found",
     # the campaign's own running counts (issue #78), passed with the method's figures
     "findings": "findings/of_reward",
     "distinct": "findings/distinct",
+    # with a failure atlas (issue #93): its places the findings cover, and new places beyond it
+    "covered": "coverage/covered",
+    "coverage_new": "coverage/new",
 }
 
 

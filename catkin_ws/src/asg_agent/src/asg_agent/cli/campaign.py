@@ -117,6 +117,13 @@ def _search_options(p):
         f"class (default {PRIMARY_RADIUS_M:g}, protocol v4's distinct radius)",
     )
     p.add_argument(
+        "--atlas",
+        default="auto",
+        help="the failure atlas whose places the progress bar, TensorBoard and the summary count as "
+        "covered (rosrun asg_agent atlas; docs/agent.md): a file, `auto` (the default: the one of "
+        "results/atlas/ whose scene, stack and finding kind are the campaign's, if any) or `none`",
+    )
+    p.add_argument(
         "--rule",
         default="",
         help="rule-sampler: the rule file (JSON; asg_analysis.rules writes them) whose layouts it draws",
@@ -274,6 +281,64 @@ def stack_line(camp) -> str:
     return line
 
 
+def campaign_atlas(choice: str, exp, settings: dict):
+    """The failure atlas (scoring.atlas.Atlas) a campaign counts its coverage of, recorded in
+    `settings["atlas"]`: the file `choice`, or with `auto` the one of the repository's
+    results/atlas/ of the campaign's identity (records/atlas.py), or None (`none`, or `auto` with no
+    such file, or a reward whose findings no atlas pools). CampaignError naming what does not fit."""
+    from asg_agent.paths import REPO, repo_relative
+    from asg_agent.records import atlas as ra
+    from asg_agent.scoring import atlas as sa
+
+    if choice == "none":
+        return None
+    kind = settings.get("reward")
+    if kind not in sa.KINDS:
+        if choice == "auto":
+            return None
+        raise CampaignError(f"--atlas {choice}: an atlas pools {', '.join(sa.KINDS)} findings, not the {kind} reward's")
+    ident = ra.identity({"name": exp.name, "settings": json.dumps(settings), "experiment_text": exp.text}, kind)
+    if choice == "auto":
+        found = ra.matching(os.path.join(REPO, "results", "atlas"), ident)
+        if not found:
+            return None
+        choice = found[0]
+    try:
+        d = ra.read(choice)
+    except ValueError as e:
+        raise CampaignError(f"--atlas: {e}") from None
+    diff = sa.same_identity(d["identity"], ident)
+    if diff:
+        raise CampaignError(
+            f"--atlas {choice}: its " + ", ".join(f"{k} {d['identity'].get(k)!r}" for k in diff)
+            + " differ from the campaign's (" + ", ".join(f"{ident.get(k)!r}" for k in diff) + ")"
+        )
+    settings["atlas"] = {"file": repo_relative(choice) or os.path.abspath(choice), "version": d["version"]}
+    return sa.load(choice)
+
+
+def coverage_line(settings: dict, found) -> str:
+    """The summary's coverage line of a campaign's findings `found` (campaign/findings.py), counted
+    again from the store (not the live tally); "" without an atlas."""
+    from asg_agent.paths import in_repo
+    from asg_agent.scoring import atlas as sa
+
+    rec = settings.get("atlas")
+    if not rec:
+        return ""
+    try:
+        atlas = sa.load(in_repo(rec["file"]))
+    except ValueError as e:
+        return f"coverage: not counted ({e})"
+    cov = sa.Coverage(atlas)
+    for f in found:
+        cov.add(tuple(f["place"]))
+    return (
+        f"coverage of the failure atlas {rec['file']} (v{rec['version']}; a place is covered by a finding of its "
+        f"class within {atlas.radius:g} m): {sa.coverage_text(cov.counts())}, recall {cov.recall():.2f}"
+    )
+
+
 def findings_lines(store, name, top: int = 10) -> list:
     """The summary's first lines (issue #78): the campaign's findings, their distinct places at
     each reported radius, by class, and the first finding of each distinct place with its replay
@@ -283,7 +348,8 @@ def findings_lines(store, name, top: int = 10) -> list:
     camp = store.campaign(name)
     settings = json.loads(camp["settings"]) if camp and camp["settings"] else {}
     rule = finding_rule(settings)
-    d = distinct_summary(findings(store, name))
+    found = findings(store, name)
+    d = distinct_summary(found)
     radii = sorted(d["distinct"])
     primary = d["primary_radius_m"]
     others = ", ".join(f"{d['distinct'][r]} at {r:g} m" for r in radii if r != primary)
@@ -293,6 +359,9 @@ def findings_lines(store, name, top: int = 10) -> list:
         "a finding is distinct when the obstacle it hit (or, without contact, where it ended) lies at "
         f"least {primary:g} m from every earlier distinct one of its class",
     ]
+    cov = coverage_line(settings, found)
+    if cov:
+        lines.append(cov)
     if d["by_class"]:
         lines.append("findings by what they hit: " + ", ".join(f"{k} {v}" for k, v in d["by_class"].items()))
     first = sorted(d["first_at_each_place"], key=lambda f: (-f["reward"], f["job"]))[:top]
@@ -461,9 +530,11 @@ def bar_text(st: dict) -> str:
         diff = f" perception {st['perception']} stack {st['stack']}"
     if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
         diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
+    cov = st.get("coverage")
+    covered = f" covered {cov['covered']}/{cov['known']}" if cov else ""
     return (
         f"{st['reward']} findings {st['findings']} distinct {st['distinct']} ({st['distinct_radius_m']:g} m)"
-        f" {st['rate_per_hour']:.0f}/h{diff} best proxy {best} >=3 {st['ge3']}"
+        f"{covered} {st['rate_per_hour']:.0f}/h{diff} best proxy {best} >=3 {st['ge3']}"
         + (f" err {st['errors']}" if st["errors"] else "")
     )
 
@@ -545,6 +616,7 @@ def main(argv=None, stand_in=None):
         method = make_search(a, exp)
         settings = campaign_settings(a, exp, workers, roles, candidates)
         settings["agent_blas"] = blas_identity()  # the search's arithmetic (asg_agent/blas.py)
+        atlas = campaign_atlas(a.atlas, exp, settings)
         if not a.fake_workers:
             check_stacks(exp, settings, workers, roles)
     except (ExperimentError, ValueError, CampaignError) as e:
@@ -571,6 +643,7 @@ def main(argv=None, stand_in=None):
             reward=a.reward,
             collision_bonus=a.collision_bonus,
             callbacks=[FunctionCallback(progress=progress)],
+            atlas=atlas,
         )
     )
     return run(a, c, store, name, bar, progress, collector, workers, roles)

@@ -46,6 +46,7 @@ METHODS = (
     "map-elites",
     "surrogate-ts",
     "novelty-ts",
+    "coverage-ts",
     "rule-sampler",
 )
 
@@ -404,6 +405,10 @@ def make_method(
         from asg_agent.search.novelty import NoveltyTS
 
         return NoveltyTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
+    if name == "coverage-ts":
+        from asg_agent.search.coverage import CoverageTS
+
+        return CoverageTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
     if name == "rule-sampler":
         from asg_agent.search.rules import RuleSampler, load_rule
 

@@ -1,0 +1,284 @@
+"""`coverage-ts`: a search that spreads its findings over the places where the stack fails
+(issue #93; no ROS imports).
+
+What a user gains from a campaign is how many of the ways the stack fails it shows: findings at
+places it had not found yet. novelty-ts modelled the reward of a whole layout and avoided the
+places found; it found the same easy obstacle in many places nearby. This method models the
+obstacle, the natural unit of a finding (a finding names the obstacle it hit), and aims
+proposals at the cells no finding covers yet:
+
+- **An obstacle-level model.** Every run gives one row per obstacle: its features (its class x a
+  cell along x beside the route, its class x how close its sun shadow comes to the route, and how
+  many other obstacles stand on the route before it) and whether the run was a finding that hit
+  it (1) or not (0; a finding without contact marks no obstacle). Bayesian linear regression
+  (scikit-learn's `BayesianRidge`) of that label on the features, refitted after every result,
+  estimates each obstacle's chance of being the one a finding hits. A proposal draws one weight
+  vector from the posterior (Thompson sampling), so cells the model is unsure of get their turn.
+- **Aimed at what is not covered.** A candidate layout's score is the sum over its obstacles of
+  that chance times a novelty weight: 1 for an obstacle standing at least `radius_m` [m] from
+  every place of its class this campaign found or aims at in a proposal still in flight, else
+  `covered_weight`. The best of `candidates` layouts is proposed; the obstacle that gave it most
+  is its aim, held as a provisional place until its result is in, so parallel proposals aim
+  elsewhere. Nothing is banned: a layout at known places can still win on a high chance.
+- **A portfolio of generators.** Candidates come from one of two generators: `uniform` (fresh
+  layouts over the experiment's action space) and `band` (fresh layouts with each obstacle, with
+  probability 1/2, along the straight start-goal route within the experiment's route_lateral_m
+  [m] of it). Each keeps a Beta posterior of how often its proposals became a finding at a new
+  place; each proposal draws from them (Thompson sampling) to pick its generator, so the campaign
+  moves to the one that pays on its scene. The first `init_random` proposals draw the generator
+  at random and the layout uniformly from it.
+
+Learns, does not know: nothing here names a class, a size or a place, or holds a prior about
+where a stack fails; every class of the scenario gets the same features and the same generators.
+Everything is a function of the seed and the results, applied in job order.
+"""
+
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from asg_agent.records.experiment import ROUTE_SPACES, Experiment
+from asg_agent.scoring.atlas import RADIUS_M
+from asg_agent.scoring.places import DistinctPlaces
+from asg_agent.search.base import SearchMethod
+from asg_agent.search.surrogate import LATERAL_EDGES, ObstacleFeatures
+from asg_scenario.layout import RouteFrame, mesh_of_instances
+
+GENERATORS = ("uniform", "band")
+AHEAD_BINS = 4  # other obstacles on the route before this one: 0, 1, 2, 3 or more
+MATCH_M = 0.05  # [m] a finding's place is the obstacle of its class standing this close to it
+
+
+class CoverageTS(SearchMethod):
+    """The search method (see the module's text); registered as `coverage-ts` in methods.py."""
+
+    name = "coverage-ts"
+
+    def __init__(
+        self,
+        experiment: Experiment,
+        seed: int,
+        init_random: int = 30,
+        candidates: int = 2000,
+        radius_m: float = RADIUS_M,
+        covered_weight: float = 0.05,
+        along_bins: int = 8,
+    ):
+        if not (init_random >= 1 and candidates >= 1 and along_bins >= 1):
+            raise ValueError("coverage-ts: init_random, candidates and along_bins must be >= 1")
+        if not radius_m > 0.0:
+            raise ValueError(f"coverage-ts: radius_m {radius_m} [m] must be > 0")
+        if not 0.0 <= covered_weight <= 1.0:
+            raise ValueError(f"coverage-ts: covered_weight {covered_weight} must be in [0, 1]")
+        super().__init__(experiment, seed)
+        self.init_random, self.candidates = int(init_random), int(candidates)
+        self.radius, self.covered_weight, self.along_bins = float(radius_m), float(covered_weight), int(along_bins)
+        self.feat = ObstacleFeatures(experiment)
+        self.route = RouteFrame(experiment.scenario)
+        self.meshes = np.array(mesh_of_instances(experiment.scenario))
+        self.cls = self.feat.cls
+        self.n = experiment.position_dim // 2
+        k = len(self.feat.classes)
+        self.n_lat = self.feat.n_lat
+        self.dim = k * self.n_lat * self.along_bins + k * self.n_lat + AHEAD_BINS
+        self.actions: List[np.ndarray] = []  # per observed run: its action
+        self.X: List[np.ndarray] = []  # per observed run: (n, dim) obstacle features
+        self.Y: List[np.ndarray] = []  # per observed run: (n,) 1 for the obstacle a finding hit
+        self.found = DistinctPlaces(self.radius)  # the campaign's findings' places
+        self.aims: Dict[int, tuple] = {}  # job -> (class, x, y) aimed at, until its result is in
+        self.outcomes: Dict[int, tuple] = {}  # job -> (place, finding), until observed
+        self.generator_of: Dict[int, str] = {}
+        self.wins = {g: [0, 0] for g in GENERATORS}  # generator -> [findings at new places, proposals]
+        self.model = None
+
+    # -- features ----------------------------------------------------------------------------
+    def obstacle_cells(self, xy: np.ndarray) -> np.ndarray:
+        """(m, n, 3) the three features that are 1 for each obstacle of m layouts (positions
+        (m, n, 2) [m]): its place cell, its shadow cell and its count of obstacles ahead."""
+        m, n = xy.shape[:2]
+        t, d = self.feat._route_coords(xy)
+        lat = np.searchsorted(self.feat.edges, np.abs(d), side="right")
+        along = np.clip((t * self.along_bins).astype(int), 0, self.along_bins - 1)
+        _, d_tip = self.feat._route_coords(xy + self.feat.shadow[None])
+        crosses = np.sign(d) != np.sign(d_tip)
+        d_shadow = np.where(crosses, 0.0, np.minimum(np.abs(d), np.abs(d_tip)))
+        shadow = np.searchsorted(self.feat.edges, d_shadow, side="right")
+        # on the route: within the first lateral edge; before: smaller t
+        on = np.abs(d) < self.feat.edges[1]
+        ahead = ((t[:, None, :] < t[:, :, None]) & on[:, None, :]).sum(axis=2)
+        ahead = np.minimum(ahead, AHEAD_BINS - 1)
+        k = len(self.feat.classes)
+        cls = np.broadcast_to(self.cls[None, :], (m, n))
+        return np.stack(
+            [
+                (cls * self.along_bins + along) * self.n_lat + lat,
+                k * self.n_lat * self.along_bins + cls * self.n_lat + shadow,
+                k * self.n_lat * (self.along_bins + 1) + ahead,
+            ],
+            axis=2,
+        )
+
+    def obstacle_features(self, xy: np.ndarray) -> np.ndarray:
+        """(m, n, dim) one-hot features of each obstacle of m layouts (positions (m, n, 2) [m])."""
+        cells = self.obstacle_cells(xy)
+        f = np.zeros(cells.shape[:2] + (self.dim,))
+        np.put_along_axis(f, cells, 1.0, axis=2)
+        return f
+
+    # -- generators --------------------------------------------------------------------------
+    def _band(self, rng, m: int) -> np.ndarray:
+        """m fresh actions with each obstacle, with probability 1/2, within route_lateral_m [m]
+        of the route (uniform along its usable range); the rest of the action uniform."""
+        a = rng.uniform(-1.0, 1.0, (m, self.exp.action_dim))
+        near = rng.uniform(size=(m, self.n)) < 0.5
+        lo, hi = self.route.t_range
+        t = rng.uniform(lo, hi, (m, self.n))
+        w = self.exp.route_lateral_m
+        d = rng.uniform(-w, w, (m, self.n))
+        if self.exp.action_space in ROUTE_SPACES:
+            u = (t - lo) / (hi - lo) * 2.0 - 1.0
+            v = d / (2.0 * w) if self.exp.action_space == "route-wide" else d / w
+            pos = np.stack([u, v], axis=2)
+        else:
+            pos = self.route.point(t, d) / self.exp.size * 2.0 - 1.0
+        p = a[:, : 2 * self.n].reshape(m, self.n, 2)
+        p[near] = pos[near]
+        a[:, : 2 * self.n] = p.reshape(m, 2 * self.n)
+        return np.clip(a, -1.0, 1.0)
+
+    def _candidates(self, rng, generator: str, m: int) -> np.ndarray:
+        if generator == "band":
+            return self._band(rng, m)
+        return rng.uniform(-1.0, 1.0, (m, self.exp.action_dim))
+
+    def _generator(self, rng) -> str:
+        draw = [rng.beta(1 + w, 1 + n - w) for w, n in (self.wins[g] for g in GENERATORS)]
+        return GENERATORS[int(np.argmax(draw))]
+
+    def _novelty(self, xy: np.ndarray) -> np.ndarray:
+        """(m, n) novelty weights: 1 where an obstacle stands `radius` from every found or aimed
+        place of its class, else covered_weight."""
+        m = xy.shape[0]
+        known = DistinctPlaces.from_state(self.found.state_dict())
+        for p in self.aims.values():
+            known.by_class.setdefault(p[0], []).append((p[1], p[2]))
+        out = np.ones((m, self.n))
+        for cls, pts in known.by_class.items():
+            cols = np.flatnonzero(self.meshes == cls)
+            if len(cols) and pts:
+                near = known.near(cls, xy[:, cols].reshape(-1, 2)).reshape(m, len(cols))
+                out[:, cols] = np.where(near, self.covered_weight, 1.0)
+        return out
+
+    # -- the SearchMethod interface ----------------------------------------------------------
+    def _rng(self, *keys):
+        return np.random.default_rng([self.seed, 17, *keys])
+
+    def propose(self, job, episode, step, state):
+        rng = self._rng(2, job)
+        gen = GENERATORS[int(rng.integers(len(GENERATORS)))] if job < self.init_random else self._generator(rng)
+        self.generator_of[int(job)] = gen
+        if job < self.init_random or self.model is None:
+            return self._candidates(rng, gen, 1)[0].astype(np.float32)
+        cand = self._candidates(rng, gen, self.candidates)
+        xy = self.exp.positions_of(cand)
+        cov = self.model.sigma_ + 1e-9 * np.eye(self.dim)
+        w = rng.multivariate_normal(self.model.coef_, cov, method="cholesky")
+        chance = np.clip(w[self.obstacle_cells(xy)].sum(axis=2) + self.model.intercept_, 0.0, 1.0)
+        value = chance * self._novelty(xy)
+        best = int(np.argmax(value.sum(axis=1)))
+        i = int(np.argmax(value[best]))
+        self.aims[int(job)] = (str(self.meshes[i]), float(xy[best, i, 0]), float(xy[best, i, 1]))
+        return cand[best].astype(np.float32)
+
+    def outcome(self, job, place, finding: bool):
+        self.outcomes[int(job)] = (tuple(place) if place is not None else None, bool(finding))
+
+    def _hit(self, xy: np.ndarray, place) -> Optional[int]:
+        """The obstacle of a layout (n, 2) [m] that a finding's place names (None: no contact)."""
+        cls, x, y = place
+        d = np.hypot(xy[:, 0] - x, xy[:, 1] - y)
+        d[self.meshes != cls] = np.inf
+        i = int(np.argmin(d))
+        return i if d[i] <= MATCH_M else None
+
+    def observe(self, job, episode, step, state, action, reward, next_state, done) -> Dict:
+        place, finding = self.outcomes.pop(int(job), (None, False)) if job is not None else (None, False)
+        gen = self.generator_of.pop(int(job), None) if job is not None else None
+        if job is not None:
+            self.aims.pop(int(job), None)
+        if reward is None:
+            return {}
+        xy = self.exp.positions_of(np.asarray(action, np.float64)[None])
+        y = np.zeros(self.n)
+        new = False
+        if finding and place is not None:
+            i = self._hit(xy[0], place)
+            if i is not None:
+                y[i] = 1.0
+            new = self.found.add(place)
+        if gen is not None:
+            self.wins[gen][0] += int(new)
+            self.wins[gen][1] += 1
+        self.actions.append(np.asarray(action, np.float64))
+        self.X.append(self.obstacle_features(xy)[0])
+        self.Y.append(y)
+        self._fit()
+        return {"coverage_found": len(self.found), "coverage_rows": len(self.Y) * self.n}
+
+    def _fit(self):
+        from sklearn.linear_model import BayesianRidge
+
+        if len(self.Y) < 2:
+            return
+        self.model = BayesianRidge(fit_intercept=True).fit(np.concatenate(self.X), np.concatenate(self.Y))
+
+    def config(self):
+        return {
+            "init_random": self.init_random,
+            "candidates": self.candidates,
+            "radius_m": self.radius,
+            "covered_weight": self.covered_weight,
+            "along_bins": self.along_bins,
+            "lateral_edges": list(LATERAL_EDGES),
+            "generators": list(GENERATORS),
+        }
+
+    def state_dict(self):
+        return {
+            "actions": [a.tolist() for a in self.actions],
+            "Y": [y.tolist() for y in self.Y],
+            "found": self.found.state_dict(),
+            "aims": {str(k): list(v) for k, v in self.aims.items()},
+            "outcomes": {str(k): [list(p) if p else None, f] for k, (p, f) in self.outcomes.items()},
+            "generator_of": {str(k): v for k, v in self.generator_of.items()},
+            "wins": {k: list(v) for k, v in self.wins.items()},
+        }
+
+    def load_state_dict(self, d):
+        self.actions = [np.asarray(a, np.float64) for a in d["actions"]]
+        self.X = list(self.obstacle_features(self.exp.positions_of(np.asarray(self.actions)))) if self.actions else []
+        self.Y = [np.asarray(y, float) for y in d["Y"]]
+        self.found = DistinctPlaces.from_state(d["found"])
+        self.aims = {int(k): (str(v[0]), float(v[1]), float(v[2])) for k, v in d["aims"].items()}
+        self.outcomes = {int(k): (tuple(p) if p else None, bool(f)) for k, (p, f) in d["outcomes"].items()}
+        self.generator_of = {int(k): str(v) for k, v in d["generator_of"].items()}
+        self.wins = {k: [int(a), int(b)] for k, (a, b) in d["wins"].items()}
+        self.model = None
+        self._fit()
+
+
+def chance_summary(method: CoverageTS) -> List[tuple]:
+    """The model's largest per-obstacle chances by class and cell (for a report): (class, cell
+    along [1..along_bins], lateral bin, chance), largest first; empty before a fit."""
+    if method.model is None:
+        return []
+    w = method.model.coef_
+    out = []
+    for c, name in enumerate(method.feat.classes):
+        for a in range(method.along_bins):
+            for la in range(method.n_lat):
+                v = w[(c * method.along_bins + a) * method.n_lat + la] + method.model.intercept_
+                out.append((name, a + 1, la, float(v)))
+    return sorted(out, key=lambda r: -r[3])
+
