@@ -136,7 +136,9 @@ def test_the_atlas_command_builds_shows_and_recalls_and_names_an_export_of_anoth
     assert cli.main(["build", "--kind", "flaw", "--out", out, a]) == 0
     assert "at 5 m: 4 places (b 4)" in capsys.readouterr().out
     assert cli.main(["recall", out, b, "--budget", "2"]) == 0
-    assert "b: recall 0.25 in 2 scenarios: covered 1 of 4 known failure places (b 1/4), 0 new" in capsys.readouterr().out
+    assert (
+        "b: recall 0.25 in 2 scenarios: covered 1 of 4 known failure places (b 1/4), 0 new" in capsys.readouterr().out
+    )
     assert cli.main(["recall", out, b, "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert (r["covered"], r["new"], r["half_at"]) == (2, 1, 4)
@@ -161,7 +163,10 @@ def _campaign(exp, store, name, atlas=None, n=24, method="random", seed=4):
             slots=4,
             reward="flaw",
             references={attr.FULL: FakePool(1, gain=0.0, prefix="f"), attr.TRUTH: FakePool(1, gain=0.0, prefix="g")},
-            settings={"experiment_file": "experiments/exp1.yaml", "references": {"full": {"model": "full"}, "ground_truth": {}}},
+            settings={
+                "experiment_file": "experiments/exp1.yaml",
+                "references": {"full": {"model": "full"}, "ground_truth": {}},
+            },
             atlas=atlas,
         )
     )
@@ -184,11 +189,19 @@ def test_a_campaign_counts_its_coverage_live_as_an_independent_recount_of_its_ex
     # the recount: plain loops over the JSON of the atlas and the export, no project geometry
     places = json.load(open(tmp_path / "atlas.json"))["groupings"][0]["places"]
     _, rows = read_export(str(tmp_path / "second.jsonl.gz"))
-    hits = [(r["meshes"][r["collision_with"]], *r["positions"][r["collision_with"]]) for r in rows if r["attribution"] == "flaw"]
-    covered = [p for p in places if any(h[0] == p["cls"] and math.hypot(h[1] - p["x"], h[2] - p["y"]) < 5.0 for h in hits)]
+    hits = [
+        (r["meshes"][r["collision_with"]], *r["positions"][r["collision_with"]])
+        for r in rows
+        if r["attribution"] == "flaw"
+    ]
+    covered = [
+        p for p in places if any(h[0] == p["cls"] and math.hypot(h[1] - p["x"], h[2] - p["y"]) < 5.0 for h in hits)
+    ]
     st = c.status()
     assert st["coverage"]["covered"] == len(covered) and st["coverage"]["known"] == len(places)
-    outside = [h for h in hits if not any(h[0] == p["cls"] and math.hypot(h[1] - p["x"], h[2] - p["y"]) < 5.0 for p in places)]
+    outside = [
+        h for h in hits if not any(h[0] == p["cls"] and math.hypot(h[1] - p["x"], h[2] - p["y"]) < 5.0 for p in places)
+    ]
     assert st["coverage"]["new"] == count_distinct(outside, 5.0)
     assert 0 < len(covered) < len(places) or st["coverage"]["new"] > 0  # the test sees both counts move
     from asg_agent.cli.campaign import bar_text, coverage_line
@@ -207,11 +220,20 @@ def test_campaign_atlas_finds_the_atlas_of_its_identity_and_refuses_another(tmp_
     from asg_agent.cli import campaign as cc
 
     exp = load_experiment(EXP1)
-    settings = {"reward": "flaw", "experiment_file": "experiments/exp1.yaml", "stack": "paper", "perception": "unet",
-                "model": "flawed", "unet_backend": "polyphase", "planner_config": "planner.yaml",
-                "references": {"full": {"model": "full", "perception": "unet"}}}
+    settings = {
+        "reward": "flaw",
+        "experiment_file": "experiments/exp1.yaml",
+        "stack": "paper",
+        "perception": "unet",
+        "model": "flawed",
+        "unet_backend": "polyphase",
+        "planner_config": "planner.yaml",
+        "references": {"full": {"model": "full", "perception": "unet"}},
+    }
     ident = ra.identity({"settings": json.dumps(settings), "experiment_text": exp.text}, "flaw")
-    f = ra.build([["b", 1.0, 2.0, 0, 0]], [{"export": "x", "campaign": "x", "scenarios": 1, "findings": 1, "digest": "0"}], ident)
+    f = ra.build(
+        [["b", 1.0, 2.0, 0, 0]], [{"export": "x", "campaign": "x", "scenarios": 1, "findings": 1, "digest": "0"}], ident
+    )
     ra.write(f, str(tmp_path / "results" / "atlas" / "exp1.json"))
     monkeypatch.setattr("asg_agent.paths.REPO", str(tmp_path))
     s = dict(settings)
@@ -266,7 +288,10 @@ def test_coverage_ts_covers_more_places_than_sampling_in_its_own_space_and_learn
     for seed in (1, 2):
         m, mine = _search("coverage-ts", exp, seed, options={"candidates": 500})
         _, rnd = _search("random", exp, seed)
-        assert count_distinct(mine, 5.0) > count_distinct(rnd, 5.0), (count_distinct(mine, 5.0), count_distinct(rnd, 5.0))
+        assert count_distinct(mine, 5.0) > count_distinct(rnd, 5.0), (
+            count_distinct(mine, 5.0),
+            count_distinct(rnd, 5.0),
+        )
         assert len(m.found) == count_distinct(mine, 5.0)
         # its model puts the failing class on the route above the other class there
         from asg_agent.search.coverage import chance_summary

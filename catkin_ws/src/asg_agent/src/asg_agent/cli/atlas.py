@@ -33,7 +33,9 @@ def parser() -> argparse.ArgumentParser:
     b = sub.add_parser("build", help="an atlas from exports (one identity; the others skipped, each with why)")
     b.add_argument("--kind", choices=sa.KINDS, required=True, help="the findings it pools")
     b.add_argument("--out", required=True, help="the atlas file to write (JSON)")
-    b.add_argument("--like", default="", help="the export whose identity the atlas takes (default: the first usable one)")
+    b.add_argument(
+        "--like", default="", help="the export whose identity the atlas takes (default: the first usable one)"
+    )
     b.add_argument("exports", nargs="+", help="campaign exports (globs are expanded)")
     a = sub.add_parser("add", help="the atlas's next version, with the exports' findings pooled in")
     a.add_argument("atlas")
@@ -121,14 +123,18 @@ def _recall(args) -> int:
         why = ra.usable(campaign, atlas.identity["kind"])
         diff = sa.same_identity(atlas.identity, ra.identity(campaign, atlas.identity["kind"])) if why is None else []
         if why or diff:
-            print(f"atlas: {path}: " + (why or "another identity than the atlas's: " + ", ".join(diff)), file=sys.stderr)
+            print(
+                f"atlas: {path}: " + (why or "another identity than the atlas's: " + ", ".join(diff)), file=sys.stderr
+            )
             return 2
         r = recall_of(atlas, rows, args.budget)
         if args.json:
             print(json.dumps(dict(r, export=path, campaign=campaign["name"]), sort_keys=True))
         else:
             half = f"half covered after {r['half_at']} scenarios" if r["half_at"] else "half never covered"
-            print(f"{campaign['name']}: recall {r['recall']:.2f} in {r['scenarios']} scenarios: {sa.coverage_text(r)}; {half}")
+            print(
+                f"{campaign['name']}: recall {r['recall']:.2f} in {r['scenarios']} scenarios: {sa.coverage_text(r)}; {half}"
+            )
     return 0
 
 

@@ -310,8 +310,11 @@ def campaign_atlas(choice: str, exp, settings: dict):
     diff = sa.same_identity(d["identity"], ident)
     if diff:
         raise CampaignError(
-            f"--atlas {choice}: its " + ", ".join(f"{k} {d['identity'].get(k)!r}" for k in diff)
-            + " differ from the campaign's (" + ", ".join(f"{ident.get(k)!r}" for k in diff) + ")"
+            f"--atlas {choice}: its "
+            + ", ".join(f"{k} {d['identity'].get(k)!r}" for k in diff)
+            + " differ from the campaign's ("
+            + ", ".join(f"{ident.get(k)!r}" for k in diff)
+            + ")"
         )
     settings["atlas"] = {"file": repo_relative(choice) or os.path.abspath(choice), "version": d["version"]}
     return sa.load(choice)

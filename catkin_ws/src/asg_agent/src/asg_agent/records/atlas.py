@@ -168,7 +168,9 @@ def build_from(paths: Sequence[str], kind: str, like: Optional[str] = None):
     ident = identity(read_export(like)[0], kind) if like else None
     findings, sources, ident, skipped = gather(paths, kind, ident)
     if not sources:
-        raise ValueError("no export can show findings of kind " + kind + ": " + "; ".join(f"{p}: {w}" for p, w in skipped))
+        raise ValueError(
+            "no export can show findings of kind " + kind + ": " + "; ".join(f"{p}: {w}" for p, w in skipped)
+        )
     return build(findings, sources, ident), skipped
 
 
@@ -178,7 +180,9 @@ def add(atlas_file: dict, paths: Sequence[str]):
     old = atlas_file
     ident = old["identity"]
     findings = [list(f) for f in old["findings"]]
-    new, sources, _, skipped = gather(paths, ident["kind"], ident, len(old["sources"]), {s["digest"] for s in old["sources"]})
+    new, sources, _, skipped = gather(
+        paths, ident["kind"], ident, len(old["sources"]), {s["digest"] for s in old["sources"]}
+    )
     if not sources:
         raise ValueError("no export adds to the atlas: " + "; ".join(f"{p}: {w}" for p, w in skipped))
     return build(findings + new, old["sources"] + sources, ident, old["version"] + 1), skipped

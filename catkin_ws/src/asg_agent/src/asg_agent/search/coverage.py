@@ -281,4 +281,3 @@ def chance_summary(method: CoverageTS) -> List[tuple]:
                 v = w[(c * method.along_bins + a) * method.n_lat + la] + method.model.intercept_
                 out.append((name, a + 1, la, float(v)))
     return sorted(out, key=lambda r: -r[3])
-

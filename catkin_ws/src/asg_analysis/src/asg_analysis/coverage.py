@@ -1,0 +1,181 @@
+"""Coverage of a failure atlas (issue #93; no ROS): protocol v5's endpoint read from exports.
+
+    python3 -m asg_analysis coverage doc [--check]                 # docs/agent.md's atlas block
+    python3 -m asg_analysis coverage figure [--out docs/images/atlas_growth.png]
+    python3 -m asg_analysis coverage arms ATLAS ARM=GLOB [ARM=GLOB ...] [--budget 300] [--radius 5]
+
+`arms` gives, per arm, each seed's recall of the atlas within its first BUDGET scenarios (the
+share of the atlas's places a flaw finding of the same class came within the radius of), per
+class, the new places beyond the atlas, the scenarios to half the atlas and distinct findings at
+2 m and 5 m; then each arm against the first (the baseline): the ratio of mean recalls with its bootstrap
+interval and the exact two-sided Mann-Whitney test (stats.mann_whitney, ties included). The
+atlas file and its places are scoring/atlas.py's; the recall of one export is the `atlas recall`
+command's (asg_agent.cli.atlas.recall_of).
+"""
+
+import argparse
+import glob
+import os
+import sys
+from typing import Dict, List
+
+from asg_agent.cli.atlas import recall_of, summary_lines
+from asg_agent.paths import REPO
+from asg_agent.records import atlas as ra
+from asg_agent.records.export import read_export
+from asg_agent.scoring import atlas as sa
+from asg_agent.scoring.places import count_distinct, place_of_row
+from asg_analysis import stats
+
+DOC = os.path.join(REPO, "docs", "agent.md")
+BEGIN, END = "<!-- atlases: begin -->", "<!-- atlases: end -->"
+FIGURE = os.path.join(REPO, "docs", "images", "atlas_growth.png")
+
+
+def atlas_files() -> List[str]:
+    return sorted(glob.glob(os.path.join(REPO, "results", "atlas", "*.json")))
+
+
+def doc_block(paths: List[str]) -> str:
+    """The block of docs/agent.md: each atlas's `show` lines under its file name."""
+    out = [BEGIN, "```text"]
+    for p in paths:
+        out.append(f"$ rosrun asg_agent atlas show {os.path.relpath(p, REPO)}")
+        out += summary_lines(ra.read(p))
+    return "\n".join(out + ["```", END])
+
+
+def rewrite_doc(check: bool) -> int:
+    text = open(DOC, encoding="utf-8").read()
+    if BEGIN not in text or END not in text:
+        print(f"coverage: {DOC} has no {BEGIN} ... {END} block", file=sys.stderr)
+        return 2
+    new = text[: text.index(BEGIN)] + doc_block(atlas_files()) + text[text.index(END) + len(END) :]
+    if check:
+        return 0 if new == text else 1
+    with open(DOC, "w", encoding="utf-8") as f:
+        f.write(new)
+    return 0
+
+
+def figure(out: str) -> str:
+    """Each atlas's growth curve at 5 m (places covered along a seeded shuffle of its pooled
+    scenarios) beside its Chao1 estimate."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = atlas_files()
+    fig, axes = plt.subplots(1, len(paths), figsize=(3.2 * len(paths), 3.0), squeeze=False)
+    for ax, p in zip(axes[0], paths):
+        d = ra.read(p)
+        g = next(g for g in d["groupings"] if g["radius_m"] == sa.RADIUS_M)
+        n, k = zip(*g["growth"])
+        ax.plot(n, k, color="tab:blue", label="places covered")
+        ax.axhline(g["chao1"]["chao1"], color="tab:red", ls="--", label="Chao1 estimate")
+        i = d["identity"]
+        ax.set_title(
+            f"{os.path.basename(p)[:-5]}\n{i['kind']}, completeness {g['chao1']['completeness']:.2f}", fontsize=8
+        )
+        ax.set_xlabel("scenarios pooled (shuffled)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0][0].set_ylabel(f"places at {sa.RADIUS_M:g} m", fontsize=8)
+    axes[0][0].legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def campaign_row(atlas: sa.Atlas, path: str, budget: int) -> Dict:
+    """One export's endpoint figures within `budget` scenarios."""
+    campaign, rows = read_export(path)
+    diff = sa.same_identity(atlas.identity, ra.identity(campaign, atlas.identity["kind"]))
+    if diff:
+        raise ValueError(f"{path}: another identity than the atlas's ({', '.join(diff)})")
+    rows = sorted(rows, key=lambda r: r["job"])[:budget]
+    r = recall_of(atlas, rows, budget)
+    found = [place_of_row(x) for x in rows if sa.is_finding(x, atlas.identity["kind"])]
+    return dict(
+        r,
+        campaign=campaign["name"],
+        seed=campaign["seed"],
+        findings=len(found),
+        distinct_2m=count_distinct(found, 2.0),
+        distinct_5m=count_distinct(found, 5.0),
+    )
+
+
+def arms(atlas_path: str, specs: Dict[str, List[str]], budget: int, radius: float = sa.RADIUS_M) -> Dict:
+    """Every arm's per-seed rows and each arm against the first (see the module's text)."""
+    atlas = sa.load(atlas_path, radius)
+    out = {"atlas": os.path.relpath(atlas_path, REPO), "budget": budget, "places": len(atlas), "arms": {}}
+    for arm, paths in specs.items():
+        out["arms"][arm] = [campaign_row(atlas, p, budget) for p in paths]
+    first = next(iter(specs))
+    ref = [r["recall"] for r in out["arms"][first]]
+    out["tests"] = {}
+    for arm in list(specs)[1:]:
+        mine = [r["recall"] for r in out["arms"][arm]]
+        ratio, lo, hi = stats.ratio_ci(mine, ref)
+        out["tests"][arm] = dict(stats.mann_whitney(mine, ref), ratio=ratio, lo=lo, hi=hi)
+    return out
+
+
+def arms_text(t: Dict) -> str:
+    lines = [f"recall of {t['atlas']} ({t['places']} places at the radius) within {t['budget']} scenarios"]
+    for arm, rows in t["arms"].items():
+        per = ", ".join(f"{r['recall']:.2f}" for r in rows)
+        mean = sum(r["recall"] for r in rows) / len(rows)
+        lines.append(f"  {arm}: {mean:.3f} (per seed {per}); new places {[r['new'] for r in rows]}")
+        for cls in sorted(rows[0]["by_class"]):
+            a = sum(r["by_class"][cls][0] for r in rows) / len(rows)
+            lines.append(f"    {cls}: {a:.1f} of {rows[0]['by_class'][cls][1]} covered on average")
+    first = next(iter(t["arms"]))
+    for arm, s in t["tests"].items():
+        lines.append(
+            f"  {arm} / {first}: {s['ratio']:.2f}x ({s['lo']:.2f}-{s['hi']:.2f}), exact Mann-Whitney p = {s['p']:.3f}"
+        )
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    import json
+
+    p = argparse.ArgumentParser(prog="asg_analysis coverage", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    d = sub.add_parser("doc", help="rewrite docs/agent.md's atlas block from results/atlas/")
+    d.add_argument("--check", action="store_true", help="exit 1 when the block is stale")
+    f = sub.add_parser("figure", help="the atlases' growth curves")
+    f.add_argument("--out", default=FIGURE)
+    a = sub.add_parser("arms", help="protocol v5's endpoint per arm and seed, each arm against the first")
+    a.add_argument("atlas")
+    a.add_argument("arms", nargs="+", help="ARM=GLOB of its exports")
+    a.add_argument("--budget", type=int, default=300)
+    a.add_argument("--radius", type=float, default=sa.RADIUS_M)
+    a.add_argument("--json", default="", help="also write the figures to this JSON file")
+    args = p.parse_args(argv)
+    try:
+        if args.cmd == "doc":
+            return rewrite_doc(args.check)
+        if args.cmd == "figure":
+            print(figure(args.out))
+            return 0
+        specs = {}
+        for spec in args.arms:
+            arm, eq, pattern = spec.partition("=")
+            paths = sorted(glob.glob(pattern))
+            if not eq or not paths:
+                raise ValueError(f"arm {spec!r}: must be ARM=GLOB matching exports")
+            specs[arm] = paths
+        t = arms(args.atlas, specs, args.budget, args.radius)
+    except ValueError as e:
+        print(f"coverage: {e}", file=sys.stderr)
+        return 2
+    print(arms_text(t))
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as fh:
+            json.dump(t, fh, indent=1, sort_keys=True)
+    return 0

@@ -1,0 +1,51 @@
+"""Issue #93: the atlases of results/atlas/ as docs/agent.md shows them, and protocol v5's
+baseline figure recounted from the exports by a plain loop (no project geometry)."""
+
+import gzip
+import json
+import math
+import os
+import subprocess
+import sys
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+
+
+def test_the_docs_atlas_block_is_the_show_output_of_every_atlas_file():
+    rc = subprocess.run(
+        [sys.executable, "-m", "asg_analysis", "coverage", "doc", "--check"], cwd=REPO, capture_output=True, text=True
+    )
+    assert rc.returncode == 0, "docs/agent.md's atlas block is stale: python3 -m asg_analysis coverage doc"
+
+
+def _recall(atlas, path, budget=300):
+    places = [g for g in atlas["groupings"] if g["radius_m"] == 5.0][0]["places"]
+    with gzip.open(path, "rt") as f:
+        f.readline()
+        rows = sorted((json.loads(line) for line in f), key=lambda r: r["job"])[:budget]
+    hits = [
+        (r["meshes"][r["collision_with"]], *r["positions"][r["collision_with"]])
+        for r in rows
+        if r.get("attribution") == "flaw" and r["termination"] == "COLLISION" and r["collision_with"] is not None
+    ]
+    ends = [
+        ("no contact", *r["trajectory_xy"][-1])
+        for r in rows
+        if r.get("attribution") == "flaw" and not (r["termination"] == "COLLISION" and r["collision_with"] is not None)
+    ]
+    got = hits + ends
+    n = sum(any(c == p["cls"] and math.hypot(x - p["x"], y - p["y"]) < 5.0 for c, x, y in got) for p in places)
+    return n / len(places)
+
+
+def test_protocol_v5s_baseline_sentence_is_the_recount_of_v4s_exports():
+    # the atlas as the protocol was written (results/atlas/ holds its newer versions)
+    atlas = json.load(open(os.path.join(REPO, "results", "coverage_v5", "exp1-flaw.v1.json")))
+    v4 = os.path.join(REPO, "results", "distinct_v4")
+    mean = {
+        arm: sum(_recall(atlas, os.path.join(v4, f"dist4-{arm}-s{s}.jsonl.gz")) for s in range(30, 35)) / 5
+        for arm in ("default", "route-random")
+    }
+    text = open(os.path.join(REPO, "experiments", "protocol-coverage-v5.yaml")).read()
+    want = f"recall {mean['default']:.2f} against\n# {mean['route-random']:.2f} of results/atlas/exp1-flaw.json v{atlas['version']}"
+    assert want in text, (want, mean)
