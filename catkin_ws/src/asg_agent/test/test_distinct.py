@@ -225,3 +225,20 @@ def test_a_campaign_tells_its_search_each_place_and_counts_distinct_findings_in_
     proxy = dict(c.status(), reward="proxy", findings=0, distinct=0)  # route-random's reward:=proxy
     assert bar_text(proxy).startswith("proxy findings 0 distinct 0 (2 m) ") and f" flaw {len(flaw)} " in bar_text(proxy)
     assert d["distinct"][1.0] >= d["distinct"][2.0] >= d["distinct"][5.0] >= 1
+
+
+def test_a_rule_reads_in_words_with_counts_bins_and_quarters_spelt_out():
+    r = Rule(
+        (
+            Condition("barberry d>=20m q1", True, 1.5),
+            Condition("barberry d<2m q2", False, 0.5),
+            Condition("juniper shadow d<4m", True, 0.5),
+            Condition("juniper d<4m q3", False, 2.5),
+        )
+    )
+    assert r.words((2.0, 4.0, 7.0, 10.0, 20.0)) == (
+        "2 or more barberries 20 m or more from the route in its first quarter; and no barberry within 2 m of "
+        "the route in its second quarter; and a juniper whose shadow comes between 2 and 4 m from the route; "
+        "and at most 2 junipers between 2 and 4 m from the route in its third quarter"
+    )
+    assert Rule((Condition("action[16]", True, 0.5),)).words() == "action[16] >= 0.5"  # no place feature: as written

@@ -82,6 +82,7 @@ def learn(rows: List[dict], experiment, target: Optional[str] = "flaw", depth: i
     from sklearn.tree import DecisionTreeClassifier
 
     from asg_agent.search.rules import Condition, Rule
+    from asg_agent.search.surrogate import ObstacleFeatures
 
     rows = sorted((r for r in rows if r["termination"] != "ERROR"), key=lambda r: (r.get("_campaign", ""), r["job"]))
     X, names = features(rows, experiment)
@@ -119,6 +120,7 @@ def learn(rows: List[dict], experiment, target: Optional[str] = "flaw", depth: i
             {
                 "rule": rule.to_dict(),
                 "text": rule.text(),
+                "words": rule.words(tuple(ObstacleFeatures(experiment).edges)),
                 "support": int((inside & keep).sum()),
                 "distinct": hits,
                 "precision": precision,
@@ -198,7 +200,7 @@ def lines(result: Dict, top: int = 5) -> List[str]:
     for r in result["rules"][:top]:
         ex = r["example"]
         out.append(
-            f"  {r['text']}: {r['distinct']} distinct findings in {r['support']} ({r['precision']:.2f}, "
+            f"  {r.get('words', r['text'])} ({r['text']}): {r['distinct']} distinct findings in {r['support']} ({r['precision']:.2f}, "
             f"{r['lift']:.1f}x), {100 * r['share_of_distinct']:.0f} % of the distinct findings and "
             f"{100 * r['share_of_findings']:.0f} % of all; e.g. {ex['campaign']} job {ex['job']}"
         )

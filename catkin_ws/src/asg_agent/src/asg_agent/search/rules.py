@@ -18,9 +18,24 @@ import json
 from dataclasses import dataclass
 from typing import Sequence
 
+import math
+import re
+
 import numpy as np
 
 from asg_agent.search.base import SearchMethod, _rng
+from asg_agent.search.surrogate import ALONG_BINS
+
+#: a surrogate feature's name: "CLASS d<Em qQ", "CLASS d>=Em qQ" or "CLASS shadow d<Em"
+_FEATURE = re.compile(r"^(?P<cls>.+?) (?P<shadow>shadow )?d(?P<op><|>=)(?P<edge>[0-9.]+)m(?: q(?P<q>[0-9]+))?$")
+_QUARTERS = ("first quarter", "second quarter", "third quarter", "last quarter")[:ALONG_BINS]
+
+
+def _plural(cls: str) -> str:
+    if cls.endswith("y") and cls[-2:-1] not in "aeiou":
+        return cls[:-1] + "ies"
+    return cls + ("es" if cls.endswith(("s", "x", "ch", "sh")) else "s")
+
 
 BATCH = 1024  # uniform layouts drawn at a time
 MAX_BATCHES = 400  # [-] a rule that holds for none of BATCH x MAX_BATCHES uniform layouts is refused
@@ -36,6 +51,30 @@ class Condition:
 
     def text(self) -> str:
         return f"{self.feature} {'>=' if self.at_least else '<'} {self.threshold:g}"
+
+    def words(self, lower=None) -> str:
+        """The condition for a person: `barberry d>=20m q1 >= 1.5` reads "2 or more barberries
+        20 m or more from the route in its first quarter" (the features of surrogate.ObstacleFeatures:
+        a class, a lateral bin of the distance to the straight start-goal route, a quarter of the
+        way along it, or the bin of how close the class's shadows come to the route). `lower` maps a
+        bin's upper edge [m] to its lower one (Rule.words gives it)."""
+        m = _FEATURE.match(self.feature)
+        if not m:
+            return self.text()
+        cls, shadow, op, edge, q = m.group("cls", "shadow", "op", "edge", "q")
+        k = math.ceil(self.threshold)  # counts: >= 1.5 is 2 or more, < 1.5 is at most 1
+        if self.at_least:
+            count = f"{k} or more {_plural(cls)}" if k > 1 else f"a {cls}"
+        else:
+            count = f"no {cls}" if k <= 1 else f"at most {k - 1} {_plural(cls) if k > 2 else cls}"
+        lo = (lower or {}).get(float(edge)) if op == "<" else None
+        if op != "<":
+            where = f"{edge} m or more from the route"
+        else:
+            where = f"between {lo:g} and {edge} m from the route" if lo else f"within {edge} m of the route"
+        if shadow:
+            return f"{count} whose shadow comes {where}"
+        return f"{count} {where} in its {_QUARTERS[int(q) - 1]}"
 
 
 @dataclass(frozen=True)
@@ -54,6 +93,12 @@ class Rule:
 
     def text(self) -> str:
         return " and ".join(c.text() for c in self.conditions) or "(any layout)"
+
+    def words(self, edges=()) -> str:
+        """The rule for a person (Condition.words), given the lateral bins' edges [m] (a bin
+        "d<E m" then reads "between the edge below E and E m")."""
+        lower = {float(b): float(a) for a, b in zip(edges, edges[1:])}
+        return "; and ".join(c.words(lower) for c in self.conditions) or "any layout"
 
     def to_dict(self) -> dict:
         return {"conditions": [[c.feature, ">=" if c.at_least else "<", c.threshold] for c in self.conditions]}
