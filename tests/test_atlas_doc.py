@@ -49,3 +49,15 @@ def test_protocol_v5s_baseline_sentence_is_the_recount_of_v4s_exports():
     text = open(os.path.join(REPO, "experiments", "protocol-coverage-v5.yaml")).read()
     want = f"recall {mean['default']:.2f} against\n# {mean['route-random']:.2f} of results/atlas/exp1-flaw.json v{atlas['version']}"
     assert want in text, (want, mean)
+
+
+def test_the_v5_records_blocks_are_the_analysis_of_the_exports():
+    rc = subprocess.run(
+        [sys.executable, "-m", "asg_analysis", "coverage", "record", "--check"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+    )
+    assert (
+        rc.returncode == 0
+    ), "docs/studies/2026-12-06-coverage-v5.md is stale: python3 -m asg_analysis coverage record"

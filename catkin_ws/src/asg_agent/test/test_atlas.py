@@ -55,6 +55,10 @@ def test_chao1_is_the_ecologists_estimate_from_the_places_seen_once_and_twice():
     assert c["chao1"] == pytest.approx(85 + 121 / 16) and c["completeness"] == pytest.approx(85 / 92.5625)
     assert sa.chao1([1, 1, 1, 4])["chao1"] == 4 + 3  # no doubletons: S + f1 (f1 - 1) / 2
     assert sa.chao1([3, 4])["completeness"] == 1.0
+    # Chao2 counts campaigns, not findings: 10 units, 3 places found by one, 2 by two, 1 by five
+    c2 = sa.chao2([1, 1, 1, 2, 2, 5], 10)
+    assert (c2["q1"], c2["q2"]) == (3, 2) and c2["chao2"] == pytest.approx(6 + 0.9 * 9 / 4)
+    assert sa.chao2([1, 1, 3], 4)["chao2"] == pytest.approx(3 + 0.75 * 1)  # Q2 = 0: Q1 (Q1 - 1) / 2
 
 
 def test_coverage_counts_each_place_once_per_class_and_keeps_the_new_ones():
@@ -116,6 +120,7 @@ def test_an_atlas_pools_one_identity_counts_a_replayed_campaign_once_and_grows_b
     assert g5["growth"][0] == [0, 0] and g5["growth"][-1] == [4, 2]
     assert all(p[1] <= q[1] for p, q in zip(g5["growth"], g5["growth"][1:]))  # it only grows
     assert g5["chao1"]["f1"] == 1 and g5["chao1"]["f2"] == 1
+    assert [p["campaigns"] for p in g5["places"]] == [1, 1] and g5["chao2"]["q1"] == 2
     path = str(tmp_path / "atlas.json")
     ra.write(f, path)
     assert ra.matching(str(tmp_path), f["identity"]) == [path]
@@ -133,6 +138,12 @@ def test_the_atlas_command_builds_shows_and_recalls_and_names_an_export_of_anoth
     _write_export(b, "b", [_row(0, 0.0, hit=False), _row(1, 31.0), _row(2, 90.0), _row(3, 11.0)])
     _write_export(c, "c", [_row(0, 60.0)], scenario="../scenarios/exp3.yaml")
     out = str(tmp_path / "atlas.json")
+    assert cli.main(["build", "--kind", "flaw", "--out", out, a]) == 0
+    assert "atlas v1:" in capsys.readouterr().out
+    assert cli.main(["build", "--kind", "flaw", "--out", out, a]) == 0  # the same places: the same version
+    assert "atlas v1:" in capsys.readouterr().out
+    assert cli.main(["build", "--kind", "flaw", "--out", out, a, b]) == 0  # new places: the next version
+    assert "atlas v2:" in capsys.readouterr().out
     assert cli.main(["build", "--kind", "flaw", "--out", out, a]) == 0
     assert "at 5 m: 4 places (b 4)" in capsys.readouterr().out
     assert cli.main(["recall", out, b, "--budget", "2"]) == 0
@@ -330,3 +341,21 @@ def test_coverage_ts_names_no_class_size_or_place():
     src = open(os.path.join(REPO, "catkin_ws/src/asg_agent/src/asg_agent/search/coverage.py")).read().lower()
     for name in mesh_names():
         assert name not in src, name
+
+
+def test_coverage_ts_generators_place_the_obstacles_they_say_and_are_checked():
+    from asg_scenario.layout import RouteFrame
+
+    for path in (WIDE, EXP1):
+        exp = load_experiment(path)
+        m = make_method("coverage-ts", exp, 1, options={"generators": ("route",)})
+        rf = RouteFrame(exp.scenario)
+        rng = np.random.default_rng(0)
+        xy = exp.positions_of(m._candidates(rng, "route", 200))
+        d = np.abs((xy - rf.start) @ rf.normal)
+        assert (d <= exp.route_lateral_m + 1e-6).all()  # every obstacle within the band
+        half = exp.positions_of(m._candidates(rng, "band", 400))
+        share = (np.abs((half - rf.start) @ rf.normal) <= exp.route_lateral_m).mean()
+        assert 0.5 < share < 1.0  # half of them placed there, the rest anywhere (some of those near too)
+    with pytest.raises(ValueError, match="generators"):
+        make_method("coverage-ts", load_experiment(WIDE), 1, options={"generators": ("nowhere",)})

@@ -1,6 +1,7 @@
 """Coverage of a failure atlas (issue #93; no ROS): protocol v5's endpoint read from exports.
 
     python3 -m asg_analysis coverage doc [--check]                 # docs/agent.md's atlas block
+    python3 -m asg_analysis coverage record [--check]              # the v5 record's blocks
     python3 -m asg_analysis coverage figure [--out docs/images/atlas_growth.png]
     python3 -m asg_analysis coverage arms ATLAS ARM=GLOB [ARM=GLOB ...] [--budget 300] [--radius 5]
 
@@ -45,22 +46,59 @@ def doc_block(paths: List[str]) -> str:
     return "\n".join(out + ["```", END])
 
 
-def rewrite_doc(check: bool) -> int:
-    text = open(DOC, encoding="utf-8").read()
-    if BEGIN not in text or END not in text:
-        print(f"coverage: {DOC} has no {BEGIN} ... {END} block", file=sys.stderr)
-        return 2
-    new = text[: text.index(BEGIN)] + doc_block(atlas_files()) + text[text.index(END) + len(END) :]
+def rewrite(doc: str, blocks: Dict[str, str], check: bool) -> int:
+    """Replaces each block NAME of `doc` (between `<!-- NAME: begin -->` and `<!-- NAME: end -->`)
+    by its text; with `check`, exit 1 when one is stale. Exit 2 when the page lacks a block."""
+    text = old = open(doc, encoding="utf-8").read()
+    for name, body in blocks.items():
+        begin, end = f"<!-- {name}: begin -->", f"<!-- {name}: end -->"
+        if begin not in text or end not in text:
+            print(f"coverage: {doc} has no {begin} ... {end} block", file=sys.stderr)
+            return 2
+        text = text[: text.index(begin)] + body + text[text.index(end) + len(end) :]
     if check:
-        return 0 if new == text else 1
-    with open(DOC, "w", encoding="utf-8") as f:
-        f.write(new)
+        return 0 if text == old else 1
+    with open(doc, "w", encoding="utf-8") as f:
+        f.write(text)
     return 0
+
+
+def rewrite_doc(check: bool) -> int:
+    return rewrite(DOC, {"atlases": doc_block(atlas_files())}, check)
+
+
+RECORD = os.path.join(REPO, "docs", "studies", "2026-12-06-coverage-v5.md")
+V1 = os.path.join(REPO, "results", "coverage_v5", "exp1-flaw.v1.json")
+
+
+def _block(name: str, lines: str) -> str:
+    return f"<!-- {name}: begin -->\n```text\n{lines}\n```\n<!-- {name}: end -->"
+
+
+def record_blocks() -> Dict[str, str]:
+    """The v5 record's generated blocks: v4's arms read against atlas v1 (the protocol's baseline),
+    and the pilot's arms against the current Exp. 1 atlas beside v4's route-random and random."""
+    v4 = os.path.join(REPO, "results", "distinct_v4")
+    base = {
+        "route-random": sorted(glob.glob(os.path.join(v4, "dist4-route-random-s3?.jsonl.gz"))),
+        "v4 default (novelty-ts)": sorted(glob.glob(os.path.join(v4, "dist4-default-s3?.jsonl.gz"))),
+        "random, route-wide": sorted(glob.glob(os.path.join(v4, "dist4-random-own-s3?.jsonl.gz"))),
+    }
+    out = {"v4 baseline": _block("v4 baseline", arms_text(arms(V1, base, 300)))}
+    pilot = os.path.join(REPO, "results", "coverage_v5")
+    specs = dict(base)
+    for arm in ("cov-wide", "cov-abs"):
+        found = sorted(glob.glob(os.path.join(pilot, f"cov5-pilot-{arm}-s*.jsonl.gz")))
+        if found:
+            specs[f"pilot {arm}"] = found
+    atlas = os.path.join(REPO, "results", "atlas", "exp1-flaw.json")
+    out["pilot"] = _block("pilot", arms_text(arms(atlas, specs, 300)))
+    return out
 
 
 def figure(out: str) -> str:
     """Each atlas's growth curve at 5 m (places covered along a seeded shuffle of its pooled
-    scenarios) beside its Chao1 estimate."""
+    scenarios) beside its Chao1 and Chao2 estimates."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -73,10 +111,13 @@ def figure(out: str) -> str:
         g = next(g for g in d["groupings"] if g["radius_m"] == sa.RADIUS_M)
         n, k = zip(*g["growth"])
         ax.plot(n, k, color="tab:blue", label="places covered")
-        ax.axhline(g["chao1"]["chao1"], color="tab:red", ls="--", label="Chao1 estimate")
+        ax.axhline(g["chao1"]["chao1"], color="tab:red", ls="--", label="Chao1 (findings)")
+        ax.axhline(g["chao2"]["chao2"], color="tab:green", ls=":", label="Chao2 (campaigns)")
         i = d["identity"]
         ax.set_title(
-            f"{os.path.basename(p)[:-5]}\n{i['kind']}, completeness {g['chao1']['completeness']:.2f}", fontsize=8
+            f"{os.path.basename(p)[:-5]} v{d['version']}, {i['kind']}\ncompleteness {g['chao1']['completeness']:.2f} "
+            f"(Chao1), {g['chao2']['completeness']:.2f} (Chao2)",
+            fontsize=8,
         )
         ax.set_xlabel("scenarios pooled (shuffled)", fontsize=8)
         ax.tick_params(labelsize=7)
@@ -98,8 +139,13 @@ def campaign_row(atlas: sa.Atlas, path: str, budget: int) -> Dict:
     rows = sorted(rows, key=lambda r: r["job"])[:budget]
     r = recall_of(atlas, rows, budget)
     found = [place_of_row(x) for x in rows if sa.is_finding(x, atlas.identity["kind"])]
+    from asg_analysis.endpoints import cpu_hours
+
+    hours = cpu_hours(campaign)
     return dict(
         r,
+        cpu_hours=hours,
+        recall_per_cpu_hour=r["recall"] / hours if hours else None,
         campaign=campaign["name"],
         seed=campaign["seed"],
         findings=len(found),
@@ -129,7 +175,10 @@ def arms_text(t: Dict) -> str:
     for arm, rows in t["arms"].items():
         per = ", ".join(f"{r['recall']:.2f}" for r in rows)
         mean = sum(r["recall"] for r in rows) / len(rows)
-        lines.append(f"  {arm}: {mean:.3f} (per seed {per}); new places {[r['new'] for r in rows]}")
+        lines.append(
+            f"  {arm}: {mean:.3f} (per seed {per}); new places {[r['new'] for r in rows]}; "
+            f"distinct at 5 m {[r['distinct_5m'] for r in rows]}; half the atlas after {[r['half_at'] for r in rows]}"
+        )
         for cls in sorted(rows[0]["by_class"]):
             a = sum(r["by_class"][cls][0] for r in rows) / len(rows)
             lines.append(f"    {cls}: {a:.1f} of {rows[0]['by_class'][cls][1]} covered on average")
@@ -148,6 +197,8 @@ def main(argv=None) -> int:
     sub = p.add_subparsers(dest="cmd", required=True)
     d = sub.add_parser("doc", help="rewrite docs/agent.md's atlas block from results/atlas/")
     d.add_argument("--check", action="store_true", help="exit 1 when the block is stale")
+    rc = sub.add_parser("record", help="rewrite the v5 record's blocks from the exports")
+    rc.add_argument("--check", action="store_true", help="exit 1 when a block is stale")
     f = sub.add_parser("figure", help="the atlases' growth curves")
     f.add_argument("--out", default=FIGURE)
     a = sub.add_parser("arms", help="protocol v5's endpoint per arm and seed, each arm against the first")
@@ -160,6 +211,8 @@ def main(argv=None) -> int:
     try:
         if args.cmd == "doc":
             return rewrite_doc(args.check)
+        if args.cmd == "record":
+            return rewrite(RECORD, record_blocks(), args.check)
         if args.cmd == "figure":
             print(figure(args.out))
             return 0

@@ -9,7 +9,8 @@
 release pair's; failure: the stack's own failed runs) of every export of one identity (the scene,
 the stack under test and its references: the first usable export's), skips every other export
 saying why, and writes the atlas (scoring/atlas.py: places at 5 m and 2 m, growth curve, Chao1
-completeness). `add` writes the next version with the exports' findings pooled in (exports of
+completeness); over a file of the same identity it writes the next version, unless its places are
+the same. `add` writes the next version with the exports' findings pooled in (exports of
 runs the atlas holds count once). `recall` gives, per export, the places it covers within its
 first BUDGET scenarios, per class, the scenarios it took to cover half, and the places it found
 beyond the atlas (new). Exit status 2 on a file that cannot be read or an export of another
@@ -68,12 +69,13 @@ def summary_lines(d: dict) -> list:
         + f") on {i['scene']}; {len(d['sources'])} campaigns, {d['scenarios']} scenarios, {len(d['findings'])} findings"
     ]
     for g in d["groupings"]:
-        c = g["chao1"]
+        c, c2 = g["chao1"], g["chao2"]
         per = ", ".join(f"{k} {v}" for k, v in sorted(g["by_class"].items()))
         half = g["growth"][len(g["growth"]) // 2]
         lines.append(
-            f"  at {g['radius_m']:g} m: {c['observed']} places ({per}); seen once {c['f1']}, twice {c['f2']}: "
-            f"Chao1 {c['chao1']:.1f}, completeness {c['completeness']:.2f}; "
+            f"  at {g['radius_m']:g} m: {c['observed']} places ({per}); seen by one finding {c['f1']}, by two "
+            f"{c['f2']}: Chao1 {c['chao1']:.1f}, completeness {c['completeness']:.2f}; found by one campaign "
+            f"{c2['q1']}, by two {c2['q2']}: Chao2 {c2['chao2']:.1f}, completeness {c2['completeness']:.2f}; "
             f"{half[1]} of them within the first {half[0]} of the pooled scenarios (shuffled)"
         )
     return lines
@@ -97,6 +99,7 @@ def main(argv=None) -> int:
     try:
         if args.cmd == "build":
             d, skipped = ra.build_from(_paths(args.exports), args.kind, args.like or None)
+            d["version"] = ra.next_version(args.out, d)
             ra.write(d, args.out)
         elif args.cmd == "add":
             d, skipped = ra.add(ra.read(args.atlas), _paths(args.exports))

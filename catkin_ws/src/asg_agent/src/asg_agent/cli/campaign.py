@@ -34,6 +34,7 @@ from asg_agent.scoring import rewards  # noqa: E402
 from asg_agent.scoring.places import PRIMARY_RADIUS_M  # noqa: E402
 from asg_agent.records.experiment import ExperimentError, load_experiment  # noqa: E402
 from asg_agent.search.methods import METHODS, make_method  # noqa: E402
+from asg_agent.search.coverage import DEFAULT_GENERATORS, GENERATORS  # noqa: E402
 from asg_agent.records.store import Store, StoreError, checkpoint_path  # noqa: E402
 from asg_agent.search.td3 import TD3Config  # noqa: E402
 
@@ -115,6 +116,12 @@ def _search_options(p):
         default=PRIMARY_RADIUS_M,
         help=f"[m] novelty-ts: no proposal puts an obstacle this close to a found failure's place of its "
         f"class (default {PRIMARY_RADIUS_M:g}, protocol v4's distinct radius)",
+    )
+    p.add_argument(
+        "--coverage-generators",
+        default=",".join(DEFAULT_GENERATORS),
+        help=f"coverage-ts: its generators, comma-separated, some of {', '.join(GENERATORS)} "
+        f"(default {','.join(DEFAULT_GENERATORS)}; docs/agent.md)",
     )
     p.add_argument(
         "--atlas",
@@ -507,6 +514,7 @@ def make_search(a, exp):
     options = {
         "route-random": {"band": a.route_band, "share": a.route_share},
         "novelty-ts": {"tabu_m": a.tabu},
+        "coverage-ts": {"generators": tuple(a.coverage_generators.split(","))},
         "rule-sampler": {"rule_file": a.rule},
     }.get(a.method)
     try:

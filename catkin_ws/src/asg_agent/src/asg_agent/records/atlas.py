@@ -103,13 +103,14 @@ def build(findings: List[list], sources: List[dict], ident: dict, version: int =
     places = [(f[0], f[1], f[2]) for f in findings]
     groupings = []
     for r in (sa.RADIUS_M, sa.FINE_RADIUS_M):
-        ps = sa.group(places, r) if places else []
+        ps = sa.group(places, r, [f[3] for f in findings]) if places else []
         atlas = sa.Atlas(ps, r, ident)
         groupings.append(
             {
                 "radius_m": r,
                 "places": ps,
                 "chao1": sa.chao1(p["findings"] for p in ps),
+                "chao2": sa.chao2((p["campaigns"] for p in ps), len(sources)),
                 "growth": _growth(findings, sources, atlas),
                 "by_class": {c: atlas.size_of(c) for c in atlas.classes()},
             }
@@ -186,6 +187,23 @@ def add(atlas_file: dict, paths: Sequence[str]):
     if not sources:
         raise ValueError("no export adds to the atlas: " + "; ".join(f"{p}: {w}" for p, w in skipped))
     return build(findings + new, old["sources"] + sources, ident, old["version"] + 1), skipped
+
+
+def next_version(path: str, d: dict) -> int:
+    """The version a rebuilt atlas `d` takes over the file `path`: 1 for a new file (or one of
+    another identity), the file's own when its places (class and position) are the same, else the
+    file's + 1."""
+    try:
+        old = read(path)
+    except ValueError:
+        return 1
+    if sa.same_identity(old["identity"], d["identity"]):
+        return 1
+
+    def places(f):
+        return [[(p["cls"], p["x"], p["y"]) for p in g["places"]] for g in f["groupings"]]
+
+    return int(old["version"]) + (0 if places(old) == places(d) else 1)
 
 
 def matching(folder: str, ident: dict) -> List[str]:

@@ -13,7 +13,9 @@ or, without contact, (NO_CONTACT, where the vehicle ended). An atlas pools every
 - **Completeness.** Chao1 (Chao 1984, as ecologists estimate the species of a survey from its
   singletons and doubletons): the places seen by exactly one finding (f1) and by exactly two (f2)
   estimate the unseen ones, S_chao1 = S_obs + f1^2 / (2 f2) (f2 = 0: S_obs + f1 (f1 - 1) / 2);
-  completeness = S_obs / S_chao1.
+  completeness = S_obs / S_chao1. Beside it Chao2, its incidence form, with the campaigns as the
+  sampling units (a place found by one campaign, by two): abundance counts assume independent
+  draws, and a search that finds one place a hundred times is not that.
 - **Coverage.** A campaign covers a place when one of its findings of the same class lies within
   `radius` [m] of it; recall = the places covered / the atlas's places (also per class). A finding
   within `radius` of no place of its class is *new*: its places (grouped as above, in job order)
@@ -49,14 +51,17 @@ def is_finding(row: dict, kind: str) -> bool:
     return row.get("attribution") == kind
 
 
-def group(places: Sequence[Place], radius: float) -> List[dict]:
+def group(places: Sequence[Place], radius: float, units: Optional[Sequence] = None) -> List[dict]:
     """The places of `places` at `radius` [m] (the module's order-free grouping): a list of
-    {"cls", "x", "y", "findings"} sorted by class, then x, then y."""
+    {"cls", "x", "y", "findings"} sorted by class, then x, then y; with `units` (the sampling unit
+    of each finding, e.g. its campaign) each place also counts the units that found it
+    ("campaigns")."""
     if not radius > 0.0:
         raise ValueError(f"radius {radius} [m] must be > 0")
     out = []
     for cls in sorted({p[0] for p in places}):
-        xy = np.array([(p[1], p[2]) for p in places if p[0] == cls], float)
+        idx = [i for i, p in enumerate(places) if p[0] == cls]
+        xy = np.array([(places[i][1], places[i][2]) for i in idx], float)
         near = ((xy[:, None, :] - xy[None, :, :]) ** 2).sum(axis=2) < radius * radius
         left = np.ones(len(xy), bool)
         while left.any():
@@ -66,9 +71,24 @@ def group(places: Sequence[Place], radius: float) -> List[dict]:
             tied = np.flatnonzero(counts == best)
             c = tied[np.lexsort((xy[tied, 1], xy[tied, 0]))[0]]
             taken = near[c] & left
-            out.append({"cls": cls, "x": float(xy[c, 0]), "y": float(xy[c, 1]), "findings": int(taken.sum())})
+            place = {"cls": cls, "x": float(xy[c, 0]), "y": float(xy[c, 1]), "findings": int(taken.sum())}
+            if units is not None:
+                place["campaigns"] = len({units[idx[k]] for k in np.flatnonzero(taken)})
+            out.append(place)
             left &= ~taken
     return sorted(out, key=lambda p: (p["cls"], p["x"], p["y"]))
+
+
+def chao2(incidences: Iterable[int], units: int) -> Dict[str, float]:
+    """Chao2, the incidence form (Chao 1987): places found by exactly one of `units` sampling
+    units (Q1) and by exactly two (Q2), S_chao2 = S + (m - 1) / m x Q1^2 / (2 Q2) (Q2 = 0:
+    (m - 1) / m x Q1 (Q1 - 1) / 2). Fit for pooled campaigns, whose findings are not independent
+    draws: a search finds one place a hundred times in one campaign."""
+    a = [int(v) for v in incidences if int(v) > 0]
+    s, q1, q2 = len(a), sum(v == 1 for v in a), sum(v == 2 for v in a)
+    k = (units - 1) / units if units > 0 else 0.0
+    est = s + k * (q1 * q1 / (2.0 * q2) if q2 > 0 else q1 * (q1 - 1) / 2.0)
+    return {"observed": s, "q1": q1, "q2": q2, "chao2": est, "completeness": s / est if est > 0 else 1.0}
 
 
 def chao1(abundances: Iterable[int]) -> Dict[str, float]:

@@ -20,10 +20,11 @@ proposals at the cells no finding covers yet:
   `covered_weight`. The best of `candidates` layouts is proposed; the obstacle that gave it most
   is its aim, held as a provisional place until its result is in, so parallel proposals aim
   elsewhere. Nothing is banned: a layout at known places can still win on a high chance.
-- **A portfolio of generators.** Candidates come from one of two generators: `uniform` (fresh
-  layouts over the experiment's action space) and `band` (fresh layouts with each obstacle, with
-  probability 1/2, along the straight start-goal route within the experiment's route_lateral_m
-  [m] of it). Each keeps a Beta posterior of how often its proposals became a finding at a new
+- **A portfolio of generators.** Candidates come from one of the campaign's generators (by
+  default the first two): `uniform` (fresh layouts over the experiment's action space), `band`
+  (fresh layouts with each obstacle, with probability 1/2, along the straight start-goal route
+  within the experiment's route_lateral_m [m] of it) and `route` (every obstacle there: the
+  proposals of route-random, whose band is route_lateral_m). Each keeps a Beta posterior of how often its proposals became a finding at a new
   place; each proposal draws from them (Thompson sampling) to pick its generator, so the campaign
   moves to the one that pays on its scene. The first `init_random` proposals draw the generator
   at random and the layout uniformly from it.
@@ -44,7 +45,9 @@ from asg_agent.search.base import SearchMethod
 from asg_agent.search.surrogate import LATERAL_EDGES, ObstacleFeatures
 from asg_scenario.layout import RouteFrame, mesh_of_instances
 
-GENERATORS = ("uniform", "band")
+#: every generator; a campaign uses `generators` of them (default: the first two)
+GENERATORS = ("uniform", "band", "route")
+DEFAULT_GENERATORS = ("uniform", "band")
 AHEAD_BINS = 4  # other obstacles on the route before this one: 0, 1, 2, 3 or more
 MATCH_M = 0.05  # [m] a finding's place is the obstacle of its class standing this close to it
 
@@ -63,15 +66,19 @@ class CoverageTS(SearchMethod):
         radius_m: float = RADIUS_M,
         covered_weight: float = 0.05,
         along_bins: int = 8,
+        generators=DEFAULT_GENERATORS,
     ):
         if not (init_random >= 1 and candidates >= 1 and along_bins >= 1):
             raise ValueError("coverage-ts: init_random, candidates and along_bins must be >= 1")
         if not radius_m > 0.0:
             raise ValueError(f"coverage-ts: radius_m {radius_m} [m] must be > 0")
+        generators = tuple(generators)
+        if not generators or any(g not in GENERATORS for g in generators) or len(set(generators)) < len(generators):
+            raise ValueError(f"coverage-ts: generators {generators}: some of {', '.join(GENERATORS)}, each once")
         if not 0.0 <= covered_weight <= 1.0:
             raise ValueError(f"coverage-ts: covered_weight {covered_weight} must be in [0, 1]")
         super().__init__(experiment, seed)
-        self.init_random, self.candidates = int(init_random), int(candidates)
+        self.init_random, self.candidates, self.generators = int(init_random), int(candidates), generators
         self.radius, self.covered_weight, self.along_bins = float(radius_m), float(covered_weight), int(along_bins)
         self.feat = ObstacleFeatures(experiment)
         self.route = RouteFrame(experiment.scenario)
@@ -88,7 +95,7 @@ class CoverageTS(SearchMethod):
         self.aims: Dict[int, tuple] = {}  # job -> (class, x, y) aimed at, until its result is in
         self.outcomes: Dict[int, tuple] = {}  # job -> (place, finding), until observed
         self.generator_of: Dict[int, str] = {}
-        self.wins = {g: [0, 0] for g in GENERATORS}  # generator -> [findings at new places, proposals]
+        self.wins = {g: [0, 0] for g in generators}  # generator -> [findings at new places, proposals]
         self.model = None
 
     # -- features ----------------------------------------------------------------------------
@@ -126,11 +133,11 @@ class CoverageTS(SearchMethod):
         return f
 
     # -- generators --------------------------------------------------------------------------
-    def _band(self, rng, m: int) -> np.ndarray:
-        """m fresh actions with each obstacle, with probability 1/2, within route_lateral_m [m]
-        of the route (uniform along its usable range); the rest of the action uniform."""
+    def _band(self, rng, m: int, share: float = 0.5) -> np.ndarray:
+        """m fresh actions with each obstacle, with probability `share`, within route_lateral_m
+        [m] of the route (uniform along its usable range); the rest of the action uniform."""
         a = rng.uniform(-1.0, 1.0, (m, self.exp.action_dim))
-        near = rng.uniform(size=(m, self.n)) < 0.5
+        near = rng.uniform(size=(m, self.n)) < share
         lo, hi = self.route.t_range
         t = rng.uniform(lo, hi, (m, self.n))
         w = self.exp.route_lateral_m
@@ -147,13 +154,13 @@ class CoverageTS(SearchMethod):
         return np.clip(a, -1.0, 1.0)
 
     def _candidates(self, rng, generator: str, m: int) -> np.ndarray:
-        if generator == "band":
-            return self._band(rng, m)
+        if generator in ("band", "route"):
+            return self._band(rng, m, 0.5 if generator == "band" else 1.0)
         return rng.uniform(-1.0, 1.0, (m, self.exp.action_dim))
 
     def _generator(self, rng) -> str:
-        draw = [rng.beta(1 + w, 1 + n - w) for w, n in (self.wins[g] for g in GENERATORS)]
-        return GENERATORS[int(np.argmax(draw))]
+        draw = [rng.beta(1 + w, 1 + n - w) for w, n in (self.wins[g] for g in self.generators)]
+        return self.generators[int(np.argmax(draw))]
 
     def _novelty(self, xy: np.ndarray) -> np.ndarray:
         """(m, n) novelty weights: 1 where an obstacle stands `radius` from every found or aimed
@@ -176,7 +183,9 @@ class CoverageTS(SearchMethod):
 
     def propose(self, job, episode, step, state):
         rng = self._rng(2, job)
-        gen = GENERATORS[int(rng.integers(len(GENERATORS)))] if job < self.init_random else self._generator(rng)
+        gen = (
+            self.generators[int(rng.integers(len(self.generators)))] if job < self.init_random else self._generator(rng)
+        )
         self.generator_of[int(job)] = gen
         if job < self.init_random or self.model is None:
             return self._candidates(rng, gen, 1)[0].astype(np.float32)
@@ -241,7 +250,7 @@ class CoverageTS(SearchMethod):
             "covered_weight": self.covered_weight,
             "along_bins": self.along_bins,
             "lateral_edges": list(LATERAL_EDGES),
-            "generators": list(GENERATORS),
+            "generators": list(self.generators),
         }
 
     def state_dict(self):
