@@ -75,6 +75,30 @@ def _block(name: str, lines: str) -> str:
     return f"<!-- {name}: begin -->\n```text\n{lines}\n```\n<!-- {name}: end -->"
 
 
+def fringe(path: str, radius: float = sa.RADIUS_M) -> str:
+    """How many of an atlas's places seen by one finding lie within twice the radius of another
+    place of their class (the fringe of a region found often), and how many findings those
+    neighbours hold."""
+    import math
+
+    g = next(g for g in ra.read(path)["groupings"] if g["radius_m"] == radius)["places"]
+    single = [p for p in g if p["findings"] == 1]
+    near = []
+    for p in single:
+        nb = [
+            q
+            for q in g
+            if q is not p and q["cls"] == p["cls"] and math.hypot(p["x"] - q["x"], p["y"] - q["y"]) < 2 * radius
+        ]
+        if nb:
+            near.append(max(q["findings"] for q in nb))
+    return (
+        f"{os.path.relpath(path, REPO)}: {len(near)} of its {len(single)} places seen by one finding lie within "
+        f"{2 * radius:g} m of another place of their class; the largest neighbour of each holds "
+        f"{sorted(near)} findings"
+    )
+
+
 def record_blocks() -> Dict[str, str]:
     """The v5 record's generated blocks: v4's arms read against atlas v1 (the protocol's baseline),
     and the pilot's arms against the current Exp. 1 atlas beside v4's route-random and random."""
@@ -85,6 +109,7 @@ def record_blocks() -> Dict[str, str]:
         "random, route-wide": sorted(glob.glob(os.path.join(v4, "dist4-random-own-s3?.jsonl.gz"))),
     }
     out = {"v4 baseline": _block("v4 baseline", arms_text(arms(V1, base, 300)))}
+    out["fringe"] = _block("fringe", fringe(os.path.join(REPO, "results", "atlas", "exp1-flaw.json")))
     pilot = os.path.join(REPO, "results", "coverage_v5")
     specs = dict(base)
     for arm in ("cov-wide", "cov-abs"):
