@@ -219,7 +219,8 @@ def test_a_campaign_counts_its_coverage_live_as_an_independent_recount_of_its_ex
     from asg_agent.campaign.findings import findings
 
     assert f" covered {len(covered)}/{len(places)} " in bar_text(st)
-    line = coverage_line({"atlas": {"file": str(tmp_path / "atlas.json"), "version": 1}}, findings(store, "second"))
+    rec = {"file": "atlas.json", "version": 1, "radius_m": 5.0, "places": [[p["cls"], p["x"], p["y"]] for p in places]}
+    line = coverage_line({"atlas": rec}, findings(store, "second"))
     assert f"covered {len(covered)} of {len(places)} known failure places" in line
     # without an atlas nothing is counted or shown
     plain = _campaign(exp, store, "third", seed=5).status()
@@ -249,6 +250,7 @@ def test_campaign_atlas_finds_the_atlas_of_its_identity_and_refuses_another(tmp_
     monkeypatch.setattr("asg_agent.paths.REPO", str(tmp_path))
     s = dict(settings)
     assert len(cc.campaign_atlas("auto", exp, s)) == 1 and s["atlas"]["version"] == 1
+    assert s["atlas"]["places"] == [["b", 1.0, 2.0]] and s["atlas"]["radius_m"] == 5.0
     assert cc.campaign_atlas("none", exp, dict(settings)) is None
     assert cc.campaign_atlas("auto", exp, dict(settings, model="full")) is None  # no atlas of that stack
     with pytest.raises(CampaignError, match="model 'flawed' differ from the campaign's \\('full'\\)"):

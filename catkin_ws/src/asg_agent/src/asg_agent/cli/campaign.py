@@ -323,29 +323,34 @@ def campaign_atlas(choice: str, exp, settings: dict):
             + ", ".join(f"{ident.get(k)!r}" for k in diff)
             + ")"
         )
-    settings["atlas"] = {"file": repo_relative(choice) or os.path.abspath(choice), "version": d["version"]}
-    return sa.load(choice)
+    atlas = sa.load(choice)
+    # the places themselves: the file grows by versions, and the summary (and any analysis of the
+    # export) recounts against the atlas the campaign counted live
+    settings["atlas"] = {
+        "file": repo_relative(choice) or os.path.abspath(choice),
+        "version": d["version"],
+        "radius_m": atlas.radius,
+        "places": [[p["cls"], p["x"], p["y"]] for p in atlas.places],
+    }
+    return atlas
 
 
 def coverage_line(settings: dict, found) -> str:
     """The summary's coverage line of a campaign's findings `found` (campaign/findings.py), counted
-    again from the store (not the live tally); "" without an atlas."""
-    from asg_agent.paths import in_repo
+    again from the store (not the live tally) against the atlas's places as the campaign recorded
+    them; "" without an atlas."""
     from asg_agent.scoring import atlas as sa
 
     rec = settings.get("atlas")
     if not rec:
         return ""
-    try:
-        atlas = sa.load(in_repo(rec["file"]))
-    except ValueError as e:
-        return f"coverage: not counted ({e})"
-    cov = sa.Coverage(atlas)
+    places = [{"cls": c, "x": x, "y": y, "findings": 0} for c, x, y in rec["places"]]
+    cov = sa.Coverage(sa.Atlas(places, rec["radius_m"]))
     for f in found:
         cov.add(tuple(f["place"]))
     return (
         f"coverage of the failure atlas {rec['file']} (v{rec['version']}; a place is covered by a finding of its "
-        f"class within {atlas.radius:g} m): {sa.coverage_text(cov.counts())}, recall {cov.recall():.2f}"
+        f"class within {rec['radius_m']:g} m): {sa.coverage_text(cov.counts())}, recall {cov.recall():.2f}"
     )
 
 
