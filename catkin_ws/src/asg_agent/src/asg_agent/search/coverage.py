@@ -103,13 +103,8 @@ class CoverageTS(SearchMethod):
         """(m, n, 3) the three features that are 1 for each obstacle of m layouts (positions
         (m, n, 2) [m]): its place cell, its shadow cell and its count of obstacles ahead."""
         m, n = xy.shape[:2]
-        t, d = self.feat._route_coords(xy)
-        lat = np.searchsorted(self.feat.edges, np.abs(d), side="right")
+        t, d, lat, shadow = self.feat.bins(xy)
         along = np.clip((t * self.along_bins).astype(int), 0, self.along_bins - 1)
-        _, d_tip = self.feat._route_coords(xy + self.feat.shadow[None])
-        crosses = np.sign(d) != np.sign(d_tip)
-        d_shadow = np.where(crosses, 0.0, np.minimum(np.abs(d), np.abs(d_tip)))
-        shadow = np.searchsorted(self.feat.edges, d_shadow, side="right")
         # on the route: within the first lateral edge; before: smaller t
         on = np.abs(d) < self.feat.edges[1]
         ahead = ((t[:, None, :] < t[:, :, None]) & on[:, None, :]).sum(axis=2)

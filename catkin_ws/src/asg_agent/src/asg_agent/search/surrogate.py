@@ -89,16 +89,21 @@ class ObstacleFeatures:
         xy = self.exp.positions_of(a)  # (m, n, 2)
         return self.of_positions(xy, a[:, self.exp.position_dim :])
 
-    def of_positions(self, xy: np.ndarray, extra: Optional[np.ndarray] = None) -> np.ndarray:
-        m, n = xy.shape[0], xy.shape[1]
+    def bins(self, xy: np.ndarray):
+        """(t, d, lat, shadow_bin) of each obstacle of layouts xy (m, n, 2) [m]: its route
+        coordinates t [-] and d [m], its lateral bin and its shadow's (0 .. n_lat - 1)."""
         t, d = self._route_coords(xy)
-        lat = np.searchsorted(self.edges, np.abs(d), side="right")  # 0 .. n_lat - 1
-        along = np.clip((t * ALONG_BINS).astype(int), 0, ALONG_BINS - 1)
+        lat = np.searchsorted(self.edges, np.abs(d), side="right")
         # the shadow's closest approach to the route line: 0 where it crosses it
         _, d_tip = self._route_coords(xy + self.shadow[None])
         crosses = np.sign(d) != np.sign(d_tip)
         d_shadow = np.where(crosses, 0.0, np.minimum(np.abs(d), np.abs(d_tip)))
-        shadow_bin = np.searchsorted(self.edges, d_shadow, side="right")
+        return t, d, lat, np.searchsorted(self.edges, d_shadow, side="right")
+
+    def of_positions(self, xy: np.ndarray, extra: Optional[np.ndarray] = None) -> np.ndarray:
+        m, n = xy.shape[0], xy.shape[1]
+        t, _, lat, shadow_bin = self.bins(xy)
+        along = np.clip((t * ALONG_BINS).astype(int), 0, ALONG_BINS - 1)
         base = self.cls[None, :] * self.per_class
         f = np.zeros((m, self.dim))
         rows = np.repeat(np.arange(m), n)
