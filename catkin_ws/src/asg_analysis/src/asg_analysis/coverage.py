@@ -112,7 +112,7 @@ def record_blocks() -> Dict[str, str]:
     out["fringe"] = _block("fringe", fringe(os.path.join(REPO, "results", "atlas", "exp1-flaw.json")))
     pilot = os.path.join(REPO, "results", "coverage_v5")
     specs = dict(base)
-    for arm in ("cov-wide", "cov-abs"):
+    for arm in ("cov-wide", "cov-abs", "cov-filter"):
         found = sorted(glob.glob(os.path.join(pilot, f"cov5-pilot-{arm}-s*.jsonl.gz")))
         if found:
             specs[f"pilot {arm}"] = found
