@@ -44,7 +44,7 @@ def test_the_runner_writes_and_checks_each_block(tmp_path, capsys):
 def test_a_bad_entry_or_a_protocol_without_report_is_named(tmp_path, capsys):
     _, proto = _study(tmp_path, [{"block": "one", "table": "pie", "exports": PILOT}])
     assert study.main([str(proto)]) == 2
-    assert "table 'pie' must be one of campaigns, arms, rules, digests, command" in capsys.readouterr().err
+    assert "table 'pie' must be one of campaigns, arms, rules, digests, coverage, command" in capsys.readouterr().err
     bare = tmp_path / "bare.yaml"
     bare.write_text("name: x\n")
     assert study.main([str(bare)]) == 2

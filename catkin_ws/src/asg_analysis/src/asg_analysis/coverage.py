@@ -15,6 +15,7 @@ command's (asg_agent.cli.atlas.recall_of).
 """
 
 import argparse
+import functools
 import glob
 import os
 import sys
@@ -99,6 +100,7 @@ def fringe(path: str, radius: float = sa.RADIUS_M) -> str:
     )
 
 
+@functools.lru_cache(maxsize=1)
 def record_blocks() -> Dict[str, str]:
     """The v5 record's generated blocks: v4's arms read against atlas v1 (the protocol's baseline),
     and the pilot's arms against the current Exp. 1 atlas beside v4's route-random and random."""

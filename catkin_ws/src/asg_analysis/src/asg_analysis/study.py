@@ -56,7 +56,7 @@ import yaml
 
 from asg_agent.paths import REPO
 
-TABLES = ("campaigns", "arms", "rules", "digests")
+TABLES = ("campaigns", "arms", "rules", "digests", "coverage")
 KINDS = TABLES + ("command",)
 
 
@@ -79,6 +79,10 @@ def render(entry: Dict) -> str:
         return _rules(entry, target)
     if kind == "digests":
         return _digests(entry["digests"])
+    if kind == "coverage":  # protocol v5's blocks (asg_analysis.coverage.record_blocks)
+        from asg_analysis.coverage import record_blocks
+
+        return "\n".join(record_blocks()[entry["block"]].splitlines()[1:-1]) + "\n"
     if kind == "campaigns":
         paths = _paths(entry["exports"])
         if not paths:
