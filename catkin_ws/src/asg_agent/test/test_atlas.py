@@ -317,13 +317,15 @@ def test_coverage_ts_is_a_function_of_its_seed_and_resumes_exactly():
     exp = load_experiment(WIDE)
     run = _toy(exp)
 
+    opts = {"candidates": 300, "generators": ("route", "mutate")}
+
     def go(resume_at=None):
-        m = make_method("coverage-ts", exp, 5, budget=60, options={"candidates": 300})
+        m = make_method("coverage-ts", exp, 5, budget=60, options=opts)
         out = []
         for job in range(60):
             if job == resume_at:
                 state = json.loads(json.dumps(m.state_dict()))
-                m = make_method("coverage-ts", exp, 5, budget=60, options={"candidates": 300})
+                m = make_method("coverage-ts", exp, 5, budget=60, options=opts)
                 m.load_state_dict(state)
             a = m.propose(job, 0, 0, None)
             r, where, finding = run(a)
@@ -335,6 +337,26 @@ def test_coverage_ts_is_a_function_of_its_seed_and_resumes_exactly():
     (a, ma), (b, _), (c, mc) = go(), go(), go(resume_at=30)
     assert np.array_equal(a, b) and np.array_equal(a, c)
     assert ma.found.state_dict() == mc.found.state_dict() and ma.wins == mc.wins
+    assert ma.wins["mutate"][1] > 0 and sorted(ma.archive) == sorted(mc.archive)
+
+
+def test_coverage_ts_mutate_keeps_one_layout_per_opened_cell_and_credits_the_parent():
+    exp = load_experiment(WIDE)
+    m, mine = _search("coverage-ts", exp, 3, n=150, options={"candidates": 300, "generators": ("route", "mutate")})
+    # one archive cell per cell of the findings, each holding the first layout that opened it
+    assert sorted(m.archive) == sorted({m.cell(p) for p in mine})
+    kids = sum(v["children"] for v in m.archive.values())
+    opened = sum(v["opened"] for v in m.archive.values())
+    assert kids == m.wins["mutate"][1] > 0  # every mutated proposal credited its parent once
+    assert 0 <= opened <= len(m.archive)
+    # the children of a parent are mutations of its layout: steps of the sigmas given
+    rng = np.random.default_rng(0)
+    cell = sorted(m.archive)[0]
+    kids = m._mutants(rng, cell, 400)
+    step = np.abs(kids - m.archive[cell]["action"][None, :])
+    assert step.max() <= 1.0 + 1e-9 and 0.02 < np.median(step) < 0.15
+    with pytest.raises(ValueError, match="mutate"):
+        make_method("coverage-ts", exp, 1, options={"generators": ("mutate",)})
 
 
 def test_coverage_ts_names_no_class_size_or_place():
@@ -353,10 +375,10 @@ def test_coverage_ts_generators_place_the_obstacles_they_say_and_are_checked():
         m = make_method("coverage-ts", exp, 1, options={"generators": ("route",)})
         rf = RouteFrame(exp.scenario)
         rng = np.random.default_rng(0)
-        xy = exp.positions_of(m._candidates(rng, "route", 200))
+        xy = exp.positions_of(m._candidates(rng, "route", 200, 0))
         d = np.abs((xy - rf.start) @ rf.normal)
         assert (d <= exp.route_lateral_m + 1e-6).all()  # every obstacle within the band
-        half = exp.positions_of(m._candidates(rng, "band", 400))
+        half = exp.positions_of(m._candidates(rng, "band", 400, 0))
         share = (np.abs((half - rf.start) @ rf.normal) <= exp.route_lateral_m).mean()
         assert 0.5 < share < 1.0  # half of them placed there, the rest anywhere (some of those near too)
     with pytest.raises(ValueError, match="generators"):

@@ -24,10 +24,17 @@ proposals at the cells no finding covers yet:
   default the first two): `uniform` (fresh layouts over the experiment's action space), `band`
   (fresh layouts with each obstacle, with probability 1/2, along the straight start-goal route
   within the experiment's route_lateral_m [m] of it) and `route` (every obstacle there: the
-  proposals of route-random, whose band is route_lateral_m). Each keeps a Beta posterior of how often its proposals became a finding at a new
-  place; each proposal draws from them (Thompson sampling) to pick its generator, so the campaign
-  moves to the one that pays on its scene. The first `init_random` proposals draw the generator
-  at random and the layout uniformly from it.
+  proposals of route-random, whose band is route_lateral_m) and `mutate` (a quality-diversity
+  archive keyed on the failure's place, as DeepHyperion-CS keys its map: per cell of class x
+  along-route x lateral at `radius_m` [m], the first layout whose finding opened it; a parent is
+  drawn by its curiosity, a Beta posterior of how often its children opened a cell, and the
+  candidates are its children, Gaussian mutations of every coordinate of its action with a step
+  drawn per child from `mutate_sigmas` [-] of the action's range). Each generator keeps a Beta
+  posterior of how often its proposals became a finding at a new place; each proposal draws from
+  them (Thompson sampling) to pick its generator, so the campaign moves to the one that pays on
+  its scene. The first `init_random` proposals draw the generator at random among those that need
+  no archive and the layout uniformly from it; `mutate` joins the draw once the archive holds a
+  layout.
 
 Learns, does not know: nothing here names a class, a size or a place, or holds a prior about
 where a stack fails; every class of the scenario gets the same features and the same generators.
@@ -46,10 +53,11 @@ from asg_agent.search.surrogate import LATERAL_EDGES, ObstacleFeatures
 from asg_scenario.layout import RouteFrame, mesh_of_instances
 
 #: every generator; a campaign uses `generators` of them (default: the first two)
-GENERATORS = ("uniform", "band", "route")
+GENERATORS = ("uniform", "band", "route", "mutate")
 DEFAULT_GENERATORS = ("uniform", "band")
 AHEAD_BINS = 4  # other obstacles on the route before this one: 0, 1, 2, 3 or more
 MATCH_M = 0.05  # [m] a finding's place is the obstacle of its class standing this close to it
+MUTATE_SIGMAS = (0.05, 0.1, 0.2)  # [-] the steps of `mutate`'s children, of the action's range [-1, 1]
 
 
 class CoverageTS(SearchMethod):
@@ -67,6 +75,7 @@ class CoverageTS(SearchMethod):
         covered_weight: float = 0.05,
         along_bins: int = 8,
         generators=DEFAULT_GENERATORS,
+        mutate_sigmas=MUTATE_SIGMAS,
     ):
         if not (init_random >= 1 and candidates >= 1 and along_bins >= 1):
             raise ValueError("coverage-ts: init_random, candidates and along_bins must be >= 1")
@@ -75,6 +84,11 @@ class CoverageTS(SearchMethod):
         generators = tuple(generators)
         if not generators or any(g not in GENERATORS for g in generators) or len(set(generators)) < len(generators):
             raise ValueError(f"coverage-ts: generators {generators}: some of {', '.join(GENERATORS)}, each once")
+        if generators == ("mutate",):
+            raise ValueError("coverage-ts: generators mutate needs another generator for its first layouts")
+        mutate_sigmas = tuple(float(v) for v in mutate_sigmas)
+        if not mutate_sigmas or not all(v > 0.0 for v in mutate_sigmas):
+            raise ValueError(f"coverage-ts: mutate_sigmas {mutate_sigmas} [-] must be > 0")
         if not 0.0 <= covered_weight <= 1.0:
             raise ValueError(f"coverage-ts: covered_weight {covered_weight} must be in [0, 1]")
         super().__init__(experiment, seed)
@@ -96,6 +110,9 @@ class CoverageTS(SearchMethod):
         self.outcomes: Dict[int, tuple] = {}  # job -> (place, finding), until observed
         self.generator_of: Dict[int, str] = {}
         self.wins = {g: [0, 0] for g in generators}  # generator -> [findings at new places, proposals]
+        self.mutate_sigmas = mutate_sigmas
+        self.archive: Dict[tuple, dict] = {}  # cell -> {"action", "children", "opened"} (mutate)
+        self.parent_of: Dict[int, tuple] = {}  # job -> the archive cell its candidates mutated
         self.model = None
 
     # -- features ----------------------------------------------------------------------------
@@ -148,14 +165,46 @@ class CoverageTS(SearchMethod):
         a[:, : 2 * self.n] = p.reshape(m, 2 * self.n)
         return np.clip(a, -1.0, 1.0)
 
-    def _candidates(self, rng, generator: str, m: int) -> np.ndarray:
+    def cell(self, place) -> tuple:
+        """The archive's cell of a finding's place (class, x, y [m]): its class and the cells of
+        `radius` [m] along and across the route."""
+        cls, x, y = place
+        v = np.array([x, y], np.float64) - self.route.start
+        t = float(v @ self.route.along) / self.route.length
+        d = float(v @ self.route.normal)
+        return (str(cls), int(np.floor(t / self.radius)), int(np.floor(d / self.radius)))
+
+    def _parent(self, rng) -> tuple:
+        """The archive's cell whose layout is mutated: the largest draw of each cell's curiosity,
+        Beta(1 + children that opened a cell, 1 + children that did not); cells in sorted order."""
+        cells = sorted(self.archive)
+        draw = [
+            rng.beta(1 + self.archive[c]["opened"], 1 + self.archive[c]["children"] - self.archive[c]["opened"])
+            for c in cells
+        ]
+        return cells[int(np.argmax(draw))]
+
+    def _mutants(self, rng, parent: tuple, m: int) -> np.ndarray:
+        a = self.archive[parent]["action"]
+        sigma = rng.choice(np.asarray(self.mutate_sigmas), size=(m, 1))
+        return np.clip(a[None, :] + sigma * rng.standard_normal((m, a.size)), -1.0, 1.0)
+
+    def _candidates(self, rng, generator: str, m: int, job: int) -> np.ndarray:
+        if generator == "mutate":
+            parent = self._parent(rng)
+            self.parent_of[int(job)] = parent
+            return self._mutants(rng, parent, m)
         if generator in ("band", "route"):
             return self._band(rng, m, 0.5 if generator == "band" else 1.0)
         return rng.uniform(-1.0, 1.0, (m, self.exp.action_dim))
 
+    def _available(self) -> tuple:
+        return tuple(g for g in self.generators if g != "mutate" or self.archive)
+
     def _generator(self, rng) -> str:
-        draw = [rng.beta(1 + w, 1 + n - w) for w, n in (self.wins[g] for g in self.generators)]
-        return self.generators[int(np.argmax(draw))]
+        gens = self._available()
+        draw = [rng.beta(1 + w, 1 + n - w) for w, n in (self.wins[g] for g in gens)]
+        return gens[int(np.argmax(draw))]
 
     def _novelty(self, xy: np.ndarray) -> np.ndarray:
         """(m, n) novelty weights: 1 where an obstacle stands `radius` from every found or aimed
@@ -178,13 +227,12 @@ class CoverageTS(SearchMethod):
 
     def propose(self, job, episode, step, state):
         rng = self._rng(2, job)
-        gen = (
-            self.generators[int(rng.integers(len(self.generators)))] if job < self.init_random else self._generator(rng)
-        )
+        first = tuple(g for g in self.generators if g != "mutate")
+        gen = first[int(rng.integers(len(first)))] if job < self.init_random else self._generator(rng)
         self.generator_of[int(job)] = gen
         if job < self.init_random or self.model is None:
-            return self._candidates(rng, gen, 1)[0].astype(np.float32)
-        cand = self._candidates(rng, gen, self.candidates)
+            return self._candidates(rng, gen, 1, job)[0].astype(np.float32)
+        cand = self._candidates(rng, gen, self.candidates, job)
         xy = self.exp.positions_of(cand)
         cov = self.model.sigma_ + 1e-9 * np.eye(self.dim)
         w = rng.multivariate_normal(self.model.coef_, cov, method="cholesky")
@@ -209,6 +257,7 @@ class CoverageTS(SearchMethod):
     def observe(self, job, episode, step, state, action, reward, next_state, done) -> Dict:
         place, finding = self.outcomes.pop(int(job), (None, False)) if job is not None else (None, False)
         gen = self.generator_of.pop(int(job), None) if job is not None else None
+        parent = self.parent_of.pop(int(job), None) if job is not None else None
         if job is not None:
             self.aims.pop(int(job), None)
         if reward is None:
@@ -221,6 +270,15 @@ class CoverageTS(SearchMethod):
             if i is not None:
                 y[i] = 1.0
             new = self.found.add(place)
+        opened = False
+        if finding and place is not None and "mutate" in self.generators:
+            c = self.cell(place)
+            if c not in self.archive:
+                self.archive[c] = {"action": np.asarray(action, np.float64), "children": 0, "opened": 0}
+                opened = True
+        if parent is not None and parent in self.archive:
+            self.archive[parent]["children"] += 1
+            self.archive[parent]["opened"] += int(opened)
         if gen is not None:
             self.wins[gen][0] += int(new)
             self.wins[gen][1] += 1
@@ -228,7 +286,10 @@ class CoverageTS(SearchMethod):
         self.X.append(self.obstacle_features(xy)[0])
         self.Y.append(y)
         self._fit()
-        return {"coverage_found": len(self.found), "coverage_rows": len(self.Y) * self.n}
+        out = {"coverage_found": len(self.found), "coverage_rows": len(self.Y) * self.n}
+        if "mutate" in self.generators:
+            out["coverage_cells"] = len(self.archive)
+        return out
 
     def _fit(self):
         from sklearn.linear_model import BayesianRidge
@@ -246,6 +307,7 @@ class CoverageTS(SearchMethod):
             "along_bins": self.along_bins,
             "lateral_edges": list(LATERAL_EDGES),
             "generators": list(self.generators),
+            "mutate_sigmas": list(self.mutate_sigmas),
         }
 
     def state_dict(self):
@@ -257,6 +319,10 @@ class CoverageTS(SearchMethod):
             "outcomes": {str(k): [list(p) if p else None, f] for k, (p, f) in self.outcomes.items()},
             "generator_of": {str(k): v for k, v in self.generator_of.items()},
             "wins": {k: list(v) for k, v in self.wins.items()},
+            "archive": [
+                [list(c), v["action"].tolist(), v["children"], v["opened"]] for c, v in sorted(self.archive.items())
+            ],
+            "parent_of": {str(k): list(v) for k, v in self.parent_of.items()},
         }
 
     def load_state_dict(self, d):
@@ -268,6 +334,15 @@ class CoverageTS(SearchMethod):
         self.outcomes = {int(k): (tuple(p) if p else None, bool(f)) for k, (p, f) in d["outcomes"].items()}
         self.generator_of = {int(k): str(v) for k, v in d["generator_of"].items()}
         self.wins = {k: [int(a), int(b)] for k, (a, b) in d["wins"].items()}
+        self.archive = {
+            (str(c[0]), int(c[1]), int(c[2])): {
+                "action": np.asarray(a, np.float64),
+                "children": int(n),
+                "opened": int(o),
+            }
+            for c, a, n, o in d.get("archive", [])
+        }
+        self.parent_of = {int(k): (str(v[0]), int(v[1]), int(v[2])) for k, v in d.get("parent_of", {}).items()}
         self.model = None
         self._fit()
 
