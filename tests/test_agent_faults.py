@@ -46,6 +46,10 @@ def cmd(store, name, *extra):
         "--no-progress",
         "--seed",
         "5",
+        "--method",
+        "td3-per-asp",  # the paper's search on its proxy (a learner with a replay buffer to lose)
+        "--reward",
+        "proxy",
         *extra,
     ]
 

@@ -178,6 +178,10 @@ def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
         "--checkpoint-every",
         "1",
         "--no-progress",
+        "--method",
+        "td3-per-asp",  # the paper's search on its proxy: the learner whose state a kill must not lose
+        "--reward",
+        "proxy",
     ]
     store = Store(str(tmp_path / "k.sqlite"))
     for kill_at in (15, 60):  # kill -9 at two moments, resuming in between

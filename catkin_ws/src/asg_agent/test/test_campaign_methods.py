@@ -376,7 +376,7 @@ def test_a_signal_ends_the_campaign_as_ctrl_c_does_even_in_the_background(tmp_pa
         + os.environ.get("PYTHONPATH", ""),
     )
     cmd = [sys.executable, "-m", "asg_agent.testing.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
-    cmd += ["--store", str(tmp_path / "s.sqlite"), "--name", "s", "--no-progress"]
+    cmd += ["--store", str(tmp_path / "s.sqlite"), "--name", "s", "--no-progress", "--method", "td3-per-asp"]
     store = Store(str(tmp_path / "s.sqlite"))
     p = subprocess.Popen(
         cmd,

@@ -48,20 +48,11 @@ def doc_block(paths: List[str]) -> str:
 
 
 def rewrite(doc: str, blocks: Dict[str, str], check: bool) -> int:
-    """Replaces each block NAME of `doc` (between `<!-- NAME: begin -->` and `<!-- NAME: end -->`)
-    by its text; with `check`, exit 1 when one is stale. Exit 2 when the page lacks a block."""
-    text = old = open(doc, encoding="utf-8").read()
-    for name, body in blocks.items():
-        begin, end = f"<!-- {name}: begin -->", f"<!-- {name}: end -->"
-        if begin not in text or end not in text:
-            print(f"coverage: {doc} has no {begin} ... {end} block", file=sys.stderr)
-            return 2
-        text = text[: text.index(begin)] + body + text[text.index(end) + len(end) :]
-    if check:
-        return 0 if text == old else 1
-    with open(doc, "w", encoding="utf-8") as f:
-        f.write(text)
-    return 0
+    """Replaces each block NAME of `doc` by its text (markers included; docblocks writes it); with
+    `check`, exit 1 when one is stale, 2 when the page lacks one."""
+    from asg_analysis.docblocks import markers, rewrite_between
+
+    return max(rewrite_between(doc, *markers(name), body, check, "coverage") for name, body in blocks.items())
 
 
 def rewrite_doc(check: bool) -> int:

@@ -171,13 +171,11 @@ def markdown(cs: List[Dict], target: Optional[str] = "flaw") -> str:
 
 
 def write_block(doc: str, block: str, text: str) -> None:
-    """Replaces the text between `<!-- BLOCK: begin -->` and `<!-- BLOCK: end -->` of `doc`."""
-    begin, end = f"<!-- {block}: begin -->\n", f"<!-- {block}: end -->"
-    page = open(doc, encoding="utf-8").read()
-    if begin not in page or end not in page:
+    """Writes `text` as block BLOCK of `doc` (docblocks.rewrite; ValueError when it has none)."""
+    from asg_analysis.docblocks import rewrite
+
+    if rewrite(doc, {block: text}, check=False, prog="endpoints") == 2:
         raise ValueError(f"{doc}: no block {block!r}")
-    head, rest = page.split(begin, 1)
-    open(doc, "w", encoding="utf-8").write(head + begin + text.rstrip("\n") + "\n" + end + rest.split(end, 1)[1])
 
 
 def main(argv=None) -> int:

@@ -885,7 +885,7 @@ def main(argv=None) -> int:
             if not args.doc:
                 print(block)
                 return 0
-            from asg_analysis.studies.seed_tables import rewrite_block
+            from asg_analysis.docblocks import rewrite_between as rewrite_block
 
             return rewrite_block(args.doc, *markers(p)[:2], block, args.check, "protocol status")
         if args.cmd == "choose":
@@ -959,7 +959,7 @@ def report_analysis(p: dict, args, res: dict) -> int:
             if not args.check:
                 coverage_figure(res, figure)
                 flaw_budget.figure(spent, list(p["arms"]), budget_png)
-        from asg_analysis.studies.seed_tables import rewrite_block
+        from asg_analysis.docblocks import rewrite_between as rewrite_block
 
         block = result_markdown(
             p,

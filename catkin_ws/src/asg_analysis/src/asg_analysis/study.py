@@ -55,6 +55,7 @@ from typing import Dict, List
 import yaml
 
 from asg_agent.paths import REPO
+from asg_analysis.docblocks import block_text
 
 TABLES = ("campaigns", "arms", "rules", "digests", "coverage")
 KINDS = TABLES + ("command",)
@@ -126,14 +127,6 @@ def _digests(digests: Dict[str, str]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def block_text(page: str, block: str) -> str:
-    text = open(page, encoding="utf-8").read()
-    begin, end = f"<!-- {block}: begin -->\n", f"<!-- {block}: end -->"
-    if begin not in text or end not in text:
-        raise ValueError(f"{os.path.relpath(page, REPO)}: no block {block!r}")
-    return text.split(begin, 1)[1].split(end, 1)[0]
-
-
 def _command(e: Dict, check: bool, out) -> int:
     """Runs a `command` entry (its module writes its own blocks); 1 when --check finds it stale."""
     import subprocess
@@ -153,7 +146,7 @@ def _command(e: Dict, check: bool, out) -> int:
 
 
 def run(protocol_path: str, check: bool = False, out=None) -> int:
-    from asg_analysis.endpoints import write_block
+    from asg_analysis.endpoints import write_block  # docblocks
 
     out = out or sys.stdout
 

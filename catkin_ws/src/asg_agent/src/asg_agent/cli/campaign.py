@@ -31,10 +31,11 @@ from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collect
 from asg_agent.cli.signals import stop_on_signals  # noqa: E402
 from asg_agent.scoring import attribution as attr  # noqa: E402
 from asg_agent.scoring import rewards  # noqa: E402
-from asg_agent.scoring.places import PRIMARY_RADIUS_M  # noqa: E402
 from asg_agent.records.experiment import ExperimentError, load_experiment  # noqa: E402
 from asg_agent.search.methods import METHODS, make_method  # noqa: E402
-from asg_agent.search.coverage import DEFAULT_GENERATORS, GENERATORS  # noqa: E402
+from asg_agent.search.coverage import GENERATORS  # noqa: E402
+from asg_agent.campaign import defaults  # noqa: E402
+from asg_agent.paths import REPO  # noqa: E402
 from asg_agent.records.store import Store, StoreError, checkpoint_path  # noqa: E402
 from asg_agent.search.td3 import TD3Config  # noqa: E402
 
@@ -69,13 +70,32 @@ def parse(argv, stand_in: bool = False):
 
 def _search_options(p):
     """What runs: the experiment, the search, its budget and seed, the workers and the store."""
-    p.add_argument("experiment", help="experiment file (experiments/expN.yaml)")
-    p.add_argument("--method", default="td3-per-asp", choices=METHODS)
-    p.add_argument("--scenarios", type=int, default=500, help="scenarios to run in all (default 500)")
-    p.add_argument("--workers", default="2", help="worker count N (/worker_0..N-1) or namespaces, comma-separated")
-    p.add_argument("--store", default="results/campaigns.sqlite", help="SQLite scenario store")
+    D = defaults.DEFAULTS
+    p.add_argument(
+        "experiment",
+        nargs="?",
+        default=os.path.join(REPO, D["experiment"].value),
+        help=f"experiment file (default {defaults.text('experiment')}, train.launch's; campaign/defaults.py)",
+    )
+    p.add_argument("--method", default=D["method"].value, choices=METHODS, help=f"(default {D['method'].value})")
+    p.add_argument(
+        "--scenarios",
+        type=int,
+        default=D["scenarios"].value,
+        help=f"scenarios to run in all (default {D['scenarios'].value})",
+    )
+    p.add_argument(
+        "--workers",
+        default=str(D["workers"].value),
+        help=f"worker count N (/worker_0..N-1) or namespaces, comma-separated (default {D['workers'].value})",
+    )
+    p.add_argument(
+        "--store",
+        default=os.path.expanduser(D["store"].value),
+        help=f"SQLite scenario store (default {D['store'].value}, train.launch's)",
+    )
     p.add_argument("--name", default="", help="campaign name (default: EXPERIMENT-METHOD-sSEED)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=D["seed"].value, help=f"(default {D['seed'].value})")
     p.add_argument("--resume", action="store_true", help="continue the named campaign from its checkpoint")
     p.add_argument("--slots", type=int, default=0, help="episodes in flight (default: 2 x workers)")
     p.add_argument("--checkpoint-every", type=int, default=10, help="checkpoint every N finished episodes")
@@ -101,8 +121,9 @@ def _search_options(p):
     p.add_argument(
         "--route-band",
         type=float,
-        default=5.0,
-        help="[m] route-random: half-width of the band around the straight start-goal route (default 5)",
+        default=D["route_band"].value,
+        help=f"[m] route-random: half-width of the band around the straight start-goal route "
+        f"(default {defaults.text('route_band')})",
     )
     p.add_argument(
         "--route-share",
@@ -113,22 +134,25 @@ def _search_options(p):
     p.add_argument(
         "--tabu",
         type=float,
-        default=PRIMARY_RADIUS_M,
+        default=D["tabu"].value,
         help=f"[m] novelty-ts: no proposal puts an obstacle this close to a found failure's place of its "
-        f"class (default {PRIMARY_RADIUS_M:g}, protocol v4's distinct radius)",
+        f"class (default {defaults.text('tabu')}, protocol v4's distinct radius)",
     )
     p.add_argument(
-        "--coverage-generators",
-        default=",".join(DEFAULT_GENERATORS),
+        "--generators",
+        *D["generators"].aliases,
+        dest="generators",
+        default=D["generators"].value,
         help=f"coverage-ts: its generators, comma-separated, some of {', '.join(GENERATORS)} "
-        f"(default {','.join(DEFAULT_GENERATORS)}; docs/agent.md)",
+        f"(default {D['generators'].value}; docs/agent.md)",
     )
     p.add_argument(
         "--atlas",
-        default="auto",
+        default=D["atlas"].value,
         help="the failure atlas whose places the progress bar, TensorBoard and the summary count as "
-        "covered (rosrun asg_agent atlas; docs/agent.md): a file, `auto` (the default: the one of "
-        "results/atlas/ whose scene, stack and finding kind are the campaign's, if any) or `none`",
+        "covered (rosrun asg_agent atlas; docs/agent.md): a file, `auto` (the one of "
+        "results/atlas/ whose scene, stack and finding kind are the campaign's, if any) or `none` (default "
+        f"{D['atlas'].value})",
     )
     p.add_argument(
         "--rule",
@@ -176,7 +200,7 @@ def _run_options(p):
     )
     p.add_argument(
         "--reward",
-        default="proxy",
+        default=defaults.DEFAULTS["reward"].value,
         choices=REWARDS + (rewards.AUTO,),
         help="what the search maximises: auto (the one the references can see: flaw with --reference "
         "full=..., regression with --reference release=..., else failure; train.launch's default), the stack under test's proxy (the paper), "
@@ -519,7 +543,7 @@ def make_search(a, exp):
     options = {
         "route-random": {"band": a.route_band, "share": a.route_share},
         "novelty-ts": {"tabu_m": a.tabu},
-        "coverage-ts": {"generators": tuple(a.coverage_generators.split(","))},
+        "coverage-ts": {"generators": tuple(a.generators.split(","))},
         "rule-sampler": {"rule_file": a.rule},
     }.get(a.method)
     try:

@@ -45,6 +45,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from asg_agent.campaign.defaults import DEFAULTS
 from asg_agent.records.experiment import ROUTE_SPACES, Experiment
 from asg_agent.scoring.atlas import RADIUS_M
 from asg_agent.scoring.places import DistinctPlaces
@@ -52,9 +53,9 @@ from asg_agent.search.base import SearchMethod
 from asg_agent.search.surrogate import LATERAL_EDGES, ObstacleFeatures
 from asg_scenario.layout import RouteFrame, mesh_of_instances
 
-#: every generator; a campaign uses `generators` of them (default: the first two)
+#: every generator; a campaign uses `generators` of them
 GENERATORS = ("uniform", "band", "route", "mutate")
-DEFAULT_GENERATORS = ("uniform", "band")
+DEFAULT_GENERATORS = tuple(DEFAULTS["generators"].value.split(","))  # campaign/defaults.py
 AHEAD_BINS = 4  # other obstacles on the route before this one: 0, 1, 2, 3 or more
 MATCH_M = 0.05  # [m] a finding's place is the obstacle of its class standing this close to it
 MUTATE_SIGMAS = (0.05, 0.1, 0.2)  # [-] the steps of `mutate`'s children, of the action's range [-1, 1]

@@ -29,6 +29,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
+from asg_agent.campaign.defaults import DEFAULTS
 from asg_agent.records.experiment import Experiment
 from asg_agent.search.base import SearchMethod, _rng
 from asg_agent.search.td3 import TD3Agent, TD3Config
@@ -69,7 +70,7 @@ class RouteRandom(SearchMethod):
 
     name = "route-random"
 
-    def __init__(self, experiment, seed, band: float = 5.0, share: float = 1.0):
+    def __init__(self, experiment, seed, band: float = DEFAULTS["route_band"].value, share: float = 1.0):
         super().__init__(experiment, seed)
         if not (band > 0.0 and 0.0 <= share <= 1.0):
             raise ValueError(f"route-random: band {band} [m] must be > 0 and share {share} in [0, 1]")

@@ -34,7 +34,8 @@ from typing import Dict, List
 
 import numpy as np
 
-from asg_agent.scoring.places import PRIMARY_RADIUS_M, DistinctPlaces
+from asg_agent.campaign.defaults import DEFAULTS
+from asg_agent.scoring.places import DistinctPlaces
 from asg_agent.search.surrogate import SurrogateTS
 from asg_agent.records.experiment import ROUTE_SPACES
 from asg_scenario.layout import RouteFrame, mesh_of_instances
@@ -47,7 +48,9 @@ class NoveltyTS(SurrogateTS):
 
     name = "novelty-ts"
 
-    def __init__(self, experiment, seed: int, tabu_m: float = PRIMARY_RADIUS_M, shift_sigma: float = 0.1, **surrogate):
+    def __init__(
+        self, experiment, seed: int, tabu_m: float = DEFAULTS["tabu"].value, shift_sigma: float = 0.1, **surrogate
+    ):
         super().__init__(experiment, seed, **surrogate)
         if not shift_sigma > 0.0:
             raise ValueError(f"novelty-ts: shift_sigma {shift_sigma} must be > 0")

@@ -455,7 +455,7 @@ def main(argv=None) -> int:
     if a.json and not a.check:
         write_json(a.json, s)
     if a.doc:
-        from asg_analysis.studies.seed_tables import rewrite_block
+        from asg_analysis.docblocks import rewrite_between as rewrite_block
 
         rc = rewrite_block(a.doc, BEGIN, END, block, a.check, "gap_nav_study")
         if a.check:

@@ -327,7 +327,7 @@ def main(argv=None) -> int:
         write_json(a.json, s)
     if a.figure:
         figure(s, a.figure)
-    from asg_analysis.studies.seed_tables import rewrite_block
+    from asg_analysis.docblocks import rewrite_between as rewrite_block
 
     rc = rewrite_block(DOC, BEGIN, END, f"{BEGIN}\n{markdown(s)}\n{END}", a.check, "loop_study")
     return max(rc, rewrite_block(DOC, BEGIN2, END2, f"{BEGIN2}\n{markdown_round2(s)}\n{END2}", a.check, "loop_study"))

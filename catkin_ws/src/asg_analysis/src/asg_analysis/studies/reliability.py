@@ -62,7 +62,7 @@ def main(argv=None) -> int:
     if not a.doc:
         print(block)
         return 0
-    from asg_analysis.studies.seed_tables import rewrite_block
+    from asg_analysis.docblocks import rewrite_between as rewrite_block
 
     return rewrite_block(a.doc, BEGIN, END, block, a.check, "reliability")
 

@@ -11,6 +11,7 @@ import os
 import sys
 
 from asg_analysis import stats
+from asg_analysis.docblocks import rewrite_between
 from asg_agent.records.export import read_export
 
 from asg_agent.paths import REPO
@@ -42,22 +43,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="seed_tables", description=__doc__.split("\n\n")[0])
     p.add_argument("--check", action="store_true")
     a = p.parse_args(argv)
-    return rewrite_block(DOC, BEGIN, END, tables(), a.check, "seed_tables")
-
-
-def rewrite_block(doc: str, begin: str, end: str, block: str, check: bool, prog: str) -> int:
-    """Replaces a page's generated block (from `begin` to `end`, markers included) by `block`; with
-    `check`, only says whether it is stale (exit 1). Exit 2 when the page has no such block."""
-    text = open(doc, encoding="utf-8").read()
-    if begin not in text or end not in text:
-        print(f"{prog}: {doc} has no {begin} ... {end} block", file=sys.stderr)
-        return 2
-    new = text[: text.index(begin)] + block + text[text.index(end) + len(end) :]
-    if check:
-        return 0 if new == text else 1
-    with open(doc, "w", encoding="utf-8") as f:
-        f.write(new)
-    return 0
+    return rewrite_between(DOC, BEGIN, END, tables(), a.check, "seed_tables")
 
 
 if __name__ == "__main__":
