@@ -217,13 +217,17 @@ def test_a_campaign_tells_its_search_each_place_and_counts_distinct_findings_in_
         assert f["place"] == [t[1] for t in told if t[0] == f["job"]][0]
     d = distinct_summary(found)
     assert c.status()["findings"] == len(flaw) and c.status()["distinct"] == d["distinct"][2.0]
-    from asg_agent.cli.campaign import bar_text
+    from asg_agent.cli.campaign import BAR_FIELDS, bar_fields, bar_text
 
-    text = bar_text(c.status())  # the bar names the reward whose findings it counts, then its classes
-    assert text.startswith(f"flaw findings {len(flaw)} distinct {d['distinct'][2.0]} (2 m) ")
-    assert f" flaw {len(flaw)} model " in text
+    # the bar names the reward whose findings it counts, how many are distinct, the rate and the
+    # re-runs: at most six fields, the flaw count once, the paper's proxy off it under another reward
+    text = bar_text(c.status())
+    assert text.startswith(f"flaw findings {len(flaw)}  distinct {d['distinct'][2.0]} (2 m)  ")
+    assert " rerun " in text and "proxy" not in text and " model " not in text and text.count("flaw") == 1
+    full = dict(c.status(), errors=2, coverage={"covered": 4, "known": 67}, diff_best=1.5, reward="differential")
+    assert len(bar_fields(full)) <= BAR_FIELDS == 6 and "covered 4/67" in bar_text(full) and " 2 err" in bar_text(full)
     proxy = dict(c.status(), reward="proxy", findings=0, distinct=0)  # route-random's reward:=proxy
-    assert bar_text(proxy).startswith("proxy findings 0 distinct 0 (2 m) ") and f" flaw {len(flaw)} " in bar_text(proxy)
+    assert bar_text(proxy).startswith("proxy findings 0  distinct 0 (2 m)  ") and "best proxy " in bar_text(proxy)
     assert d["distinct"][1.0] >= d["distinct"][2.0] >= d["distinct"][5.0] >= 1
 
 

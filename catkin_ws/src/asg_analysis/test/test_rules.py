@@ -3,6 +3,7 @@
 
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -58,7 +59,12 @@ def test_learn_finds_the_hidden_rule_and_a_place_found_many_times_weighs_as_one(
     top = res["rules"][0]
     assert [feature, ">=", 1.0] in top["rule"]["conditions"]
     assert top["precision"] >= 2 * res["base_rate"] and top["share_of_distinct"] > 0.9
-    assert any("distinct findings in" in line for line in rules.lines(res))
+    shown = rules.lines(res)
+    assert any("distinct findings in" in line for line in shown)
+    # the screen reads in words, its terms said once above the rules, no `q3` or `d<4m` shorthand
+    assert sum(rules.TERMS in line for line in shown) == 1
+    assert not any(re.search(r"\bq[1-4]\b|d<\d", line) for line in shown[1:]), shown
+    assert "third quarter" in "\n".join(shown)
     # rules are only what the tree can say: nothing when nothing is found
     none = rules.learn([dict(r, attribution="not_candidate", termination="SUCCESS") for r in rows], exp, "flaw")
     assert none["rules"] == [] and none["findings"] == 0
@@ -101,7 +107,7 @@ def test_the_command_line_learns_from_exports_and_names_bad_input(tmp_path, caps
             f.write(json.dumps(r) + "\n")
     out = tmp_path / "rules.json"
     assert rules.main(["learn", str(path), "--out", str(out)]) == 0
-    assert "d<4m q2 >= 1" in capsys.readouterr().out
+    assert "4 m from the route in its second quarter" in capsys.readouterr().out  # in words
     assert json.load(open(out))["rules"]
     assert rules.main(["learn", str(tmp_path / "none.jsonl.gz")]) == 2
     assert "No such file" in capsys.readouterr().err

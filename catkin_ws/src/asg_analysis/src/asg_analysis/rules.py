@@ -185,6 +185,13 @@ def check(rule_rows: List[dict], base_rows: List[dict], target: Optional[str] = 
     }
 
 
+#: the terms of a rule in words, said once above the rules
+TERMS = (
+    "  (the route: the straight line from start to goal; its quarters: of its length from the start; "
+    "a distance: an obstacle's from that line [m]; a shadow: the obstacle's sun shadow on the ground)"
+)
+
+
 def lines(result: Dict, top: int = 5) -> List[str]:
     """What a user reads of learnt rules."""
     what = result["target"] or "failure"
@@ -197,10 +204,12 @@ def lines(result: Dict, top: int = 5) -> List[str]:
     ]
     if not result["rules"]:
         out.append("  no rule: no leaf of the tree reaches twice the base rate")
+    else:
+        out.append(TERMS)
     for r in result["rules"][:top]:
         ex = r["example"]
         out.append(
-            f"  {r.get('words', r['text'])} ({r['text']}): {r['distinct']} distinct findings in {r['support']} ({r['precision']:.2f}, "
+            f"  {r.get('words', r['text'])}: {r['distinct']} distinct findings in {r['support']} ({r['precision']:.2f}, "
             f"{r['lift']:.1f}x), {100 * r['share_of_distinct']:.0f} % of the distinct findings and "
             f"{100 * r['share_of_findings']:.0f} % of all; e.g. {ex['campaign']} job {ex['job']}"
         )

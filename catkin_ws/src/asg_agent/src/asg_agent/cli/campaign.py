@@ -552,31 +552,35 @@ def make_search(a, exp):
         raise CampaignError(str(e)) from e
 
 
-def bar_text(st: dict) -> str:
-    """The progress bar's text from Campaign.status(): the findings of the campaign's reward, named
-    (`flaw findings 3 distinct 2 (2 m)`; a route-random campaign on `reward:=proxy` reads `proxy
-    findings 0 ... flaw 17`, not a bare `findings 0` beside its flaw class), then the rate, the
-    attribution classes and the best proxy."""
-    best = "-" if not math.isfinite(st["best"]) else f"{st['best']:.2f}"
-    diff = ""
-    cl = st.get("classes")
-    if cl and attr.FULL in st.get("roles", ()):
-        rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
-        diff = f" flaw {cl['flaw']} model {cl['model']} stack {cl['stack']} rerun {rerun}"
-    elif cl and attr.RELEASE in st.get("roles", ()):
-        rerun = sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)
-        diff = f" regression {cl['regression']} shared {cl['shared']} rerun {rerun}"
-    elif st.get("perception") is not None:
-        diff = f" perception {st['perception']} stack {st['stack']}"
-    if st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
-        diff += f" diff best {st['diff_best']:+.2f} >=1 {st['diff_ge1']}"
+#: the most fields the progress bar shows (docs/agent.md, "What a campaign prints")
+BAR_FIELDS = 6
+
+
+def bar_fields(st: dict) -> list:
+    """The progress bar's fields from Campaign.status(), at most BAR_FIELDS: the findings of the
+    campaign's reward, named (`flaw findings 3`), how many are distinct (`distinct 2 (2 m)`), the
+    atlas's places covered where there is an atlas (`covered 4/67`), the rate with the errors
+    (`1369/h`, `1369/h 2 err`), the re-runs on the reference stacks where there are any
+    (`rerun 6`), and only where the reward is the paper's proxy, its best (`best proxy 3.37`) or,
+    for the differential reward, the best difference."""
+    out = [f"{st['reward']} findings {st['findings']}", f"distinct {st['distinct']} ({st['distinct_radius_m']:g} m)"]
     cov = st.get("coverage")
-    covered = f" covered {cov['covered']}/{cov['known']}" if cov else ""
-    return (
-        f"{st['reward']} findings {st['findings']} distinct {st['distinct']} ({st['distinct_radius_m']:g} m)"
-        f"{covered} {st['rate_per_hour']:.0f}/h{diff} best proxy {best} >=3 {st['ge3']}"
-        + (f" err {st['errors']}" if st["errors"] else "")
-    )
+    if cov:
+        out.append(f"covered {cov['covered']}/{cov['known']}")
+    out.append(f"{st['rate_per_hour']:.0f}/h" + (f" {st['errors']} err" if st["errors"] else ""))
+    cl = st.get("classes")
+    if cl and (attr.FULL in st.get("roles", ()) or attr.RELEASE in st.get("roles", ())):
+        out.append(f"rerun {sum(v for k, v in cl.items() if k != attr.NOT_CANDIDATE)}")
+    if st["reward"] == "differential" and st.get("diff_best") is not None and math.isfinite(st["diff_best"]):
+        out.append(f"best diff {st['diff_best']:+.2f}")
+    elif st["reward"] == "proxy" and math.isfinite(st["best"]):
+        out.append(f"best proxy {st['best']:.2f}")
+    return out[:BAR_FIELDS]
+
+
+def bar_text(st: dict) -> str:
+    """The progress bar's text: its fields (bar_fields), two spaces apart."""
+    return "  ".join(bar_fields(st))
 
 
 def progress_bar(a):
