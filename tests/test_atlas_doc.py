@@ -61,3 +61,30 @@ def test_the_v5_records_blocks_are_the_analysis_of_the_exports():
     assert (
         rc.returncode == 0
     ), "docs/studies/2026-12-06-coverage-v5.md is stale: python3 -m asg_analysis coverage record"
+
+
+def test_the_readmes_answer_is_the_recount_of_the_default_and_route_random():
+    """The README's first screen says how the default compares with route-random on the study's
+    endpoint; its per-seed figures are those of a plain recount against the current atlas."""
+    import re
+
+    atlas = json.load(open(os.path.join(REPO, "results", "atlas", "exp1-flaw.json")))
+    v4 = os.path.join(REPO, "results", "distinct_v4")
+    per = {
+        arm: [_recall(atlas, os.path.join(v4, f"dist4-{arm}-s{s}.jsonl.gz")) for s in range(30, 35)]
+        for arm in ("default", "route-random")
+    }
+    readme = open(os.path.join(REPO, "README.md"), encoding="utf-8").read()
+    answer = readme.split("<!-- answer: begin -->", 1)[1].split("<!-- answer: end -->", 1)[0]
+    assert readme.index("<!-- answer: begin -->") < readme.index("## Start here")  # on the first screen
+    for arm, text in (
+        ("default", "covered {m:.2f} (per seed {p})"),
+        ("route-random", "cheapest competitor, {m:.2f} ({p})"),
+    ):
+        want = text.format(m=sum(per[arm]) / 5, p=", ".join(f"{r:.2f}" for r in per[arm]))
+        assert want in answer, (arm, want)
+    ratio = float(re.search(r": (\d\.\d\d)x \(95 % interval", answer).group(1))
+    assert abs(ratio - sum(per["default"]) / sum(per["route-random"])) < 0.006
+    # the verdict is no stronger than the test it reports
+    p = float(re.search(r"p = (\d\.\d\d)", answer).group(1))
+    assert ("Not shown" in answer) == (p >= 0.05)
