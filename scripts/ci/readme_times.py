@@ -1,6 +1,8 @@
 #!/usr/bin/python3
-"""The README's times block (issue #79): each command's newest record in results/readme_times/
-(written by scripts/repro/readme_times.sh, never by hand), with the CPU it ran on.
+"""The README's times block: each command's newest record in results/readme_times/ (written by
+scripts/repro/readme_times.sh, never by hand), with the CPU it ran on; a newest run that failed
+is shown as failed, beside the newest that passed; a record whose command's files changed since
+its commit is stale (tests/test_readme_times.py fails until it is measured again).
     python3 scripts/ci/readme_times.py --doc README.md     # rewrites the block
     python3 scripts/ci/readme_times.py                     # prints it"""
 
@@ -14,15 +16,51 @@ BEGIN, END = "<!-- times: begin -->\n", "<!-- times: end -->"
 ORDER = ("demo", "train", "test")
 
 
-def records(folder=os.path.join(REPO, "results", "readme_times")):
-    """{command name: its newest record that exited 0}."""
+def all_records(folder=os.path.join(REPO, "results", "readme_times")):
+    """{command name: its records, oldest first}."""
     out = {}
     for path in sorted(glob.glob(os.path.join(folder, "*.json"))):
         rec = json.load(open(path, encoding="utf-8"))
-        name = rec["command"].split("/")[-1][: -len(".sh")]
-        if rec["exit"] == 0 and (name not in out or rec["date"] >= out[name]["date"]):
-            out[name] = rec
+        out.setdefault(rec["command"].split("/")[-1][: -len(".sh")], []).append(rec)
+    return {k: sorted(v, key=lambda r: r["date"]) for k, v in out.items()}
+
+
+def records(folder=os.path.join(REPO, "results", "readme_times")):
+    """{command name: its newest record, passing or not}."""
+    return {k: v[-1] for k, v in all_records(folder).items()}
+
+
+def passing(folder=os.path.join(REPO, "results", "readme_times")):
+    """{command name: its newest record that exited 0}."""
+    out = {}
+    for k, v in all_records(folder).items():
+        ok = [r for r in v if r["exit"] == 0]
+        if ok:
+            out[k] = ok[-1]
     return out
+
+
+#: the files whose change makes a command's time stale (the command and what it sources)
+FILES = {
+    "demo": ("scripts/demo.sh", "scripts/common.sh"),
+    "train": ("scripts/train.sh", "scripts/common.sh", "launch/train.launch"),
+    "test": ("scripts/test.sh", "scripts/common.sh"),
+}
+
+
+def stale(rec) -> list:
+    """The files of a record's command changed since its commit (git; [] when unchanged)."""
+    import subprocess
+
+    name = rec["command"].split("/")[-1][: -len(".sh")]
+    r = subprocess.run(
+        ["git", "-C", REPO, "diff", "--name-only", rec["commit"], "HEAD", "--", *FILES[name]],
+        capture_output=True,
+        text=True,
+    )
+    if r.returncode != 0:
+        return [f"(commit {rec['commit']} unknown here)"]
+    return r.stdout.split()
 
 
 def minutes(s: float) -> str:
@@ -30,15 +68,27 @@ def minutes(s: float) -> str:
     return f"{m} min {sec:02d} s" if m else f"{sec} s"
 
 
-def block(recs) -> str:
+def _one(r) -> str:
+    built = "the workspace already built" if r["built_before"] else "in a fresh clone, installing what is missing and building first"
+    return f"{minutes(r['wall_s'])} on a {r['cores']}-core {r['cpu']} ({r['cpu_kind']}), {built} ({r['date']}, {r['commit']})"
+
+
+def block(recs, ok=None) -> str:
+    """The README's block: each command's newest record; a newest run that failed is said, with
+    the newest passing run beside it (`ok`: passing())."""
+    ok = passing() if ok is None else ok
     lines = []
     for name in ORDER:
         r = recs.get(name)
-        if r:
-            built = "the workspace already built" if r["built_before"] else "installing and building first"
+        if not r:
+            continue
+        if r["exit"] == 0:
+            lines.append(f"`{r['command']}`: {_one(r)}.")
+        else:
+            prev = ok.get(name)
             lines.append(
-                f"`{r['command']}`: {minutes(r['wall_s'])} on a {r['cores']}-core {r['cpu']} ({r['cpu_kind']}), "
-                f"{built} ({r['date']}, {r['commit']})."
+                f"`{r['command']}`: its newest run exited {r['exit']} after {_one(r)}"
+                + (f"; the newest that passed: {_one(prev)}." if prev else "; none has passed yet.")
             )
     body = "Measured times: " + " ".join(lines) if lines else "No times measured yet."
     return BEGIN + body + "\n" + END
@@ -46,7 +96,7 @@ def block(recs) -> str:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    text = block(records())
+    text = block(records(), passing())
     if argv[:1] == ["--doc"]:
         path = argv[1]
         doc = open(path, encoding="utf-8").read()
