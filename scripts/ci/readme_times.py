@@ -69,7 +69,11 @@ def minutes(s: float) -> str:
 
 
 def _one(r) -> str:
-    built = "the workspace already built" if r["built_before"] else "in a fresh clone, installing what is missing and building first"
+    built = (
+        "the workspace already built"
+        if r["built_before"]
+        else "in a fresh clone, installing what is missing and building first"
+    )
     return f"{minutes(r['wall_s'])} on a {r['cores']}-core {r['cpu']} ({r['cpu_kind']}), {built} ({r['date']}, {r['commit']})"
 
 

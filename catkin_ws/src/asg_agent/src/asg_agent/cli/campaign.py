@@ -423,24 +423,6 @@ def print_summary(store, name, out=sys.stdout):
     s = store.summary(name)
     for line in findings_lines(store, name):
         print(line, file=out)
-    best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
-    print(
-        f"the paper's proxy: >= 3 in {s['proxy_ge_3']}, >= 4 in {s['proxy_ge_4']}, largest {best}",
-        file=out,
-    )
-    print("terminations: " + ", ".join(f"{k} {v}" for k, v in sorted(s["terminations"].items())), file=out)
-    if s["attributed"]:
-        print(
-            f"attribution ({s['attributed']} scenarios re-run on the reference stack): of the proxy >= 3, "
-            f"{s['perception_ge3']} are the perception's (reference < 2), {s['stack_ge3']} the stack's "
-            f"(reference >= 3); proxy - reference >= 1: {s['differential_ge1']}",
-            file=out,
-        )
-        print(
-            f"collisions: {s['perception_collisions']} the perception's (the reference stack drove through), "
-            f"{s['stack_collisions']} the stack's (the reference collided too)",
-            file=out,
-        )
     print(generator_line(store.campaign(name)), file=out)
     print(stack_line(store.campaign(name)), file=out)
     cl = s["classes"]
@@ -464,6 +446,25 @@ def print_summary(store, name, out=sys.stdout):
             + (f", perception {cl['perception']}" if cl["perception"] else "")
             + f"; unclear {cl['unclear']}, reverse {cl['reverse']}, pass {cl['pass']}, error {cl['error']}"
             + (f", pending {cl[attr.PENDING]}" if cl[attr.PENDING] else ""),
+            file=out,
+        )
+    # the paper's proxy after what the campaign searched for and the attribution (issue #95)
+    print("terminations: " + ", ".join(f"{k} {v}" for k, v in sorted(s["terminations"].items())), file=out)
+    best = "n/a" if s["max_proxy"] is None else f"{s['max_proxy']:.3f}"
+    print(
+        f"the paper's proxy: >= 3 in {s['proxy_ge_3']}, >= 4 in {s['proxy_ge_4']}, largest {best}",
+        file=out,
+    )
+    if s["attributed"]:
+        print(
+            f"the proxy against the reference ({s['attributed']} scenarios re-run on it): of the proxy >= 3, "
+            f"{s['perception_ge3']} are the perception's (reference < 2), {s['stack_ge3']} the stack's "
+            f"(reference >= 3); proxy - reference >= 1: {s['differential_ge1']}",
+            file=out,
+        )
+        print(
+            f"collisions: {s['perception_collisions']} the perception's (the reference stack drove through), "
+            f"{s['stack_collisions']} the stack's (the reference collided too)",
             file=out,
         )
     if s["plr_below_0999"]:

@@ -2,6 +2,7 @@
 
     python3 -m asg_agent.cli.store export STORE CAMPAIGN OUT.jsonl.gz
     python3 -m asg_agent.cli.store summary EXPORT.jsonl.gz [...]
+    python3 -m asg_agent.cli.store show STORE CAMPAIGN        # the campaign's last screen, again
     python3 -m asg_agent.cli.store park STORE CAMPAIGN OUT.tar.xz [--unfinished-only]
     python3 -m asg_agent.cli.store unpark STORE PARKED.tar.xz
     python3 -m asg_agent.cli.store complete EXPORT.jsonl.gz SCENARIOS   # exit 0: finished, that many
@@ -28,6 +29,9 @@ def parser() -> argparse.ArgumentParser:
     e.add_argument("out")
     sm = sub.add_parser("summary", help="counts of exported campaigns")
     sm.add_argument("exports", nargs="+")
+    sh = sub.add_parser("show", help="a campaign's last screen again: its findings with their replay commands")
+    sh.add_argument("store")
+    sh.add_argument("campaign")
     pk = sub.add_parser("park", help="pack an unfinished campaign (rows and checkpoint) into one tar.xz")
     pk.add_argument("store")
     pk.add_argument("campaign")
@@ -81,6 +85,23 @@ def main(argv=None) -> int:
             return 2
         n = export(store, args.campaign, args.out)
         print(f"{args.out}: {n} scenarios")
+        return 0
+    if args.cmd == "show":
+        try:
+            store = Store(args.store, create=False)
+        except StoreError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        if store.campaign(args.campaign) is None:
+            names = ", ".join(store.campaign_names()) or "none"
+            print(f"error: {args.store} holds no campaign {args.campaign!r} (it holds: {names})", file=sys.stderr)
+            return 2
+        from asg_agent.cli.campaign import generator_line, print_summary, stack_line
+
+        camp = store.campaign(args.campaign)
+        print(generator_line(camp))
+        print(stack_line(camp))
+        print_summary(store, args.campaign)
         return 0
     if args.cmd == "complete":  # exit 1 (not complete) says why
         if not os.path.isfile(args.export):

@@ -209,6 +209,9 @@ class Store:
         row = self.db.execute("SELECT * FROM campaigns WHERE name = ?", (name,)).fetchone()
         return dict(row) if row else None
 
+    def campaign_names(self) -> List[str]:
+        return [r[0] for r in self.db.execute("SELECT name FROM campaigns ORDER BY name")]
+
     def create_campaign(self, name, method, experiment, experiment_text, seed, settings: dict):
         try:
             self.db.execute(

@@ -104,12 +104,21 @@ def draw_snapshot(ax, bag_path: str, t: float, ns: str = "worker_0", legend: boo
     return ""
 
 
-def snapshot(bag_path: str, out: str, t: float, ns: str = "worker_0"):
+def snapshot(bag_path: str, out: str, t: float, ns: str = ""):
+    """The planner at simulated time `t` [s] of a replay bag, in worker namespace `ns` (empty: the
+    bag's own, as replay_view finds it)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    if not ns:
+        import rosbag
+
+        from asg_agent.ros.replay_view import bag_namespace
+
+        with rosbag.Bag(bag_path) as b:
+            ns = bag_namespace(b.get_type_and_topic_info().topics)
     fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
     what = draw_snapshot(ax, bag_path, t, ns)
     ax.set_title(f"planner at t = {t:.2f} s" + (f": {what}" if what else ""), fontsize=9)
@@ -241,7 +250,7 @@ def main(argv=None):
     a.add_argument("bag")
     a.add_argument("out")
     a.add_argument("--time", type=float, required=True, help="[s] simulated time of the snapshot")
-    a.add_argument("--ns", default="worker_0")
+    a.add_argument("--ns", default="", help="the worker namespace in the bag (default: found in it)")
     c = sub.add_parser("perception")
     c.add_argument("store")
     c.add_argument("campaign")
