@@ -147,7 +147,7 @@ def test_every_stored_reference_file_the_docs_cite_exists():
 
 
 #: what marks a sentence about bf16 as history: bf16 was the default from issue #24 to issue #53
-THEN = ("then", "to issue #53", "until issue #53", "before issue #53")
+THEN = ("then", "to 2026-11-27", "until 2026-11-27", "before 2026-11-27")
 
 
 def test_bf16_is_called_shipped_only_in_sentences_marked_as_history():

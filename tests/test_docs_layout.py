@@ -46,6 +46,17 @@ def test_the_guides_are_short_and_name_no_round():
         assert not rounds, f"docs/{name}: a heading names a round (a record's): {rounds}"
 
 
+def test_the_guides_carry_no_issue_numbers_nor_a_round_as_a_default():
+    """History (issue numbers, which round's default or winner a search was) belongs to the study
+    records; a guide says what is, with a date where the when matters."""
+    found = []
+    for path in sorted(glob.glob(os.path.join(REPO, "docs", "*.md"))) + [os.path.join(REPO, "README.md")]:
+        for n, line in enumerate(open(path, encoding="utf-8"), 1):
+            if re.search(r"\bissues? #\d+|\b[Rr]ound \d+'s (default|winner|best)", line):
+                found.append(f"{os.path.relpath(path, REPO)}:{n}: {line.strip()[:100]}")
+    assert not found, "\n".join(found)
+
+
 def test_every_relative_link_of_the_docs_resolves():
     broken = []
     pages = glob.glob(os.path.join(REPO, "docs", "**", "*.md"), recursive=True) + [os.path.join(REPO, "README.md")]

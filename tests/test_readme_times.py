@@ -68,3 +68,9 @@ def test_the_block_names_each_cpu_and_an_older_record_gives_way(tmp_path):
     # the newest run failed: said, with the newest that passed beside it
     assert "`bash scripts/demo.sh`: its newest run exited 1 after 5 s on a 2-core AMD EPYC (AVX2-only)" in text
     assert "the newest that passed: 1 min 01 s on a 2-core AMD EPYC (AVX2-only)" in text
+
+
+def test_benchmarks_says_the_measured_avx2_train_runs():
+    doc = open(os.path.join(REPO, "docs", "benchmarks.md"), encoding="utf-8").read()
+    assert readme_times.avx2_train_block() in doc, "run python3 scripts/ci/readme_times.py --doc docs/benchmarks.md"
+    assert "not measured" not in doc.split("## Scale-out")[0].split("on an AVX2-only CPU: predicted")[1]

@@ -4,6 +4,7 @@ scripts/repro/readme_times.sh, never by hand), with the CPU it ran on; a newest 
 is shown as failed, beside the newest that passed; a record whose command's files changed since
 its commit is stale (tests/test_readme_times.py fails until it is measured again).
     python3 scripts/ci/readme_times.py --doc README.md     # rewrites the block
+    python3 scripts/ci/readme_times.py --doc docs/benchmarks.md   # its AVX2-only train.sh runs
     python3 scripts/ci/readme_times.py                     # prints it"""
 
 import glob
@@ -98,17 +99,40 @@ def block(recs, ok=None) -> str:
     return BEGIN + body + "\n" + END
 
 
+AVX2_BEGIN, AVX2_END = "<!-- avx2 train: begin -->\n", "<!-- avx2 train: end -->"
+
+
+def avx2_train_block(recs=None) -> str:
+    """docs/benchmarks.md's measured train.sh runs on an AVX2-only CPU (every record that passed)."""
+    runs = [r for r in (recs if recs is not None else all_records()).get("train", []) if r["cpu_kind"] == "AVX2-only"]
+    runs = [r for r in runs if r["exit"] == 0]
+    if not runs:
+        return AVX2_BEGIN + "No run on an AVX2-only CPU is recorded yet.\n" + AVX2_END
+    lines = [f"- `{r['command']}`: {_one(r)}." for r in runs]
+    under = all(r["wall_s"] < 15 * 60 for r in runs)
+    lines.append(f"- {'every run under' if under else 'not every run under'} the 15 minutes.")
+    return AVX2_BEGIN + "\n".join(lines) + "\n" + AVX2_END
+
+
+def _rewrite(doc: str, begin: str, end: str, text: str) -> str:
+    head, rest = doc.split(begin, 1)
+    return head + text + rest.split(end, 1)[1]
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     text = block(records(), passing())
     if argv[:1] == ["--doc"]:
         path = argv[1]
         doc = open(path, encoding="utf-8").read()
-        if BEGIN not in doc or END not in doc:
+        found = False
+        if BEGIN in doc and END in doc:
+            doc, found = _rewrite(doc, BEGIN, END, text), True
+        if AVX2_BEGIN in doc and AVX2_END in doc:
+            doc, found = _rewrite(doc, AVX2_BEGIN, AVX2_END, avx2_train_block()), True
+        if not found:
             print(f"readme_times: {path} has no times block", file=sys.stderr)
             return 2
-        head, rest = doc.split(BEGIN, 1)
-        doc = head + text + rest.split(END, 1)[1]
         open(path, "w", encoding="utf-8").write(doc)
     else:
         print(text)
