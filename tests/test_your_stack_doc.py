@@ -58,14 +58,18 @@ def problems(text=None):
             if re.match(r"(/usr/bin/)?python3 -m asg_agent\.cli\.(campaign|baseline)", c):
                 missing = asked_workers(c) - have
                 if missing and have:
-                    found.append(f"{head}: `{c[:60]}...` asks for {sorted(missing)}; the section launched {sorted(have)}")
+                    found.append(
+                        f"{head}: `{c[:60]}...` asks for {sorted(missing)}; the section launched {sorted(have)}"
+                    )
             for path in experiments_named(c):
                 if not os.path.isfile(path):
                     found.append(f"{head}: {os.path.relpath(path, REPO)} does not exist")
                     continue
                 space = (yaml.safe_load(open(path)) or {}).get("action_space", "absolute")
                 if f"`{space}`" not in prose:
-                    found.append(f"{head}: {os.path.relpath(path, REPO)} runs the `{space}` action space; the section does not say so")
+                    found.append(
+                        f"{head}: {os.path.relpath(path, REPO)} runs the `{space}` action space; the section does not say so"
+                    )
             if c.startswith("printf") and "exp1-my-stack" in c and "action_space:" not in c:
                 found.append(f"{head}: the experiment it writes states no action_space")
     return found

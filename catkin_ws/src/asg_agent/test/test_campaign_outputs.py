@@ -145,6 +145,20 @@ def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input
     assert "no campaign 'nope'" in capsys.readouterr().err
     assert main(["unpark", store, str(tmp_path / "done.jsonl.gz")]) == 2
     assert "not a parked campaign" in capsys.readouterr().err
+    # `show`: the campaign's last screen again (docs/replay.md's first step), bad input named
+    from asg_agent.cli.campaign import print_summary
+    import io
+
+    screen = io.StringIO()
+    print_summary(c.store, "done", out=screen)
+    assert main(["show", store, "done"]) == 0
+    out = capsys.readouterr().out
+    assert screen.getvalue() in out and "scene generator: random" in out
+    assert out.index("terminations:") < out.index("the paper's proxy:")  # the proxy after the attribution
+    assert main(["show", store, "nope"]) == 2
+    assert "holds no campaign 'nope' (it holds: cut, done)" in capsys.readouterr().err
+    assert main(["show", str(tmp_path / "none.sqlite"), "done"]) == 2
+    assert "no such scenario store" in capsys.readouterr().err
 
 
 def test_differential_campaign_learns_from_the_difference_and_repeats(tmp_path):

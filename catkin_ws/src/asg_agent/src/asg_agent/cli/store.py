@@ -77,21 +77,17 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     if args.cmd in ("park", "unpark"):
         return park_or_unpark(args)
-    if args.cmd == "export":
+    if args.cmd in ("export", "show"):
         try:
             store = Store(args.store, create=False)
         except StoreError as e:
             print(f"error: {e}", file=sys.stderr)
             return 2
+    if args.cmd == "export":
         n = export(store, args.campaign, args.out)
         print(f"{args.out}: {n} scenarios")
         return 0
     if args.cmd == "show":
-        try:
-            store = Store(args.store, create=False)
-        except StoreError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 2
         if store.campaign(args.campaign) is None:
             names = ", ".join(store.campaign_names()) or "none"
             print(f"error: {args.store} holds no campaign {args.campaign!r} (it holds: {names})", file=sys.stderr)
