@@ -113,8 +113,24 @@ def record_blocks() -> Dict[str, str]:
         if found:
             specs[f"pilot {arm}"] = found
     atlas = os.path.join(REPO, "results", "atlas", "exp1-flaw.json")
-    out["pilot"] = _block("pilot", arms_text(arms(atlas, specs, 300)))
+    t = arms(atlas, specs, 300)
+    out["pilot"] = _block("pilot", arms_text(t))
+    out["rates"] = _block("rates", rates_text(t))
     return out
+
+
+def rates_text(t: Dict) -> str:
+    """Each arm's flaw findings in its first scenarios, pooled over its seeds: how often it finds
+    the flaw at all, beside how many distinct places it covers."""
+    lines = []
+    for arm, rows in t["arms"].items():
+        k, n = sum(r["findings"] for r in rows), sum(r["scenarios"] for r in rows)
+        d5 = sum(r["distinct_5m"] for r in rows)
+        lines.append(
+            f"{arm}: {k} flaw findings in {n:,} scenarios (1 in {n / k:.1f}), {d5} distinct at 5 m "
+            f"({d5 / k:.2f} of them)"
+        )
+    return "\n".join(lines)
 
 
 README = os.path.join(REPO, "README.md")
