@@ -37,7 +37,7 @@ def test_each_time_is_measured_since_its_commands_files_last_changed_and_the_fir
     """A time is regenerated when the command's files change (the script, what it sources, the
     launch file it runs): bash scripts/repro/readme_times.sh NAME, then the --doc line above."""
     recs = readme_times.records()
-    for name in ("train", "test"):
+    for name in ("demo", "train", "test"):
         assert name in recs, name
         assert readme_times.stale(recs[name]) == [], (name, readme_times.stale(recs[name]))
     # the first run a newcomer meets: train.sh in a fresh clone, installing and building first
