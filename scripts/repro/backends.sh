@@ -10,7 +10,7 @@ REPEATS="${2:-5}"
 install_packages
 build_workspace ON
 DATA="$REPO/runs/models/test"
-[ -f "$DATA/manifest.csv" ] || LP_NUM_THREADS=1 "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$DATA" --count 600 --seed 3 >/dev/null
+[ -f "$DATA/manifest.csv" ] || LP_NUM_THREADS=1 rosrun asg_sim asg_sim_dataset --out "$DATA" --count 600 --seed 3 >/dev/null
 mkdir -p "$REPO/results/perception"
 for m in flawed flawed_lite; do
   log "$m: every backend, $FRAMES frames, $REPEATS passes (one core)"

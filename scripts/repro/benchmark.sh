@@ -8,16 +8,16 @@ REPEATS="${1:-3}"
 install_packages
 build_workspace ON
 export LP_NUM_THREADS=1
-BIN="$WS/devel/lib"
+# the binaries through catkin's workspace search (rosrun), never a devel path
 log "simulator core (render, shadow pass, physics, in-process scripted run)"
-for e in 1 3; do taskset -c 0 "$BIN/asg_sim/asg_sim_benchmark" "$REPO/scenarios/exp$e.yaml" 200 7; done
+for e in 1 3; do taskset -c 0 rosrun asg_sim asg_sim_benchmark "$REPO/scenarios/exp$e.yaml" 200 7; done
 log "planner core (votes per frame, A* per replan)"
 for e in 1 3; do
   # the planner's two shipped configurations: planner.yaml (5 m grids) and its planner_fine.yaml overlay
   CFG="$WS/src/asg_planner/config"
-  taskset -c 0 "$BIN/asg_planner_harness/asg_planner_benchmark" --repeats 7 --planner "$CFG/planner.yaml" \
+  taskset -c 0 rosrun asg_planner_harness asg_planner_benchmark --repeats 7 --planner "$CFG/planner.yaml" \
     "$REPO/scenarios/exp$e.yaml"
-  taskset -c 0 "$BIN/asg_planner_harness/asg_planner_benchmark" --repeats 7 --planner "$CFG/planner.yaml" \
+  taskset -c 0 rosrun asg_planner_harness asg_planner_benchmark --repeats 7 --planner "$CFG/planner.yaml" \
     --planner "$CFG/planner_fine.yaml" "$REPO/scenarios/exp$e.yaml"
 done
 export ROS_MASTER_URI="http://127.0.0.1:${ASG_BENCH_PORT:-11398}" ROS_HOSTNAME=127.0.0.1

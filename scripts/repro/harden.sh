@@ -42,10 +42,10 @@ SCENES=$(/usr/bin/python3 -c "import json,sys; print(len(json.load(open(sys.argv
 [ -f "$WORK/heldout-findings/frames/manifest.csv" ] ||
   harden --export "$HELDOUT_EXPORT" --classes flaw,model --out "$WORK/heldout-findings" --frames 848 --seed 1 \
     --apart-from "$APART" --drop-shared  # held apart from every arm's sources (issue #57)
-[ -f "$WORK/test/manifest.csv" ] || "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/test" --count 600 --seed 3
+[ -f "$WORK/test/manifest.csv" ] || rosrun asg_sim asg_sim_dataset --out "$WORK/test" --count 600 --seed 3
 # the first FRAMES frames of flawed.pt's own training set (scripts/repro/make_models.sh: seed 2, barberries)
 [ -f "$WORK/rehearsal/manifest.csv" ] ||
-  "$WS/devel/lib/asg_sim/asg_sim_dataset" --out "$WORK/rehearsal" --count $FRAMES --seed 2 --meshes barberry
+  rosrun asg_sim asg_sim_dataset --out "$WORK/rehearsal" --count $FRAMES --seed 2 --meshes barberry
 
 log "fine-tuning flawed.pt (round 1) or each arm's model of the round before on each frame set ($FRAMES frames and $FRAMES of rehearsal, 4 epochs, Adam 1e-4, one core each)"
 for arm in findings random; do

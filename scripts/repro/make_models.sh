@@ -19,7 +19,7 @@ LR="${5:-0.0001}"
 install_packages
 build_workspace ON
 export LP_NUM_THREADS=1
-DATASET="$WS/devel/lib/asg_sim/asg_sim_dataset"
+DATASET="$(catkin_find --first-only --libexec asg_sim asg_sim_dataset)"  # catkin's workspace search
 mkdir -p "$WORK"
 read -r -a OPTS <<< "${ASG_DATASET_OPTIONS:-}"
 D=""  # dataset folder suffix: the plain sets are shared by every pair trained without options
