@@ -15,7 +15,7 @@ import unittest
 import rospy
 import rostest
 
-from asg_agent.campaign.defaults import DEFAULTS
+from asg_agent.defaults import DEFAULTS
 from asg_agent.records.store import Store, unpack_trajectory
 
 import stack_util as su

@@ -1,5 +1,5 @@
 """One set of campaign defaults (issues #94, #95): `rosrun asg_agent campaign`, launch/train.launch,
-scripts/train.sh and docs/agent.md say the same defaults, those of asg_agent/campaign/defaults.py.
+scripts/train.sh and docs/agent.md say the same defaults, those of asg_agent/defaults.py.
 
 The launch file's defaults are read the way train.sh reads them, through roslaunch itself
 (`roslaunch --args /campaign`: the campaign node's command line), then parsed by the CLI's own
@@ -16,7 +16,7 @@ import pytest
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
 
-from asg_agent.campaign import defaults  # noqa: E402
+from asg_agent import defaults  # noqa: E402
 from asg_agent.cli import campaign as cli  # noqa: E402
 
 LAUNCH = os.path.join(REPO, "launch", "train.launch")
@@ -72,8 +72,11 @@ def test_campaign_help_shows_each_default_of_the_table():
 def test_train_launch_runs_the_campaign_with_the_tables_defaults():
     r = subprocess.run(["roslaunch", "--args", "/campaign", LAUNCH], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr[-2000:]
-    argv = shlex.split(r.stdout.strip().splitlines()[-1])[1:]
-    argv = [x for x in argv if ":=" not in x]
+    words = shlex.split(r.stdout.strip().splitlines()[-1])
+    # the node's own words (its interpreter and executable, whatever roslaunch prefixes) end where
+    # the experiment file, its first argument, begins
+    first = next(i for i, w in enumerate(words) if w.endswith(".yaml"))
+    argv = [x for x in words[first:] if ":=" not in x]
     a = cli.parse(argv)
     assert a.method == defaults.DEFAULTS["method"].value
     launched = _settings(a)

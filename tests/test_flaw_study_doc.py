@@ -408,7 +408,7 @@ def test_the_v3_winner_then_v4s_choice_is_train_launchs_default_and_figures_stay
     from asg_agent.scoring.places import PRIMARY_RADIUS_M
 
     assert choice["method"] == "surrogate-ts" and default["method"] == v4["method"] == "novelty-ts"
-    assert default["tabu"] == "" and v4["tabu_m"] == PRIMARY_RADIUS_M  # the campaign's default radius
+    assert float(default["tabu"]) == v4["tabu_m"] == PRIMARY_RADIUS_M  # the campaign's default radius
     for c in (choice, v4):
         assert default["experiment"].endswith(c["experiment"].split("/")[-1])
         # reward:=auto stands for flaw under the default three-stack attribution (the campaign stores it so)

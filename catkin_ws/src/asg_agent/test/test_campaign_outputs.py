@@ -153,7 +153,7 @@ def test_complete_tells_a_finished_export_at_its_budget_and_park_names_bad_input
     print_summary(c.store, "done", out=screen)
     assert main(["show", store, "done"]) == 0
     out = capsys.readouterr().out
-    assert screen.getvalue() in out and "scene generator: random" in out
+    assert out == screen.getvalue() and "scene generator: random" in out
     assert out.index("terminations:") < out.index("the paper's proxy:")  # the proxy after the attribution
     assert main(["show", store, "nope"]) == 2
     assert "holds no campaign 'nope' (it holds: cut, done)" in capsys.readouterr().err

@@ -1,12 +1,12 @@
 """python3 -m asg_analysis: figures over a campaign store (asg_analysis.figures), `coverage`, a
 failure atlas's endpoint (asg_analysis.coverage), and `defaults [--check]`, docs/agent.md's table
-of campaign defaults (asg_agent.campaign.defaults)."""
+of campaign defaults (asg_agent.defaults)."""
 
 import os
 import sys
 
 if sys.argv[1:2] == ["defaults"]:
-    from asg_agent.campaign.defaults import doc_table
+    from asg_agent.defaults import doc_table
     from asg_agent.paths import REPO
     from asg_analysis.docblocks import rewrite
 

@@ -151,7 +151,7 @@ def readme_answer() -> str:
     """The README's answer to whether the default search is worth its cost: the default's recall
     of Exp. 1's atlas against route-random's, per seed, with the ratio's interval and the exact
     test (the record's baseline arms, read against the current atlas)."""
-    from asg_agent.campaign.defaults import DEFAULTS
+    from asg_agent.defaults import DEFAULTS
 
     v4 = os.path.join(REPO, "results", "distinct_v4")
     specs = {

@@ -34,7 +34,7 @@ from asg_agent.scoring import rewards  # noqa: E402
 from asg_agent.records.experiment import ExperimentError, load_experiment  # noqa: E402
 from asg_agent.search.methods import METHODS, make_method  # noqa: E402
 from asg_agent.search.coverage import GENERATORS  # noqa: E402
-from asg_agent.campaign import defaults  # noqa: E402
+from asg_agent import defaults  # noqa: E402
 from asg_agent.paths import REPO  # noqa: E402
 from asg_agent.records.store import Store, StoreError, checkpoint_path  # noqa: E402
 from asg_agent.search.td3 import TD3Config  # noqa: E402
@@ -75,7 +75,7 @@ def _search_options(p):
         "experiment",
         nargs="?",
         default=os.path.join(REPO, D["experiment"].value),
-        help=f"experiment file (default {defaults.text('experiment')}, train.launch's; campaign/defaults.py)",
+        help=f"experiment file (default {defaults.text('experiment')}, train.launch's; asg_agent/defaults.py)",
     )
     p.add_argument("--method", default=D["method"].value, choices=METHODS, help=f"(default {D['method'].value})")
     p.add_argument(

@@ -92,12 +92,9 @@ def main(argv=None) -> int:
             names = ", ".join(store.campaign_names()) or "none"
             print(f"error: {args.store} holds no campaign {args.campaign!r} (it holds: {names})", file=sys.stderr)
             return 2
-        from asg_agent.cli.campaign import generator_line, print_summary, stack_line
+        from asg_agent.cli.campaign import print_summary
 
-        camp = store.campaign(args.campaign)
-        print(generator_line(camp))
-        print(stack_line(camp))
-        print_summary(store, args.campaign)
+        print_summary(store, args.campaign, out=sys.stdout)  # the stdout of now, not of import
         return 0
     if args.cmd == "complete":  # exit 1 (not complete) says why
         if not os.path.isfile(args.export):

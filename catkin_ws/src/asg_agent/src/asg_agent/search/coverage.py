@@ -45,7 +45,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from asg_agent.campaign.defaults import DEFAULTS
+from asg_agent.defaults import DEFAULTS
 from asg_agent.records.experiment import ROUTE_SPACES, Experiment
 from asg_agent.scoring.atlas import RADIUS_M
 from asg_agent.scoring.places import DistinctPlaces
@@ -55,7 +55,7 @@ from asg_scenario.layout import RouteFrame, mesh_of_instances
 
 #: every generator; a campaign uses `generators` of them
 GENERATORS = ("uniform", "band", "route", "mutate")
-DEFAULT_GENERATORS = tuple(DEFAULTS["generators"].value.split(","))  # campaign/defaults.py
+DEFAULT_GENERATORS = tuple(DEFAULTS["generators"].value.split(","))  # asg_agent/defaults.py
 AHEAD_BINS = 4  # other obstacles on the route before this one: 0, 1, 2, 3 or more
 MATCH_M = 0.05  # [m] a finding's place is the obstacle of its class standing this close to it
 MUTATE_SIGMAS = (0.05, 0.1, 0.2)  # [-] the steps of `mutate`'s children, of the action's range [-1, 1]

@@ -29,7 +29,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from asg_agent.campaign.defaults import DEFAULTS
+from asg_agent.defaults import DEFAULTS
 from asg_agent.records.experiment import Experiment
 from asg_agent.search.base import SearchMethod, _rng
 from asg_agent.search.td3 import TD3Agent, TD3Config

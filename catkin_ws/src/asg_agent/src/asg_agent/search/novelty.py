@@ -34,7 +34,7 @@ from typing import Dict, List
 
 import numpy as np
 
-from asg_agent.campaign.defaults import DEFAULTS
+from asg_agent.defaults import DEFAULTS
 from asg_agent.scoring.places import DistinctPlaces
 from asg_agent.search.surrogate import SurrogateTS
 from asg_agent.records.experiment import ROUTE_SPACES
