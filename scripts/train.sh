@@ -51,7 +51,7 @@ trap - EXIT
 for i in "${!CAMPAIGN[@]}"; do [ "${CAMPAIGN[$i]}" = --store ] && STORE="${CAMPAIGN[$((i + 1))]}"; done
 if [ "$rc" = 0 ]; then
   # what the campaign's failures have in common (issue #78): rules learnt from its own results
-  /usr/bin/python3 -m asg_analysis.rules learn --store "$STORE" || true
+  /usr/bin/python3 -m asg_analysis rules learn --store "$STORE" || true
 fi
 log "store: $STORE (docs/agent.md: schema, resume, reading it)"
 exit "$rc"

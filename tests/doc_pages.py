@@ -6,6 +6,9 @@ import glob
 import os
 import re
 
+from asg_analysis.docs import RECORD_LINE  # noqa: F401 (the index itself: python3 -m asg_analysis docs)
+from asg_analysis.docs import records_index as index_rows  # noqa: F401
+
 REPO = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 STUDIES = os.path.join(REPO, "docs", "studies")
 
@@ -22,7 +25,6 @@ def guide(name: str) -> str:
     return os.path.join(REPO, "docs", name)
 
 
-RECORD_LINE = re.compile(r"^\*Study record, (\d{4}-\d{2}-\d{2}) \((issues? #[^)]*)\)\. Status: ([^.]+)\.")
 INDEX_BEGIN, INDEX_END = "<!-- records: begin -->", "<!-- records: end -->"
 
 
@@ -47,21 +49,3 @@ def records_problems(root: str = STUDIES) -> list:
         elif rec.group(1) != m.group(1):
             out.append(f"{name}: recorded {rec.group(1)}, named {m.group(1)}")
     return out
-
-
-def index_rows(root: str = STUDIES) -> str:
-    """The index's table of the records, newest first (docs/studies/README.md)."""
-    rows = ["| recorded | record | issue | status |", "|---|---|---|---|"]
-    for p in sorted(glob.glob(os.path.join(root, "????-??-??-*.md")), reverse=True):
-        lines = open(p, encoding="utf-8").read().split("\n")
-        rec = RECORD_LINE.match(lines[2])
-        rows.append(f"| {rec.group(1)} | [{lines[0][2:]}]({os.path.basename(p)}) | {rec.group(2)} | {rec.group(3)} |")
-    return "\n".join(rows)
-
-
-if __name__ == "__main__":  # rewrite the index: /usr/bin/python3 tests/doc_pages.py
-    page = os.path.join(STUDIES, "README.md")
-    text = open(page, encoding="utf-8").read()
-    head, rest = text.split(INDEX_BEGIN + "\n", 1)
-    tail = rest.split(INDEX_END, 1)[1]
-    open(page, "w", encoding="utf-8").write(head + INDEX_BEGIN + "\n" + index_rows() + "\n" + INDEX_END + tail)

@@ -9,18 +9,20 @@ import subprocess
 import sys
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "test"))  # the stand-in beside its tests
+import stand_in  # noqa: E402
 
 
 def proposals(tmp_path, name, coretype, native=False):
     store = str(tmp_path / f"{name}.sqlite")
-    env = dict(os.environ, OPENBLAS_CORETYPE=coretype, OMP_NUM_THREADS="1")
+    env = stand_in.environ(dict(os.environ, OPENBLAS_CORETYPE=coretype, OMP_NUM_THREADS="1"))
     env.pop("ASG_AGENT_BLAS", None)
     if native:
         env["ASG_AGENT_BLAS"] = "native"
     cmd = [
         "/usr/bin/python3",
         "-m",
-        "asg_agent.testing.campaign",
+        "stand_in.campaign",
         os.path.join(REPO, "experiments", "exp1.yaml"),
         "--fake-workers",
         "3",

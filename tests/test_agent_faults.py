@@ -15,14 +15,18 @@ import pytest
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
+sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "test"))  # the stand-in beside its tests
+import stand_in  # noqa: E402
 from asg_agent.records.store import Store  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
-ENV = dict(
-    os.environ,
-    PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
-    + os.pathsep
-    + os.environ.get("PYTHONPATH", ""),
+ENV = stand_in.environ(
+    dict(
+        os.environ,
+        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+        + os.pathsep
+        + os.environ.get("PYTHONPATH", ""),
+    )
 )
 N = 200
 
@@ -31,7 +35,7 @@ def cmd(store, name, *extra):
     return [
         sys.executable,
         "-m",
-        "asg_agent.testing.campaign",
+        "stand_in.campaign",
         EXP,
         "--fake-workers",
         "2",

@@ -14,7 +14,7 @@ import tokenize
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 SRC = os.path.join(REPO, "catkin_ws", "src")
-FLOORS = ["scoring", "records", "search", "campaign", "ros", "cli", "testing"]
+FLOORS = ["scoring", "records", "search", "campaign", "ros", "cli"]
 GROUND = {"asg_agent", "asg_agent.paths"}
 
 

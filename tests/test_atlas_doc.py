@@ -90,3 +90,24 @@ def test_the_readmes_answer_is_the_recount_of_the_default_and_route_random():
 
     p = stats.mann_whitney(per["default"], per["route-random"])["p"]
     assert ("Not shown" in answer) == (p >= 0.05), p
+
+
+def test_the_records_atlas_v3_sentence_is_the_atlas_files():
+    # the record's prose on the current atlas and on v2, which the pilot was read against
+    def at5(path):
+        with open(os.path.join(REPO, path), encoding="utf-8") as f:
+            a = json.load(f)
+        g = [g for g in a["groupings"] if g["radius_m"] == 5.0][0]
+        return a["version"], len(g["places"]), g["chao1"]["completeness"], g["chao2"]["completeness"]
+
+    v, n, c1, c2 = at5("results/atlas/exp1-flaw.json")
+    v2, n2, c1_2, c2_2 = at5("results/coverage_v5/exp1-flaw.v2.json")
+    assert v2 == 2 and v == 3
+    page = os.path.join(REPO, "docs", "studies", "2026-12-06-coverage-v5.md")
+    text = " ".join(open(page, encoding="utf-8").read().split())
+    said = (
+        f"version {v}, {n} places at 5 m, estimated completeness {c1:.2f} by Chao1 and {c2:.2f} by Chao2 "
+        f"(v2: {c1_2:.2f} and {c2_2:.2f})"
+    )
+    assert said in text, said
+    assert (n < n2) == ("One place fewer than v2" in text) and c1 < 0.90 and "it is not frozen" in text

@@ -216,6 +216,23 @@ def test_the_round_6_refactor_found_the_same_results_before_and_after():
     assert digests["before"] == digests["after"] and digests["after"][0] == "120"
 
 
+def test_round_8s_refactor_found_round_7s_results_on_another_epyc_class():
+    # issue #94: round 7's end (18c8fe5) and the refactored tree, one seeded 120-scenario campaign a
+    # side on the AVX512-BF16 EPYC: one digest, round 7's on the AVX2-only EPYC
+    bench = os.path.join(REPO, "results", "bench")
+    seen = {}
+    for name in ("r8-one-before-1", "r8-one-after-1", "r7-config-after-1"):
+        seen[name] = tuple(open(os.path.join(bench, f"{name}.digest")).read().split())
+    assert len(set(seen.values())) == 1 and seen["r8-one-after-1"][0] == "120"
+    cpus = {}
+    for name in ("r8-one-before-1", "r8-one-after-1", "r7-config-after-1"):
+        with open(os.path.join(bench, f"{name}.json"), encoding="utf-8") as f:
+            cpus[name] = json.load(f)["machine"]
+    assert cpus["r8-one-before-1"] == cpus["r8-one-after-1"]
+    text = " ".join(open(record("refactors-before-after"), encoding="utf-8").read().split())
+    assert f"the same digest as round 7's on the AVX2-only EPYC ({seen['r8-one-after-1'][1][:8]})" in text
+
+
 def test_a_seeded_campaign_gives_one_digest_on_the_xeon_and_the_epyc():
     # issue #68 item 5: with the agent's OpenBLAS kernel pinned, the seeded 120-scenario campaign gives
     # on the AMX Xeon the digest it gave on the AVX2-only EPYC; before the pin the Xeon gave another

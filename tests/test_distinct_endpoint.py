@@ -153,7 +153,7 @@ def test_the_flaw_study_page_says_the_default_collapsed_with_these_figures():
 
 def test_the_protocol_v4_pilot_block_is_its_exports():
     """docs/experiments.md's pilot table of protocol v4, regenerated from results/distinct_v4's
-    pilot exports (python3 -m asg_analysis.endpoints --budget 150 --doc docs/studies/2026-12-04-distinct-failures-v4.md
+    pilot exports (python3 -m asg_analysis endpoints --budget 150 --doc docs/studies/2026-12-04-distinct-failures-v4.md
     "distinct v4 pilot" results/distinct_v4/dist4-pilot-*.jsonl.gz), and the figures for scale
     beside it recomputed from the flaw study v3's exports."""
     from asg_agent.records.export import read_export
@@ -378,7 +378,7 @@ def test_the_defaults_first_seed_replays_every_flaw_finding():
     begin, end = replays.markers(os.path.join("results", "distinct_v4"))
     page = open(record("distinct-failures-v4"), encoding="utf-8").read()
     block = re.search(re.escape(begin) + r"\n(.*?)\n" + re.escape(end), page, re.S)
-    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis.replays"
+    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis replays"
     assert f"every one of its {len(flaw)} flaw findings" in " ".join(page.split())
 
 

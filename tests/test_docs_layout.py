@@ -33,7 +33,7 @@ def test_a_record_without_its_date_or_record_line_is_named(tmp_path):
 def test_the_index_lists_every_record():
     page = open(os.path.join(STUDIES, "README.md"), encoding="utf-8").read()
     block = page.split(INDEX_BEGIN + "\n", 1)[1].split(INDEX_END, 1)[0]
-    assert block.strip() == index_rows().strip(), "regenerate: /usr/bin/python3 tests/doc_pages.py"
+    assert block.strip() == index_rows().strip(), "regenerate: python3 -m asg_analysis docs"
 
 
 def test_the_guides_are_short_and_name_no_round():

@@ -18,7 +18,7 @@ MANIFEST = os.path.join(REPO, "results", "experiments.yaml")
 
 
 def test_recompute_matches_exports_stores_and_docs(tmp_path):
-    summary = experiments.run(MANIFEST, str(tmp_path))
+    summary = experiments.compute(MANIFEST, str(tmp_path))
     assert summary["table2"], "the manifest names no Table 2 campaign"
     for exp, row in summary["table2"].items():
         camp, rows = read_export(os.path.join(REPO, "results", row["export"]))
@@ -75,7 +75,7 @@ def test_recompute_matches_exports_stores_and_docs(tmp_path):
     with open(record("paper-table2")) as f:
         quoted = experiments.docs_block(f.read())
     generated = (tmp_path / "tables.md").read_text().strip("\n")
-    assert quoted == generated, "the Table 2 record is stale: run `python3 -m asg_analysis.studies.experiments`"
+    assert quoted == generated, "the Table 2 record is stale: run `python3 -m asg_analysis experiments`"
     # The differential campaigns, round 2's and round 3's: every count is the export's.
     diffs = list((summary.get("differentials") or {}).values())
     if "differential" in summary:
@@ -135,7 +135,7 @@ def test_differential_counts_on_a_known_export(tmp_path):
         for r in rows:
             f.write(json.dumps(r) + "\n")
     (tmp_path / "m.yaml").write_text("differential: {export: d.jsonl.gz, under_test: flawed, reference: full}\n")
-    d = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["differential"]
+    d = experiments.compute(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["differential"]
     assert (d["scenarios"], d["both_runs"], d["same"]) == (12, 11, 3)
     assert d["regressions"] == {"1": 4, "2": 2, "3": 1} and d["reverse"] == {"1": 2, "2": 1, "3": 0}
     assert abs(d["max_reward"] - 3.5) < 1e-9 and abs(d["min_reward"] + 2.4) < 1e-9
@@ -230,7 +230,7 @@ def test_attributed_comparison_counts_known_findings(tmp_path):
         for r in rows:
             f.write(json.dumps(r) + "\n")
     (tmp_path / "m.yaml").write_text("attributed: {budget: 20, threshold_m: 5.0, arms: {random: [a.jsonl.gz]}}\n")
-    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["attributed"]["random"][0]
+    s = experiments.compute(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["attributed"]["random"][0]
     assert (s["scenarios"], s["attributed"]) == (20, 20)
     assert (s["perception"], s["perception_distinct"]) == (2, 1)
     assert (s["differential"], s["differential_distinct"]) == (3, 2)
@@ -261,7 +261,7 @@ def test_weather_tables_bin_findings_by_attribute(tmp_path):
         for r in rows:
             f.write(json.dumps(r) + "\n")
     (tmp_path / "m.yaml").write_text("weather: {exports: [w.jsonl.gz], attributes: [fog_visibility_m], bins: 2}\n")
-    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["weather"]["fog_visibility_m"]
+    s = experiments.compute(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["weather"]["fog_visibility_m"]
     assert [b["scenarios"] for b in s] == [4, 4]
     assert [b["collisions"] for b in s] == [1, 0] and [b["differential"] for b in s] == [1, 0]
     assert [b["reference_collisions"] for b in s] == [0, 1]
@@ -292,7 +292,7 @@ def test_terrain_tables_bin_findings_by_terrain_attribute(tmp_path):
     (tmp_path / "m.yaml").write_text(
         "terrain: {exports: [t.jsonl.gz], attributes: [terrain.amplitude_m, terrain.hill_from_route_m], bins: 2}\n"
     )
-    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["terrain"]
+    s = experiments.compute(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["terrain"]
     assert [b["scenarios"] for b in s["terrain.amplitude_m"]] == [3, 3]
     assert [b["collisions"] for b in s["terrain.amplitude_m"]] == [1, 0]
     assert s["obstacle_hit"] == {
@@ -405,7 +405,7 @@ def test_rerun_selects_what_an_attributed_campaign_blamed_on_the_perception(tmp_
     (tmp_path / "m.yaml").write_text(
         "flaw_or_layout_attributed: {file: r.json, campaign: synthetic, export: a.jsonl.gz}\n"
     )
-    s = experiments.run(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["flaw_or_layout_attributed"][0]
+    s = experiments.compute(str(tmp_path / "m.yaml"), str(tmp_path / "out"))["flaw_or_layout_attributed"][0]
     assert s["collisions_by_obstacle"] == {rows[2]["meshes"][1]: {"runs": 1, "still": 1}}
     table = (tmp_path / "out" / "tables.md").read_text()
     assert f"| paper | full | 3 | 0 of 1 | 1 of 1 | 1 of 1 | {rows[2]['meshes'][1]} 1 of 1 | 0 |" in table
@@ -418,7 +418,7 @@ def test_round3_seed_tables_are_the_exports_and_the_prose_holds():
     from asg_analysis.studies import seed_tables
     from asg_agent.records.export import read_export
 
-    assert seed_tables.main(["--check"]) == 0, "round 3's record: run python3 -m asg_analysis.studies.seed_tables"
+    assert seed_tables.run(["--check"]) == 0, "round 3's record: run python3 -m asg_analysis seed-tables"
 
     rows = {
         (a, s): read_export(os.path.join(REPO, "results", "comparison", p.format(s) + ".jsonl.gz"))[1]

@@ -35,7 +35,8 @@ def test_the_doc_block_is_in_step_with_the_exports():
         [
             "/usr/bin/python3",
             "-m",
-            "asg_analysis.protocol",
+            "asg_analysis",
+            "protocol",
             "status",
             os.path.join(REPO, "experiments", "protocol-flaw-study.yaml"),
             FOLDER,
@@ -80,7 +81,7 @@ def test_the_replays_block_is_what_the_replay_records_say():
     assert records, "no replay record in results/flaw_study/replays/"
     text = open(DOC, encoding="utf-8").read()
     block = re.search(re.escape(replays.BEGIN) + r"\n(.*?)\n" + re.escape(replays.END), text, re.S)
-    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis.replays"
+    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis replays"
     for r in records:
         with gzip.open(os.path.join(FOLDER, f"{r['campaign']}.jsonl.gz"), "rt") as f:
             rows = [json.loads(line) for line in f][1:]
@@ -213,7 +214,8 @@ def test_the_version_3_status_block_is_in_step_with_its_exports():
         [
             "/usr/bin/python3",
             "-m",
-            "asg_analysis.protocol",
+            "asg_analysis",
+            "protocol",
             "status",
             os.path.join(REPO, "experiments", "protocol-flaw-study-v3.yaml"),
             os.path.join(REPO, "results", "flaw_study3"),
@@ -408,7 +410,7 @@ def test_the_v3_winner_then_v4s_choice_is_train_launchs_default_and_figures_stay
     from asg_agent.scoring.places import PRIMARY_RADIUS_M
 
     assert choice["method"] == "surrogate-ts" and default["method"] == v4["method"] == "novelty-ts"
-    assert float(default["tabu"]) == v4["tabu_m"] == PRIMARY_RADIUS_M  # the campaign's default radius
+    assert float(default["tabu_m"]) == v4["tabu_m"] == PRIMARY_RADIUS_M  # the campaign's default radius
     for c in (choice, v4):
         assert default["experiment"].endswith(c["experiment"].split("/")[-1])
         # reward:=auto stands for flaw under the default three-stack attribution (the campaign stores it so)

@@ -37,7 +37,7 @@ def prose():
 
 def in_step(*args):
     r = subprocess.run(
-        ["/usr/bin/python3", "-m", "asg_analysis.protocol", *args, "--check"], capture_output=True, text=True
+        ["/usr/bin/python3", "-m", "asg_analysis", "protocol", *args, "--check"], capture_output=True, text=True
     )
     assert r.returncode == 0, (
         f"the flaw study v3 record is stale: rerun `protocol {' '.join(args[:3])}`" + r.stdout + r.stderr
@@ -52,7 +52,7 @@ def test_the_v3_replays_are_every_flaw_finding_of_the_defaults_first_seed_and_al
     begin, end = replays.markers(os.path.join("results", "flaw_study3"))
     text = open(DOC, encoding="utf-8").read()
     block = re.search(re.escape(begin) + r"\n(.*?)\n" + re.escape(end), text, re.S)
-    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis.replays"
+    assert block and block.group(1) == replays.markdown(records), "regenerate: python3 -m asg_analysis replays"
     # the rerun on the Xeon has the first seed's own flaw findings: the same jobs, the same layouts
     _, rerun = read(os.path.join(V3, "cpu_check", "flaw3-xeon-default-s10.jsonl.gz"))
     _, first = read(os.path.join(V3, "flaw3-default-s10.jsonl.gz"))

@@ -179,7 +179,7 @@ def test_the_block_is_the_generators():
 
     assert held_apart.in_doc(DOC) == held_apart.block(
         held_apart.measure()
-    ), "regenerate it: python3 -m asg_analysis.studies.held_apart --doc docs/design-loop.md"
+    ), "regenerate it: python3 -m asg_analysis held-apart --doc docs/design-loop.md"
 
 
 def test_the_prose_about_the_twins(found):

@@ -61,9 +61,7 @@ def test_the_findings_are_every_flaw_contact_of_the_exports():
 def test_the_docs_table_is_generated_from_the_json():
     m = re.search(r"<!-- mechanism:begin[^>]*-->\n(.*?)\n<!-- mechanism:end -->", doc_text(), re.S)
     assert m, "docs/design-loop.md has no mechanism block"
-    assert m.group(1) == mechanism.markdown(
-        load()
-    ), "regenerate it: python3 -m asg_analysis.studies.mechanism ... --doc"
+    assert m.group(1) == mechanism.markdown(load()), "regenerate it: python3 -m asg_analysis mechanism ... --doc"
 
 
 def test_the_prose_quotes_the_measured_shares():

@@ -93,12 +93,12 @@ def edges(src=SRC):
     """[(package, kind, what, where, is_test)]: every import of another package or third-party
     module, and every executable of another package it runs."""
     pkgs = packages(src)
-    helpers = {  # the tests' own modules, which tests import from each other's folders
-        f[: -len(".py")]
+    helpers = {  # the tests' own modules and packages (stand_in), which tests import from each other's folders
+        name
         for info in pkgs.values()
         for root, _, files in os.walk(os.path.join(info["dir"], "test"))
-        for f in files
-        if f.endswith(".py")
+        for name in [f[: -len(".py")] for f in files if f.endswith(".py")]
+        + ([os.path.basename(root)] if "__init__.py" in files else [])
     }
     out = []
     for pkg, info in pkgs.items():

@@ -8,10 +8,15 @@ tests/test_your_stack_recipe.py.)"""
 import os
 import re
 import shlex
+import sys
 
 import yaml
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+for _pkg in ("asg_agent", "asg_perception", "asg_scenario"):  # the experiment loader (no ROS)
+    sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", _pkg, "src"))
+from asg_agent.records.experiment import effective  # noqa: E402
+
 DOC = os.path.join(REPO, "docs", "your-stack.md")
 
 
@@ -65,7 +70,7 @@ def problems(text=None):
                 if not os.path.isfile(path):
                     found.append(f"{head}: {os.path.relpath(path, REPO)} does not exist")
                     continue
-                space = (yaml.safe_load(open(path)) or {}).get("action_space", "absolute")
+                space = effective(path).get("action_space", "absolute")  # a file with a base: its effective keys
                 if f"`{space}`" not in prose:
                     found.append(
                         f"{head}: {os.path.relpath(path, REPO)} runs the `{space}` action space; the section does not say so"

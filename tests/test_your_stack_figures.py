@@ -377,7 +377,7 @@ def test_the_gap_nav_study_block_and_json_are_in_step():
     sys.path.insert(0, os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src"))
     from asg_analysis.studies import gap_nav_study
 
-    cmd = [sys.executable, "-m", "asg_analysis.studies.gap_nav_study", "--doc", DOC, "--check"]
+    cmd = [sys.executable, "-m", "asg_analysis", "gap-nav-study", "--doc", DOC, "--check"]
     assert subprocess.run(cmd, cwd=REPO).returncode == 0
     with open(os.path.join(GAP, "study.json")) as f:
         assert json.load(f) == json.loads(json.dumps(gap_nav_study.study()))

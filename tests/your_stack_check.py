@@ -77,7 +77,7 @@ class YourStack(unittest.TestCase):
         # Step 5: the report, then two runs of a scenario (the stored one and its replay),
         # identical to the last bit.
         report = os.path.join(self.dir, "report")
-        p = run(doc_command("python3 -m asg_analysis.report", self.store, **{"results/depth-report": report}), 300)
+        p = run(doc_command("python3 -m asg_analysis report", self.store, **{"results/depth-report": report}), 300)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr[-2000:])
         with open(os.path.join(report, "index.html"), encoding="utf-8") as f:
             page = f.read()

@@ -5,6 +5,7 @@ is shown as failed, beside the newest that passed; a record whose command's file
 its commit is stale (tests/test_readme_times.py fails until it is measured again).
     python3 scripts/ci/readme_times.py --doc README.md     # rewrites the block
     python3 scripts/ci/readme_times.py --doc docs/benchmarks.md   # its AVX2-only train.sh runs
+    python3 scripts/ci/readme_times.py --doc PAGE --check  # exit 1 if a block is stale
     python3 scripts/ci/readme_times.py                     # prints it"""
 
 import glob
@@ -122,9 +123,11 @@ def _rewrite(doc: str, begin: str, end: str, text: str) -> str:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     text = block(records(), passing())
+    check = "--check" in argv
+    argv = [a for a in argv if a != "--check"]
     if argv[:1] == ["--doc"]:
         path = argv[1]
-        doc = open(path, encoding="utf-8").read()
+        doc = old = open(path, encoding="utf-8").read()
         found = False
         if BEGIN in doc and END in doc:
             doc, found = _rewrite(doc, BEGIN, END, text), True
@@ -133,6 +136,8 @@ def main(argv=None) -> int:
         if not found:
             print(f"readme_times: {path} has no times block", file=sys.stderr)
             return 2
+        if check:  # --check: exit 1 if a block is stale, write nothing
+            return 0 if doc == old else 1
         open(path, "w", encoding="utf-8").write(doc)
     else:
         print(text)

@@ -45,4 +45,4 @@ for w in $COUNTS; do
   grep -E "stage report|proxy >= 3" "$TMP/w$w.log" || true
   files+=("$OUT/$TAG-w$w.json")
 done
-/usr/bin/python3 -m asg_analysis.bench table "${files[@]}"
+/usr/bin/python3 -m asg_analysis bench table "${files[@]}"

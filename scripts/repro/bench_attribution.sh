@@ -20,4 +20,4 @@ for k in $(seq "$REPEATS"); do
 done
 source "$HERE/../common.sh"
 source_ros
-/usr/bin/python3 -m asg_analysis.bench table "${files[@]}"
+/usr/bin/python3 -m asg_analysis bench table "${files[@]}"

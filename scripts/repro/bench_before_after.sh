@@ -3,7 +3,7 @@
 # no attribution) on the code at BEFORE (a commit; built in a git worktree under runs/) and on this
 # tree, REPEATS times each, alternated before, after, after, before, before, after, ... so that a
 # drifting load falls on both; one JSON stage report per campaign in results/bench/, the table
-# (python3 -m asg_analysis.bench table) at the end. EXPERIMENT is a file of this tree: the
+# (python3 -m asg_analysis bench table) at the end. EXPERIMENT is a file of this tree: the
 # default, experiments/exp1-gt.yaml, leaves the U-Net out (ground-truth labels), so the figures
 # are those of the worker, planner, run loop and agent, which the refactor changed.
 #   bash scripts/repro/bench_before_after.sh BEFORE [SCENARIOS=120] [REPEATS=3] [TAG=r4-arch] [EXPERIMENT]
@@ -72,7 +72,7 @@ print(len(rows), hashlib.sha256(repr(rows).encode()).hexdigest())" "$store") > "
   done
 done
 source_ros
-/usr/bin/python3 -m asg_analysis.bench table "${files[@]}"
-/usr/bin/python3 -m asg_analysis.bench before-after $(printf '%s\n' "${files[@]}" | grep -v -- "-fast-")
+/usr/bin/python3 -m asg_analysis bench table "${files[@]}"
+/usr/bin/python3 -m asg_analysis bench before-after $(printf '%s\n' "${files[@]}" | grep -v -- "-fast-")
 echo "scenarios and digest of each campaign's results:"
 for f in "${files[@]}"; do echo "  $(basename "${f%.json}"): $(cat "${f%.json}.digest")"; done

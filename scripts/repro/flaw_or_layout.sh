@@ -3,7 +3,7 @@
 # Exp. 1 campaign run again on the full-model stack and on the ground-truth-label stack, with the
 # paper's 5 m planner grids (planner.yaml, the campaign's) and with the fine grids
 # (planner_fine.yaml, where the flawed stack is re-run too). Two workers per stack; results under
-# results/flaw_or_layout/, the table in docs/experiments.md (python3 -m asg_analysis.studies.experiments).
+# results/flaw_or_layout/, the table in docs/experiments.md (python3 -m asg_analysis experiments).
 #   bash scripts/repro/flaw_or_layout.sh [EXPORT=results/campaigns/exp1-td3-per-asp-s0.jsonl.gz] [TOP=50]
 # ASG_RERUN_OUT=results/NAME: another results folder (its table: results/NAME.json).
 # ASG_RERUN_SELECT=perception: an attributed campaign's perception findings, differential findings

@@ -90,4 +90,4 @@ for suite in "$OUT/suite-exp1c" "$OUT/suite-r4pilot"; do
   for s in "${STACKS[@]}"; do grep -q "^    ${s%%=*}:" "$suite/suite.yaml" || todo+=("$s"); done
   [ ${#todo[@]} -eq 0 ] || bash "$REPO/scripts/repro/suite_record.sh" "$suite" "${todo[@]}"
 done
-/usr/bin/python3 -m asg_analysis.studies.hardening "$OUT" --json "$OUT/summary.json" --markdown
+/usr/bin/python3 -m asg_analysis hardening "$OUT" --json "$OUT/summary.json" --markdown

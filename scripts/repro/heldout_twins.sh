@@ -25,7 +25,7 @@ log "heldout-findings rendered again as built: $(field "['frames']") frames, see
     --out "$WORK/heldout-findings" --frames "$(field "['frames']")" --seed "$(field "['seed']")" \
     --apart-from "$(field "['made_from']['apart_from']")" --drop-shared --tol-m 0.01
 cp "$WORK/heldout-findings/hardening.json" "$OUT/heldout-findings.json"
-/usr/bin/python3 -m asg_analysis.studies.held_apart --frames-without-twins "$WORK/heldout-findings/frames" "$WORK/twins-left-out"
+/usr/bin/python3 -m asg_analysis held-apart --frames-without-twins "$WORK/heldout-findings/frames" "$WORK/twins-left-out"
 ARMS=("flawed=$MODELS/flawed.pt" "full=$MODELS/full.pt")
 for r in 1 2; do ARMS+=("hardened-findings-$r=$MODELS/flawed_hf$r.pt" "hardened-random-$r=$MODELS/flawed_hr$r.pt"); done
 for k in rerendered twins-left-out; do
@@ -34,4 +34,4 @@ for k in rerendered twins-left-out; do
   [ -f "$OUT/evaluation-heldout-findings-$k.json" ] ||
     /usr/bin/python3 -m asg_perception.evaluate --data "$data" "${ARMS[@]}" --json "$OUT/evaluation-heldout-findings-$k.json"
 done
-/usr/bin/python3 -m asg_analysis.studies.held_apart --doc docs/design-loop.md
+/usr/bin/python3 -m asg_analysis held-apart --doc docs/design-loop.md

@@ -6,7 +6,7 @@
 # Each label's outcomes (termination, proxy, trajectory digest) go into SUITE/suite.yaml.
 # ASG_SUITE_WORKERS=N runs N workers a stack (default 1; runs are deterministic either way).
 # ASG_SUITE_JSON=DIR also writes each label's results, paths driven included, to DIR/LABEL.json
-# (for `python3 -m asg_analysis.studies.hardening picture`).
+# (for `python3 -m asg_analysis hardening picture`).
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 SUITE="$1"
 shift

@@ -5,5 +5,5 @@
 #   bash scripts/repro/terrain_pictures.sh [OUT=docs/images/terrain_panel.png] [X=22 Y=50 YAW=0.3]
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 source_ros
-exec /usr/bin/python3 -m asg_analysis.studies.pictures terrain --out "${1:-$REPO/docs/images/terrain_panel.png}" \
+exec /usr/bin/python3 -m asg_analysis pictures terrain --out "${1:-$REPO/docs/images/terrain_panel.png}" \
     --pose "${2:-22}" "${3:-50}" "${4:-0.3}"

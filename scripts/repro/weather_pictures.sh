@@ -5,4 +5,4 @@
 #   bash scripts/repro/weather_pictures.sh [OUT=docs/images/weather_panel.png]
 source "$(dirname "${BASH_SOURCE[0]}")/../common.sh"
 source_ros
-exec /usr/bin/python3 -m asg_analysis.studies.pictures weather --out "${1:-$REPO/docs/images/weather_panel.png}"
+exec /usr/bin/python3 -m asg_analysis pictures weather --out "${1:-$REPO/docs/images/weather_panel.png}"

@@ -11,7 +11,6 @@ setup(
             "asg_agent.records",
             "asg_agent.ros",
             "asg_agent.cli",
-            "asg_agent.testing",  # the stand-in: test support (and the ASP-effect figure)
         ],
         package_dir={"": "src"},
     )

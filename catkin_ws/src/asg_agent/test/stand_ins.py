@@ -3,7 +3,7 @@ that dies mid-episode as a killed process would (not a test module)."""
 
 import os
 
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment

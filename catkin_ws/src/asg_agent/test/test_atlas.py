@@ -21,7 +21,7 @@ from asg_agent.scoring import atlas as sa
 from asg_agent.scoring import attribution as attr
 from asg_agent.scoring.places import NO_CONTACT, count_distinct
 from asg_agent.search.methods import make_method
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 EXP1 = os.path.join(REPO, "experiments", "exp1.yaml")

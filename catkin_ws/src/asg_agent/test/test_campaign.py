@@ -11,7 +11,8 @@ import time
 import pytest
 
 from asg_agent.records.experiment import ExperimentError, load_experiment
-from asg_agent.testing.fake_pool import FakePool
+import stand_in
+from stand_in.fake_pool import FakePool
 from asg_agent.records.store import Store, StoreError, park, unpark
 
 
@@ -156,16 +157,18 @@ def test_a_finished_campaign_is_extended_by_a_resume_with_a_larger_budget(tmp_pa
 
 
 def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
-    env = dict(
-        os.environ,
-        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
-        + os.pathsep
-        + os.environ.get("PYTHONPATH", ""),
+    env = stand_in.environ(  # the agent's sources, and the stand-in beside the tests
+        dict(
+            os.environ,
+            PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+            + os.pathsep
+            + os.environ.get("PYTHONPATH", ""),
+        )
     )
     cmd = [
         sys.executable,
         "-m",
-        "asg_agent.testing.campaign",
+        "stand_in.campaign",
         EXP,
         "--fake-workers",
         "2",

@@ -8,7 +8,7 @@ import os
 import pytest
 
 from asg_agent.campaign.config import CampaignCallback, CampaignConfig, FunctionCallback
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.records.experiment import load_experiment
 from asg_agent.records.store import Store

@@ -15,7 +15,8 @@ import pytest
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig, FunctionCallback
 from asg_agent.records.experiment import ExperimentError, load_experiment
-from asg_agent.testing.fake_pool import FakePool
+import stand_in
+from stand_in.fake_pool import FakePool
 from asg_agent.search.methods import make_method
 from asg_agent.records.store import Store
 from asg_agent.search.td3 import TD3Config
@@ -298,7 +299,7 @@ def test_an_experiment_with_free_weather_sets_it_from_the_action(tmp_path):
         fog = [json.loads(r["request"])["textural"]["fog_visibility_m"] for r in rows]
         assert len(rows) == 12 and all(25.0 <= f <= 500.0 for f in fog) and len(set(fog)) > 3
     bad = tmp_path / "bad.yaml"
-    text = open(os.path.join(REPO, "experiments", "exp5.yaml")).read()
+    text = load_experiment(os.path.join(REPO, "experiments", "exp5.yaml")).text  # effective: exp5 has a base
     text = text.replace("../scenarios/exp1.yaml", os.path.join(REPO, "scenarios", "exp1.yaml"))
     for broken, fixed, message in (
         ("cloud_cover: [0.0, 1.0]", "cloud_cover: [0.0, 1.5]", "textural_free.cloud_cover: [0.0, 1.5] must satisfy"),
@@ -369,13 +370,15 @@ def test_an_experiment_with_free_terrain_sets_it_from_the_action(tmp_path):
 def test_a_signal_ends_the_campaign_as_ctrl_c_does_even_in_the_background(tmp_path, sig):
     # A campaign started with `&` by a non-interactive shell inherits SIGINT ignored; kill's
     # SIGTERM ended it at once. Both now save its state and end it with status 130.
-    env = dict(
-        os.environ,
-        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
-        + os.pathsep
-        + os.environ.get("PYTHONPATH", ""),
+    env = stand_in.environ(  # the agent's sources, and the stand-in beside the tests
+        dict(
+            os.environ,
+            PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
+            + os.pathsep
+            + os.environ.get("PYTHONPATH", ""),
+        )
     )
-    cmd = [sys.executable, "-m", "asg_agent.testing.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
+    cmd = [sys.executable, "-m", "stand_in.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
     cmd += ["--store", str(tmp_path / "s.sqlite"), "--name", "s", "--no-progress", "--method", "td3-per-asp"]
     store = Store(str(tmp_path / "s.sqlite"))
     p = subprocess.Popen(

@@ -9,7 +9,7 @@ import pytest
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.search.methods import make_method
 from asg_agent.records.store import Store
 
@@ -75,7 +75,7 @@ def test_the_collision_reward_adds_its_bonus_to_perception_collisions_only(tmp_p
         bonus = 1.5 if job in (2, 5) else 0.0  # job 9: the reference collided too
         assert r["termination"] == ("COLLISION" if job in (2, 5, 9) else "SUCCESS")
         assert abs(r["reward"] - (r["proxy"] + bonus)) < 1e-12, job
-    from asg_agent.testing.campaign import parse
+    from stand_in.campaign import parse
 
     assert parse([EXP, "--fake-workers", "2", "--reward", "collision"]).collision_bonus == 2.0
     with pytest.raises(SystemExit):
@@ -313,7 +313,7 @@ def test_the_store_and_the_export_hold_repository_relative_paths(tmp_path):
     from asg_agent.paths import REPO, in_repo
     from asg_agent.records.export import export, read_export
 
-    a = SimpleNamespace(reward="proxy", fake_workers=1)
+    a = SimpleNamespace(reward="proxy")
     s = campaign_settings(a, load_experiment(EXP), ["fake_0"], {}, "failures")
     assert s["experiment_file"] == s["experiment_repo_file"] == "experiments/exp1.yaml"
     assert in_repo(s["experiment_file"]) == os.path.join(REPO, "experiments", "exp1.yaml") == in_repo(EXP)
@@ -342,7 +342,7 @@ def test_reward_auto_stands_for_what_the_references_can_see_and_is_stored_resolv
     regression with a release's, and (issue #78) the stack's own failures with none or ground
     truth alone; the parsed options (and so the store's record of the campaign) name the resolved
     reward."""
-    from asg_agent.testing.campaign import parse
+    from stand_in.campaign import parse
     from asg_agent.scoring import rewards
 
     assert rewards.for_roles(["full", "ground_truth"]) == "flaw"

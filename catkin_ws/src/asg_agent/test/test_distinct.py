@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.experiment import load_experiment

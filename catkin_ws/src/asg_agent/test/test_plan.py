@@ -10,7 +10,7 @@ import pytest
 
 from asg_agent.records.export import read_export
 from asg_agent.records.experiment import load_experiment
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign as Loop
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store, checkpoint_path

@@ -114,7 +114,7 @@ def test_shadow_ahead_is_the_point_by_point_answer():
 
 
 def test_dense_rewards_see_how_close_a_run_came():
-    from asg_agent.testing.fake_pool import FakePool
+    from stand_in.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store

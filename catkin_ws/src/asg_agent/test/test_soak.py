@@ -9,7 +9,7 @@ import time
 
 from asg_agent.campaign import soak_check
 from asg_agent.records.experiment import load_experiment
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign as Loop
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store

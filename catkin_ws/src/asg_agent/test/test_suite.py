@@ -10,12 +10,12 @@ import yaml
 
 from asg_agent.records.export import export
 from asg_agent.records.experiment import load_experiment
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store
 from asg_agent.campaign import suite as st
-from asg_agent.testing.suite import main as suite_cli
+from stand_in.suite import main as suite_cli
 from asg_agent.scoring import attribution as attr
 from asg_agent.search.methods import make_method
 

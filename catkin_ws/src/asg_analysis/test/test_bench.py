@@ -8,6 +8,10 @@ import sys
 
 import pytest
 
+AGENT_TEST = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "asg_agent", "test")
+sys.path.insert(0, AGENT_TEST)  # the agent's in-process stand-in (stand_in/), beside its tests
+import stand_in  # noqa: E402
+
 from asg_analysis.bench import table
 from asg_agent.records.stage_costs import breakdown
 
@@ -67,7 +71,7 @@ def test_campaign_times_its_own_stages(tmp_path):
         [
             sys.executable,
             "-m",
-            "asg_agent.testing.campaign",
+            "stand_in.campaign",
             exp,
             "--fake-workers",
             "2",
@@ -84,6 +88,7 @@ def test_campaign_times_its_own_stages(tmp_path):
         capture_output=True,
         text=True,
         timeout=300,
+        env=stand_in.environ(),
     )
     assert r.returncode == 0, r.stderr
     rep = json.loads(out.read_text())

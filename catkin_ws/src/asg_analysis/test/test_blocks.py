@@ -1,6 +1,7 @@
 """Protocol v4's blocks (asg_analysis.blocks): one seed of every arm, the pilot's choice filled in,
 an order drawn from the block's seed."""
 
+import pytest
 import os
 
 import yaml
@@ -21,7 +22,7 @@ def test_a_block_holds_one_seed_of_every_arm_in_an_order_drawn_from_its_seed():
     orders = {tuple(c["arm"] for c in blocks.block(protocol, choice, k)) for k in range(5)}
     assert len(orders) > 1  # the order is drawn, not fixed
     default = next(c for c in blocks.block(protocol, choice, 0) if c["arm"] == "default")
-    assert "method:=novelty-ts" in default["args"] and "tabu:=5" in default["args"]
+    assert "method:=novelty-ts" in default["args"] and "tabu_m:=5" in default["args"]
     assert "experiment:=experiments/exp1-route.yaml" in default["args"]
     own = next(c for c in blocks.block(protocol, choice, 0) if c["arm"] == "random-own")
     assert "experiment:=experiments/exp1-route.yaml" in own["args"]  # random in the default's own space
@@ -54,7 +55,7 @@ def test_a_block_past_the_seeds_is_refused(capsys, tmp_path):
         assert "arm a: block 1 but only 1 seeds" in str(e)
     else:
         raise AssertionError("no refusal")
-    assert blocks.main([str(tmp_path / "none.yaml"), str(tmp_path / "c.json"), "0"]) == 2
+    assert blocks.run([str(tmp_path / "none.yaml"), str(tmp_path / "c.json"), "0"]) == 2
     assert "none.yaml" in capsys.readouterr().err
 
 
@@ -104,3 +105,16 @@ def test_choose_takes_the_larger_distinct_mean_then_the_5_m_figure(tmp_path):
     _export(tmp_path / "t-pilot-far-s20.jsonl.gz", "t-pilot-far-s20", 20, [6.0 * k for k in range(12)])
     c = blocks.choose(protocol, str(tmp_path))  # 120 against 120: a tie; far has more at 5 m (120 against 60)
     assert c["arm"] == "far" and c["tabu_m"] == 5.0 and c["experiment"] == "e2"
+
+
+def test_one_translator_writes_every_plan_and_refuses_a_key_it_has_no_argument_for():
+    from asg_analysis import protocol
+
+    assert protocol.launch_args({"method": "novelty-ts", "tabu_m": 5.0, "attribution": False, "seed": 3}) == [
+        "method:=novelty-ts",
+        "tabu_m:=5",
+        "seed:=3",
+        "attribution:=false",
+    ]
+    with pytest.raises(protocol.ProtocolError, match="tabu"):
+        protocol.launch_args({"tabu": 2})  # an arm's key under another name is refused, not dropped

@@ -24,11 +24,11 @@ def test_the_picture_draws_a_failure_before_and_after(tmp_path, campaign_export,
     args = ["picture", out, failed[0]["file"], png, f"before={tmp_path / 'r.json'}"]
     with open(tmp_path / "after.json", "w") as f:
         json.dump(passed, f)
-    assert hardening.main(args + [f"after={tmp_path / 'after.json'}"]) == 0 and os.path.getsize(png) > 10_000
+    assert hardening.run(args + [f"after={tmp_path / 'after.json'}"]) == 0 and os.path.getsize(png) > 10_000
     # issue #68: exit 2 alone also held for another error (a spec without "=" then opened the file "",
     # exit 2 too): each refusal's reason is asserted
     capsys.readouterr()
-    assert hardening.main(["picture", out, "no-such.yaml", png, f"before={tmp_path / 'r.json'}"]) == 2
+    assert hardening.run(["picture", out, "no-such.yaml", png, f"before={tmp_path / 'r.json'}"]) == 2
     assert "'no-such.yaml': not a scenario of" in capsys.readouterr().err
-    assert hardening.main(args + ["after"]) == 2  # LABEL=RESULTS.json, named as wrong
+    assert hardening.run(args + ["after"]) == 2  # LABEL=RESULTS.json, named as wrong
     assert "'after': expected LABEL=RESULTS.json" in capsys.readouterr().err

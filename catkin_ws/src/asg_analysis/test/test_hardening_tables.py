@@ -42,4 +42,4 @@ def test_hardening_table_reads_evaluations_and_recorded_suite_outcomes(tmp_path)
     assert t["arms"]["flawed"]["test"]["shadow_false_obstacle_rate"] == 0.3
     md = ah.markdown(t)
     assert "| flawed | 0.500 | 0.300 | 0.500 | 0.300 | 0 / 2 |" in md.splitlines()  # no suite-r4pilot column
-    assert ah.main([str(tmp_path / "none")]) == 2
+    assert ah.run([str(tmp_path / "none")]) == 2

@@ -36,7 +36,7 @@ def test_a_learning_arm_rises_and_a_level_one_does_not(tmp_path, capsys):
     drawn = lc.figure(res, str(tmp_path / "c.png"))
     assert drawn == {"learns": [0.5, 4.5], "level": [3.0, 2.0]} and (tmp_path / "c.png").stat().st_size > 0
     # each refusal names what is wrong (an exit code alone is shared by every error)
-    assert lc.main([str(tmp_path), "--arm", "x=a1,nope", "--budget", "10", "--block", "5"]) == 2
+    assert lc.run([str(tmp_path), "--arm", "x=a1,nope", "--budget", "10", "--block", "5"]) == 2
     assert f"no export {tmp_path / 'nope.jsonl.gz'}" in capsys.readouterr().err
-    assert lc.main([str(tmp_path), "--arm", "no-equals-sign"]) == 2
+    assert lc.run([str(tmp_path), "--arm", "no-equals-sign"]) == 2
     assert "--arm 'no-equals-sign' is not NAME=CAMPAIGN" in capsys.readouterr().err

@@ -3,15 +3,20 @@ every deviation printed (in-process stand-in stacks, no ROS)."""
 
 import json
 import os
+import sys
 
 import pytest
 import yaml
 
+AGENT_TEST = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "asg_agent", "test")
+sys.path.insert(0, AGENT_TEST)  # the agent's in-process stand-in (stand_in/), beside its tests
 from asg_analysis import protocol as pr
+from asg_analysis import protocol_analysis as pa
+from asg_analysis import protocol_pages as pp
 from asg_agent.records.export import export
 from asg_agent.cli.plan import cpu_event
 from asg_agent.records.experiment import load_experiment
-from asg_agent.testing.fake_pool import FakePool
+from stand_in.fake_pool import FakePool
 from asg_agent.campaign.loop import Campaign
 from asg_agent.campaign.config import CampaignConfig
 from asg_agent.records.store import Store
@@ -90,24 +95,24 @@ def test_the_protocol_plans_chooses_and_analyses(tmp_path, monkeypatch):
     ]
     for c in pilot:  # clearance and the 5 m band find more (the stand-in collides where told)
         run(tmp_path, store, c, {1, 4, 6} if ("clearance" in c["name"] or "band-5" in c["name"]) else {3})
-    ch = pr.choose(p, str(tmp_path / "out"))
+    ch = pa.choose(p, str(tmp_path / "out"))
     assert (ch["reward"], ch["band_m"]) == ("clearance", 5.0) and ch["deviations"] == []
     assert ch["rewards"] == {"proxy": 1000 / 12, "clearance": 3000 / 12}
     # A tie on the endpoint goes to more distinct failure modes (then to the earlier entry).
     from asg_agent.records import failure_modes as fm
 
     with monkeypatch.context() as m:
-        m.setattr(pr, "per_seed", lambda rows, budget, cls: 5.0)  # every arm ties on the endpoint
+        m.setattr(pa, "per_seed", lambda rows, budget, cls: 5.0)  # every arm ties on the endpoint
         m.setattr(
             fm, "modes_of", lambda camp, rows, keep: [(i,) for i in range(3 if "clearance" in camp["name"] else 1)]
         )
-        tie = pr.choose(p, str(tmp_path / "out"))
+        tie = pa.choose(p, str(tmp_path / "out"))
     assert tie["reward"] == "clearance" and tie["band_m"] == 2.5  # bands tie on modes too: the earlier one
     confirm = pr.campaigns(p, "confirmatory", ch)
     for c in confirm:
         collide = {2, 5, 8, 9} if c["arm"] == "default" else {7}
         run(tmp_path, store, c, collide, workers=2 if c["name"] == "t-route-random-s2" else 3)
-    res = pr.analyse(p, str(tmp_path / "out"), ch)
+    res = pa.analyse(p, str(tmp_path / "out"), ch)
     assert res["arms"]["default"]["per_seed"] == {1: 4000 / 12, 2: 4000 / 12}
     assert res["arms"]["route-random"]["per_seed"] == {1: 1000 / 12, 2: 1000 / 12}
     row = next(r for r in res["comparison"] if r["arm"] == "route-random")
@@ -116,7 +121,7 @@ def test_the_protocol_plans_chooses_and_analyses(tmp_path, monkeypatch):
     assert res["deviations"] == ["t-route-random-s2: 2 workers under test, the protocol says 3"]
     assert res["arms"]["default"]["distinct_modes"] >= 1 and 0 < res["arms"]["default"]["coverage"] <= 1
     os.remove(tmp_path / "out" / "t-default-s2.jsonl.gz")
-    assert "t-default-s2: no export" in pr.analyse(p, str(tmp_path / "out"), ch)["deviations"][0]
+    assert "t-default-s2: no export" in pa.analyse(p, str(tmp_path / "out"), ch)["deviations"][0]
 
 
 def read_rows(folder, prefix):
@@ -181,12 +186,12 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     for c in pr.campaigns(p, "pilot"):
         assert c["budget"] == 10
         run(tmp_path, store, c, {1, 4, 6} if "route-proxy" in c["name"] else {3})
-    ch = pr.choose(p, str(tmp_path / "out"))
+    ch = pa.choose(p, str(tmp_path / "out"))
     assert (ch["search"], ch["experiment"], ch["band_m"]) == ("route-proxy", "experiments/exp1-route.yaml", 5.0)
     assert ch["searches"] == {"absolute-proxy": 100.0, "route-proxy": 300.0} and ch["deviations"] == []
     for c in pr.campaigns(p, "confirmatory", ch):
         run(tmp_path, store, c, {2, 5, 8, 9} if c["arm"] == "default" else {7})
-    res = pr.analyse(p, str(tmp_path / "out"), ch)
+    res = pa.analyse(p, str(tmp_path / "out"), ch)
     assert res["deviations"] == []
     d = res["arms"]["default"]
     assert set(d["cpu_hours"]) == {1, 2} and all(h > 0 for h in d["cpu_hours"].values())
@@ -198,14 +203,14 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     assert res["winner"]["arm"] == best
     assert res["arms"]["route-random"]["train_args"] == [
         "method:=route-random",
+        "route_band:=5",
         "experiment:=experiments/exp1.yaml",
         "reward:=proxy",
-        "route_band:=5",
     ]
     # every flaw finding of the default's seeds in one cell of the map
     assert sum(d["mode_counts"].values()) == round(sum(d["per_seed"].values()) * 12 / 1000)
-    block = pr.result_markdown(p, res, "images/cov.png")
-    assert block.startswith(pr.markers(p)[2]) and block.endswith(pr.markers(p)[3])
+    block = pp.result_markdown(p, res, "images/cov.png")
+    assert block.startswith(pp.markers(p)[2]) and block.endswith(pp.markers(p)[3])
     assert "| default | 2 | 333.3, 250.0 |" in block and "| route-random | 2 | 83.3, 83.3 |" in block
     assert f"Winner (most flaw findings per CPU-hour, mean over the seeds): {best}" in block
     assert "Target (3x route-random per 1,000 and 3x per CPU-hour" in block
@@ -213,15 +218,15 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     assert "Not decided at p < 0.01" in block
     # a descriptive protocol (p: null, too few seeds for a test) of another class: issue #67's depth pair
     q = dict(p, target=dict(p["target"], p=None), endpoint=dict(p["endpoint"], **{"class": "regression"}))
-    block = pr.result_markdown(q, res, "images/cov.png")
+    block = pp.result_markdown(q, res, "images/cov.png")
     assert "descriptive: no test" in block and "Descriptive, no test (too few seeds to reach one)" in block
     assert "| arm | seeds | regression per 1,000, per seed |" in block and "distinct regression modes" in block
     assert "Does the search find the release candidate's regressions (scenes only it fails) better" in block
     assert "Winner (most regressions per CPU-hour" in block and "flaw" not in block.replace("flaw_", "")
-    pr.coverage_figure(res, str(tmp_path / "cov.png"))
+    pp.coverage_figure(res, str(tmp_path / "cov.png"))
     assert (tmp_path / "cov.png").stat().st_size > 5000
     # how each arm spent its budget: every flaw finding of the default in its windows, every obstacle placed
-    from asg_analysis.studies import flaw_budget as fb
+    from asg_analysis import budget as fb
 
     spent = fb.read(str(tmp_path / "out"), 12, "v")
     assert set(spent) == {"default", "route-random"} and spent["default"]["seeds"] == 2
@@ -232,9 +237,9 @@ def test_version_2_chooses_a_search_arm_and_counts_per_cpu_hour(tmp_path):
     fb.figure(spent, ["default", "route-random"], str(tmp_path / "budget.png"))
     assert (tmp_path / "budget.png").stat().st_size > 5000
     os.remove(tmp_path / "out" / "v-route-random-s2.jsonl.gz")
-    res = pr.analyse(p, str(tmp_path / "out"), ch)
+    res = pa.analyse(p, str(tmp_path / "out"), ch)
     assert res["complete"] == 3 and res["winner"] is None  # no per-CPU-hour comparison of an arm not in
-    assert "Not answered yet: 3 of the 4 confirmatory campaigns" in pr.result_markdown(p, res)
+    assert "Not answered yet: 3 of the 4 confirmatory campaigns" in pp.result_markdown(p, res)
 
 
 def test_interruptions_and_cpu_hours_from_events_and_gaps(tmp_path):
@@ -247,11 +252,11 @@ def test_interruptions_and_cpu_hours_from_events_and_gaps(tmp_path):
             {"kind": "resume", "time": 4990.0, "cpu": "EPYC", "cores": 2, "commit": "abc1234def5678", "stored": 5},
         ]
     }
-    said = pr.interruptions(settings, rows)
+    said = pa.interruptions(settings, rows)
     assert said == ["resume after 5 stored scenarios on EPYC at commit abc1234def", "paused 3,960 s after job 4"]
     # 10 s to the first row, 4 x 10 s, the 3,960 s pause left out, 2 x 10 s; on 2 cores
-    assert pr.cpu_hours(settings, rows, 8) == pytest.approx(2 * (10 + 40 + 20) / 3600)
-    assert pr.cpu_hours(settings, rows, 5) == pytest.approx(2 * 50 / 3600)  # the budget's rows only
+    assert pa.cpu_hours(settings, rows, 8) == pytest.approx(2 * (10 + 40 + 20) / 3600)
+    assert pa.cpu_hours(settings, rows, 5) == pytest.approx(2 * 50 / 3600)  # the budget's rows only
     # a campaign resumed in its store records the resume itself
     store = Store(str(tmp_path / "s.sqlite"))
     exp = load_experiment(os.path.join(REPO, "experiments", "exp1.yaml"))
@@ -291,10 +296,10 @@ def test_measured_cpu_hours_sums_every_runs_cpu_or_says_none():
         {"kind": "resume", "time": 2000.0},
         {"kind": "cpu", "cpu_s": 1800.0, "wall_s": 1000.0, "rc": 0},
     ]
-    assert pr.measured_cpu_hours({"events": events}) == pytest.approx(1.0)
+    assert pa.measured_cpu_hours({"events": events}) == pytest.approx(1.0)
     # a run that went unmeasured (the resume's cpu event missing): None, the clock is the fallback
-    assert pr.measured_cpu_hours({"events": events[:3]}) is None
-    assert pr.measured_cpu_hours({}) is None
+    assert pa.measured_cpu_hours({"events": events[:3]}) is None
+    assert pa.measured_cpu_hours({}) is None
 
 
 def test_a_campaign_named_in_the_machine_log_shared_the_machine(tmp_path):
@@ -302,14 +307,14 @@ def test_a_campaign_named_in_the_machine_log_shared_the_machine(tmp_path):
     (tmp_path / "machine.log").write_text(
         "# comment naming flaw-x-s1, ignored\n05:00 05:10 a soak (issue #53's) beside flaw-x-s1 and flaw-y-s2\n"
     )
-    got = pr.shared_machine(str(tmp_path), ["flaw-x-s1", "flaw-y-s2", "flaw-x-s11", "flaw-y-s"])
+    got = pa.shared_machine(str(tmp_path), ["flaw-x-s1", "flaw-y-s2", "flaw-x-s11", "flaw-y-s"])
     assert got == {
         "flaw-x-s1": ["shared the machine (machine.log line 2)"],
         "flaw-y-s2": ["shared the machine (machine.log line 2)"],
         "flaw-x-s11": [],
         "flaw-y-s": [],
     }
-    assert pr.shared_machine(str(tmp_path / "none"), ["a"]) == {"a": []}
+    assert pa.shared_machine(str(tmp_path / "none"), ["a"]) == {"a": []}
 
 
 def test_the_transfer_and_pair_studies_take_the_pilots_arm_to_their_scene():
@@ -341,9 +346,9 @@ def test_an_adopted_export_says_where_it_came_from():
     }
     camp = {"method": "route-random", "seed": 11, "settings": json.dumps(settings)}
     rows = [{"job": 0}, {"job": 1}]
-    assert pr.deviations(p, c, camp, rows) == []
+    assert pa.deviations(p, c, camp, rows) == []
     camp["adopted"] = {"from": "flaw-route-random-s11.jsonl.gz", "proof": "proof-s11.jsonl.gz", "budget": 60}
-    assert pr.deviations(p, c, camp, rows) == [
+    assert pa.deviations(p, c, camp, rows) == [
         "flaw3-route-random-s11: adopted from flaw-route-random-s11.jsonl.gz (an older study's run, on"
         " Intel(R) Xeon(R) Processor; proof-s11.jsonl.gz repeats its first 60 jobs on today's code)"
     ]

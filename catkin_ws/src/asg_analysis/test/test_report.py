@@ -38,7 +38,7 @@ def test_a_registered_stack_finds_the_baseline_of_its_scenario_and_names_its_ref
 
 def test_the_report_of_a_store_that_is_not_there_says_so_and_makes_none(tmp_path, capsys):
     missing = tmp_path / "typo.sqlite"
-    assert report.main(["campaign", str(missing), "c", str(tmp_path / "out")]) == 2
+    assert report.run(["campaign", str(missing), "c", str(tmp_path / "out")]) == 2
     assert "no such scenario store" in capsys.readouterr().err
     assert not missing.exists()
 
@@ -60,7 +60,7 @@ def test_the_report_shows_the_three_stack_classes(tmp_path):
 def test_the_report_agrees_with_the_store(tmp_path):
     from stand_ins import campaign
 
-    from asg_agent.testing.fake_pool import FakePool
+    from stand_in.fake_pool import FakePool
 
     c = campaign(tmp_path, "rep", FakePool(2, seed=8), total=30, method="random")
     c.start()
@@ -82,14 +82,14 @@ def test_the_report_agrees_with_the_store(tmp_path):
 def test_the_figure_command_draws_the_jobs_named_and_names_a_missing_one(tmp_path, capsys):
     from stand_ins import campaign
 
-    from asg_agent.testing.fake_pool import FakePool
+    from stand_in.fake_pool import FakePool
     from asg_analysis import figures
 
     c = campaign(tmp_path, "fig", FakePool(2, seed=8), total=6, method="random")
     c.start()
     c.run()
     out = tmp_path / "pics"
-    assert figures.main(["figure", c.store.path, "fig", "--job", "2", "--job", "4", "--out", str(out)]) == 0
+    assert figures.run([c.store.path, "fig", "--job", "2", "--job", "4", "--out", str(out)]) == 0
     assert sorted(os.listdir(out)) == ["fig_job2.png", "fig_job4.png"]
-    assert figures.main(["figure", c.store.path, "fig", "--job", "99", "--out", str(out)]) == 2
+    assert figures.run([c.store.path, "fig", "--job", "99", "--out", str(out)]) == 2
     assert "campaign 'fig' has no job 99" in capsys.readouterr().err

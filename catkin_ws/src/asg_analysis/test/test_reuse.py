@@ -41,8 +41,8 @@ def test_an_old_export_is_adopted_only_when_todays_run_repeats_it(tmp_path):
         r["worker"] = "/worker_9"
     _export(proof, "flaw3-route-random-s10", same)
     _export(other, "flaw3-route-random-s11", _rows(flip=3))
-    assert reuse.main(["check", str(proof), str(old), "--budget", "6"]) == 0
-    assert reuse.main(["check", str(other), str(old), "--budget", "6"]) == 1
+    assert reuse.run(["check", str(proof), str(old), "--budget", "6"]) == 0
+    assert reuse.run(["check", str(other), str(old), "--budget", "6"]) == 1
     assert reuse.first_difference(reuse._read(str(other))[1], reuse._read(str(old))[1]) == 3
     assert reuse.first_difference(reuse._read(str(other))[1], reuse._read(str(old))[1], budget=3) is None
     folder = tmp_path / "study"
@@ -60,7 +60,7 @@ def test_an_old_export_is_adopted_only_when_todays_run_repeats_it(tmp_path):
 def test_an_adopted_export_carries_its_own_studys_sharing_of_the_machine(tmp_path):
     # round 5's route-random s13 and s14 ran beside a soak (results/flaw_study/machine.log): adopted
     # into version 3, that deviation must still be listed in their rows
-    from asg_analysis import protocol
+    from asg_analysis import protocol_analysis
 
     old_study, study = tmp_path / "old", tmp_path / "study"
     old_study.mkdir()
@@ -81,7 +81,7 @@ def test_an_adopted_export_carries_its_own_studys_sharing_of_the_machine(tmp_pat
     head10, _ = reuse._read(str(study / "x-s10.jsonl.gz"))
     assert "shared" not in head10["campaign"]["adopted"]  # s1 is not s10, and no line names s10
     c = {"name": "flaw3-route-random-s13", "method": "route-random", "seed": 13, "reward": "proxy", "band": None}
-    devs = protocol.deviations(
+    devs = protocol_analysis.deviations(
         {"budget": 6, "experiment": "x", "attribution": "three", "workers": 3}, c, head["campaign"], []
     )
     assert "flaw3-route-random-s13: shared the machine in its older study (old/machine.log line 2)" in devs

@@ -4,6 +4,7 @@
 import json
 import os
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ from asg_analysis import rules
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
 WIDE = os.path.join(REPO, "experiments", "exp1-route-wide.yaml")
+AGENT_TEST = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "asg_agent", "test")
+sys.path.insert(0, AGENT_TEST)  # the agent's in-process stand-in (stand_in/), beside its tests
 
 
 def _rows(exp, n, seed, hidden, repeat_first=0):
@@ -106,17 +109,17 @@ def test_the_command_line_learns_from_exports_and_names_bad_input(tmp_path, caps
         for r in _rows(exp, 600, 2, hidden):
             f.write(json.dumps(r) + "\n")
     out = tmp_path / "rules.json"
-    assert rules.main(["learn", str(path), "--out", str(out)]) == 0
+    assert rules.run(["learn", str(path), "--out", str(out)]) == 0
     assert "4 m from the route in its second quarter" in capsys.readouterr().out  # in words
     assert json.load(open(out))["rules"]
-    assert rules.main(["learn", str(tmp_path / "none.jsonl.gz")]) == 2
+    assert rules.run(["learn", str(tmp_path / "none.jsonl.gz")]) == 2
     assert "No such file" in capsys.readouterr().err
-    assert rules.main(["learn", "--store", str(tmp_path / "none.sqlite")]) == 2
+    assert rules.run(["learn", "--store", str(tmp_path / "none.sqlite")]) == 2
     assert "none.sqlite: no such file" in capsys.readouterr().err
 
 
 def test_learn_reads_the_store_campaign_that_ran_last(tmp_path, capsys):
-    from asg_agent.testing.fake_pool import FakePool
+    from stand_in.fake_pool import FakePool
     from asg_agent.campaign.loop import Campaign
     from asg_agent.campaign.config import CampaignConfig
     from asg_agent.records.store import Store
@@ -141,8 +144,8 @@ def test_learn_reads_the_store_campaign_that_ran_last(tmp_path, capsys):
         c._checkpoint = lambda: None
         c.start()
         c.run(poll_timeout=0.0)
-    assert rules.main(["learn", "--store", path]) == 0
+    assert rules.run(["learn", "--store", path]) == 0
     out = capsys.readouterr().out
     assert out.startswith("rules of second (failure findings:") and "in 40 scenarios" in out
-    assert rules.main(["learn", "--store", path, "--campaign", "first"]) == 0
+    assert rules.run(["learn", "--store", path, "--campaign", "first"]) == 0
     assert capsys.readouterr().out.startswith("rules of first")

@@ -48,4 +48,4 @@ def test_repetitions_that_do_not_hold_the_same_scenarios_are_refused(tmp_path):
     rerun(tmp_path / "b.jsonl", {0: ("SUCCESS", 1.0)})
     with pytest.raises(ValueError, match=r"jobs \[1\] are missing from some repetitions"):
         run_spread.spread(str(tmp_path / "e.jsonl.gz"), [str(tmp_path / "a.jsonl"), str(tmp_path / "b.jsonl")])
-    assert run_spread.main([str(tmp_path / "e.jsonl.gz"), str(tmp_path / "a.jsonl"), str(tmp_path / "b.jsonl")]) == 2
+    assert run_spread.run([str(tmp_path / "e.jsonl.gz"), str(tmp_path / "a.jsonl"), str(tmp_path / "b.jsonl")]) == 2

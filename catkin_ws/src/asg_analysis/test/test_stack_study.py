@@ -21,7 +21,7 @@ def test_counts_failures_with_exact_intervals_and_tests_the_arms(tmp_path):
     export(tmp_path / "s.jsonl.gz", "s", search)
     export(tmp_path / "r.jsonl.gz", "r", random)
     out = tmp_path / "c.json"
-    assert stack_study.main([str(tmp_path), "s", "r", "--json", str(out)]) == 0
+    assert stack_study.run([str(tmp_path), "s", "r", "--json", str(out)]) == 0
     s = json.loads(out.read_text())
     a, b = s["arms"]["s"], s["arms"]["r"]
     assert (a["failures"], a["scenarios"], a["errors"]) == (5, 100, 0)
@@ -40,7 +40,7 @@ def test_counts_failures_with_exact_intervals_and_tests_the_arms(tmp_path):
 
 
 def test_a_missing_export_is_named(tmp_path, capsys):
-    assert stack_study.main([str(tmp_path), "s", "r"]) == 2
+    assert stack_study.run([str(tmp_path), "s", "r"]) == 2
     assert "s.jsonl.gz: no export" in capsys.readouterr().err
 
 
@@ -54,7 +54,7 @@ def test_several_seeds_an_arm_compare_the_per_seed_rates(tmp_path, capsys):
     searches = ",".join(f"x-search-s{i}" for i in range(3))
     randoms = ",".join(f"x-random-s{i}" for i in range(3))
     out = tmp_path / "seeds.json"
-    assert stack_study.main([str(tmp_path), searches, randoms, "--json", str(out)]) == 0
+    assert stack_study.run([str(tmp_path), searches, randoms, "--json", str(out)]) == 0
     s = json.loads(out.read_text())
     assert (s["search"], s["baseline"]) == ("x-search", "x-random")
     assert [s["campaigns"][f"x-search-s{i}"]["failures"] for i in range(3)] == [5, 8, 3]
@@ -70,8 +70,8 @@ def test_several_seeds_an_arm_compare_the_per_seed_rates(tmp_path, capsys):
     # a name given twice, or both arms with one stem, is refused by name (issue #68: the second case
     # named x-search-s2 twice, so the duplicate check refused it and the stem check never ran)
     capsys.readouterr()
-    assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s0", randoms]) == 2
+    assert stack_study.run([str(tmp_path), "x-search-s0,x-search-s0", randoms]) == 2
     assert "a campaign is named twice" in capsys.readouterr().err
-    assert stack_study.main([str(tmp_path), "x-search-s0,x-search-s1", "x-search-s2"]) == 2
+    assert stack_study.run([str(tmp_path), "x-search-s0,x-search-s1", "x-search-s2"]) == 2
     err = capsys.readouterr().err
     assert "the search's and the baseline's campaigns share a name: ['x-search']" in err, err

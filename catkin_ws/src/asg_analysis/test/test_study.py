@@ -31,30 +31,32 @@ def test_the_runner_writes_and_checks_each_block(tmp_path, capsys):
             {"block": "two", "table": "arms", "arms": {"default": PILOT, "none": str(tmp_path / "no-*.jsonl.gz")}},
         ],
     )
-    assert study.main([str(proto), "--check"]) == 1  # block one is stale ("old")
+    assert study.run([str(proto), "--check"]) == 1  # block one is stale ("old")
     assert "block 'one' is stale" in capsys.readouterr().out
-    assert study.main([str(proto)]) == 0
+    assert study.run([str(proto)]) == 0
     out = capsys.readouterr().out
     assert "block 'one' written" in out and "two: skipped, no export of arm(s) none" in out
     want = endpoints.markdown([endpoints.campaign(*read_export(p), budget=150) for p in sorted(glob.glob(PILOT))])
     assert study.block_text(str(page), "one").strip() == want.strip()
-    assert study.main([str(proto), "--check"]) == 0
+    assert study.run([str(proto), "--check"]) == 0
 
 
 def test_a_bad_entry_or_a_protocol_without_report_is_named(tmp_path, capsys):
     _, proto = _study(tmp_path, [{"block": "one", "table": "pie", "exports": PILOT}])
-    assert study.main([str(proto)]) == 2
+    assert study.run([str(proto)]) == 2
     assert "table 'pie' must be one of campaigns, arms, rules, digests, coverage, command" in capsys.readouterr().err
     bare = tmp_path / "bare.yaml"
     bare.write_text("name: x\n")
-    assert study.main([str(bare)]) == 2
+    assert study.run([str(bare)]) == 2
     assert "no `report:` list" in capsys.readouterr().err
 
 
 def test_the_v4_record_is_what_its_protocols_generate():
     for name in ("distinct-v4", "distinct-v4-exp3", "distinct-v4-exp6", "distinct-v4-gapnav", "distinct-v4-depth"):
         assert (
-            study.run(os.path.join(REPO, "experiments", f"protocol-{name}.yaml"), check=True, out=open(os.devnull, "w"))
+            study.regenerate(
+                os.path.join(REPO, "experiments", f"protocol-{name}.yaml"), check=True, out=open(os.devnull, "w")
+            )
             == 0
         ), name
 
@@ -67,13 +69,13 @@ def test_a_command_entry_runs_its_generator_and_checks_it(tmp_path, capsys):
     page = tmp_path / "record.md"
     page.write_text(f"# r\n\n{begin}\nold\n{end}\n")
     proto = tmp_path / "protocol.yaml"
-    entry = {"table": "command", "module": "asg_analysis.replays", "args": [folder, "--doc", str(page)]}
+    entry = {"table": "command", "command": "replays", "args": [folder, "--doc", str(page)]}
     proto.write_text(yaml.safe_dump({"name": "x", "report": [entry]}))
-    assert study.main([str(proto), "--check"]) == 1 and "stale" in capsys.readouterr().out
+    assert study.run([str(proto), "--check"]) == 1 and "stale" in capsys.readouterr().out
     assert page.read_text().count("old") == 1  # --check wrote nothing
-    assert study.main([str(proto)]) == 0
+    assert study.run([str(proto)]) == 0
     assert replays.markdown(replays.read(folder)) in page.read_text()
-    assert study.main([str(proto), "--check"]) == 0
+    assert study.run([str(proto), "--check"]) == 0
 
 
 def test_every_study_with_a_record_lists_its_blocks():
@@ -147,7 +149,7 @@ def unnamed_blocks(pages, names, tests_text):
 
 def test_every_generated_block_of_every_record_is_named_by_a_study_file():
     """Issue #80: each record regenerates from its study file (protocol-*.yaml, or study-*.yaml for
-    a record older than protocols) with `python3 -m asg_analysis.study FILE`; a block no file names
+    a record older than protocols) with `python3 -m asg_analysis study FILE`; a block no file names
     is one sentence a test quotes and checks (the v3 pilot's choice) or it fails here."""
     pages = {p: open(p, encoding="utf-8").read() for p in glob.glob(os.path.join(REPO, "docs", "studies", "2*.md"))}
     tests_text = " ".join(open(p, encoding="utf-8").read() for p in glob.glob(os.path.join(REPO, "tests", "test_*.py")))
@@ -161,7 +163,10 @@ def test_every_generated_block_of_every_record_is_named_by_a_study_file():
 
 def test_the_refactors_and_round3_records_are_what_their_study_files_generate():
     for name in ("study-refactors", "study-round3-search-comparison"):
-        assert study.run(os.path.join(REPO, "experiments", f"{name}.yaml"), check=True, out=open(os.devnull, "w")) == 0
+        assert (
+            study.regenerate(os.path.join(REPO, "experiments", f"{name}.yaml"), check=True, out=open(os.devnull, "w"))
+            == 0
+        )
 
 
 def test_the_digests_table_quotes_each_file(tmp_path):

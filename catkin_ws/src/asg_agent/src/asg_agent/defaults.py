@@ -38,7 +38,7 @@ DEFAULTS: Dict[str, Default] = {
     "workers": Default(2, "", "scene workers running the stack under test"),
     "seed": Default(0, "", "seeds every random choice of the search"),
     "store": Default("~/.ros/asg/campaigns.sqlite", "", "the SQLite scenario store"),
-    "tabu": Default(2.0, "[m]", "novelty-ts: no obstacle this close to a found place of its class"),
+    "tabu_m": Default(2.0, "[m]", "novelty-ts: no obstacle this close to a found place of its class"),
     "route_band": Default(5.0, "[m]", "route-random: half-width of the band around the start-goal route"),
     "generators": Default(
         "uniform,band",

@@ -5,7 +5,7 @@ the campaign times its own loop (campaign.Stages). `breakdown` turns the reading
 start and the end of a campaign into per-scenario seconds per stage, the rate, and the bound the
 U-Net alone sets; `table` renders one or several breakdowns as Markdown.
 
-    python3 -m asg_analysis.bench table results/bench/*.json
+    python3 -m asg_analysis bench table results/bench/*.json
 """
 
 import argparse
@@ -16,6 +16,8 @@ import sys
 from typing import List
 
 from asg_agent.records.stage_costs import transport
+
+PROG = "python3 -m asg_analysis bench"
 
 
 ROWS = [  # (label, key in per_scenario_s)
@@ -162,8 +164,8 @@ def predict_sentence(r: dict) -> str:
     )
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(prog="bench", description="Markdown table of bench breakdowns (docs/benchmarks.md)")
+def run(argv=None):
+    p = argparse.ArgumentParser(prog=PROG, description="Markdown table of bench breakdowns (docs/benchmarks.md)")
     sub = p.add_subparsers(dest="cmd", required=True)
     t = sub.add_parser("table", help="one column per breakdown JSON")
     t.add_argument("files", nargs="+")
@@ -203,7 +205,3 @@ def main(argv=None):
         return 0
     print(table(runs, labels))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -2,8 +2,8 @@
 of every arm in an order drawn from the block's seed, so that CPU-hours compare within a block.
 No ROS.
 
-    python3 -m asg_analysis.blocks choose PROTOCOL.yaml EXPORTS_DIR > results/STUDY/pilot_choice.json
-    python3 -m asg_analysis.blocks PROTOCOL.yaml CHOICE.json BLOCK > results/STUDY/block-BLOCK.txt
+    python3 -m asg_analysis blocks choose PROTOCOL.yaml EXPORTS_DIR > results/STUDY/pilot_choice.json
+    python3 -m asg_analysis blocks PROTOCOL.yaml CHOICE.json BLOCK > results/STUDY/block-BLOCK.txt
 
 BLOCK counts from 0: block k runs every arm's k-th seed. The plan's lines are campaigns.sh's
 (NAME  BUDGET train ARGS...), headed by the order's seed and the arms in the order drawn.
@@ -16,19 +16,7 @@ from typing import Dict, List
 
 import yaml
 
-#: an arm's keys and the train.launch argument each becomes
-ARGS = (
-    ("method", "method"),
-    ("tabu_m", "tabu"),
-    ("band_m", "route_band"),
-    ("experiment", "experiment"),
-    ("reward", "reward"),
-)
-
-
-def _launch_value(v) -> str:
-    """A protocol's value as train.launch reads it (YAML's false is the launch's `false`)."""
-    return ("true" if v else "false") if isinstance(v, bool) else str(v)
+from asg_analysis.protocol import launch_args
 
 
 def resolve(arm: dict, choice: dict) -> dict:
@@ -45,16 +33,11 @@ def block(protocol: dict, choice: dict, k: int) -> List[dict]:
         if k >= len(a["seeds"]):
             raise ValueError(f"arm {arm}: block {k} but only {len(a['seeds'])} seeds")
         seed = int(a["seeds"][k])
-        args = [
-            f"{flag}:={a[key]:g}" if isinstance(a.get(key), float) else f"{flag}:={a[key]}"
-            for key, flag in ARGS
-            if a.get(key) is not None
-        ]
-        args += [
-            f"seed:={seed}",
-            f"workers:={protocol.get('workers', 3)}",
-            f"attribution:={_launch_value(protocol.get('attribution', 'three'))}",
-        ]
+        keys = ("method", "tabu_m", "band_m", "experiment", "reward")  # what an arm may set
+        args = launch_args(
+            {k: a.get(k) for k in keys}
+            | {"seed": seed, "workers": protocol.get("workers", 3), "attribution": protocol.get("attribution", "three")}
+        )
         out.append({"name": f"{name}-{arm}-s{seed}", "arm": arm, "seed": seed, "budget": budget, "args": args})
     order_seed = min(c["seed"] for c in out)
     random.Random(order_seed).shuffle(out)
@@ -110,7 +93,7 @@ def choose(protocol: dict, folder: str) -> dict:
     }
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["choose"] and len(argv) == 3:
         try:
@@ -133,7 +116,3 @@ def main(argv=None) -> int:
         print(f"blocks: {e}", file=sys.stderr)
         return 2
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

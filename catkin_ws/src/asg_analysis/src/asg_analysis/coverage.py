@@ -29,6 +29,8 @@ from asg_agent.scoring import atlas as sa
 from asg_agent.scoring.places import count_distinct, place_of_row
 from asg_analysis import stats
 
+PROG = "python3 -m asg_analysis coverage"
+
 DOC = os.path.join(REPO, "docs", "agent.md")
 BEGIN, END = "<!-- atlases: begin -->", "<!-- atlases: end -->"
 FIGURE = os.path.join(REPO, "docs", "images", "atlas_growth.png")
@@ -64,6 +66,9 @@ def rewrite_doc(check: bool) -> int:
 
 RECORD = os.path.join(REPO, "docs", "studies", "2026-12-06-coverage-v5.md")
 V1 = os.path.join(REPO, "results", "coverage_v5", "exp1-flaw.v1.json")
+# the atlas the pilot was read against and chosen by (v2, kept as it was); the current one is results/atlas/
+V2 = os.path.join(REPO, "results", "coverage_v5", "exp1-flaw.v2.json")
+CURRENT = os.path.join(REPO, "results", "atlas", "exp1-flaw.json")
 
 
 def _block(name: str, lines: str) -> str:
@@ -97,7 +102,8 @@ def fringe(path: str, radius: float = sa.RADIUS_M) -> str:
 @functools.lru_cache(maxsize=1)
 def record_blocks() -> Dict[str, str]:
     """The v5 record's generated blocks: v4's arms read against atlas v1 (the protocol's baseline),
-    and the pilot's arms against the current Exp. 1 atlas beside v4's route-random and random."""
+    the pilot's arms against atlas v2 (the one it was chosen by) beside v4's route-random and random,
+    and v4's arms against the current atlas (what the README's answer reads)."""
     v4 = os.path.join(REPO, "results", "distinct_v4")
     base = {
         "route-random": sorted(glob.glob(os.path.join(v4, "dist4-route-random-s3?.jsonl.gz"))),
@@ -105,17 +111,17 @@ def record_blocks() -> Dict[str, str]:
         "random, route-wide": sorted(glob.glob(os.path.join(v4, "dist4-random-own-s3?.jsonl.gz"))),
     }
     out = {"v4 baseline": _block("v4 baseline", arms_text(arms(V1, base, 300)))}
-    out["fringe"] = _block("fringe", fringe(os.path.join(REPO, "results", "atlas", "exp1-flaw.json")))
+    out["fringe"] = _block("fringe", fringe(V2))
     pilot = os.path.join(REPO, "results", "coverage_v5")
     specs = dict(base)
     for arm in ("cov-wide", "cov-abs", "cov-filter", "cov-mutate"):
         found = sorted(glob.glob(os.path.join(pilot, f"cov5-pilot-{arm}-s*.jsonl.gz")))
         if found:
             specs[f"pilot {arm}"] = found
-    atlas = os.path.join(REPO, "results", "atlas", "exp1-flaw.json")
-    t = arms(atlas, specs, 300)
+    t = arms(V2, specs, 300)
     out["pilot"] = _block("pilot", arms_text(t))
     out["rates"] = _block("rates", rates_text(t))
+    out["current atlas"] = _block("current atlas", arms_text(arms(CURRENT, base, 300)))
     return out
 
 
@@ -158,8 +164,7 @@ def readme_answer() -> str:
         "route-random": sorted(glob.glob(os.path.join(v4, "dist4-route-random-s3?.jsonl.gz"))),
         "default": sorted(glob.glob(os.path.join(v4, "dist4-default-s3?.jsonl.gz"))),
     }
-    atlas = os.path.join(REPO, "results", "atlas", "exp1-flaw.json")
-    t = arms(atlas, specs, 300)
+    t = arms(CURRENT, specs, 300)
     mean = {a: sum(r["recall"] for r in rows) / len(rows) for a, rows in t["arms"].items()}
     per = {a: ", ".join(f"{r['recall']:.2f}" for r in rows) for a, rows in t["arms"].items()}
     s = t["tests"]["default"]
@@ -270,10 +275,10 @@ def arms_text(t: Dict) -> str:
     return "\n".join(lines)
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     import json
 
-    p = argparse.ArgumentParser(prog="asg_analysis coverage", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     d = sub.add_parser("doc", help="rewrite docs/agent.md's atlas block from results/atlas/")
     d.add_argument("--check", action="store_true", help="exit 1 when the block is stale")

@@ -2,9 +2,9 @@
 radius, distinct layouts and failure modes, per 1,000 scenarios and per CPU-hour; and a comparison
 of arms over seeds. A library: a study names its exports and arms, this computes. No ROS.
 
-    python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] [--markdown]  # one line (row) per campaign
-    python3 -m asg_analysis.endpoints EXPORT.jsonl.gz [...] --doc PAGE BLOCK  # the table into PAGE's block
-    python3 -m asg_analysis.endpoints --arm default=GLOB --arm route-random=GLOB [--budget 300]
+    python3 -m asg_analysis endpoints EXPORT.jsonl.gz [...] [--markdown]  # one line (row) per campaign
+    python3 -m asg_analysis endpoints EXPORT.jsonl.gz [...] --doc PAGE BLOCK  # the table into PAGE's block
+    python3 -m asg_analysis endpoints --arm default=GLOB --arm route-random=GLOB [--budget 300]
                                   [--markdown | --doc PAGE BLOCK]      # arms compared (JSON, or the table)
 
 A finding is a row of the target class (`flaw` with three-stack attribution, `regression` with a
@@ -19,6 +19,8 @@ import sys
 from typing import Dict, List, Optional
 
 from asg_agent.scoring.places import PRIMARY_RADIUS_M, REPORTED_RADII_M, count_distinct, place_of_row
+
+PROG = "python3 -m asg_analysis endpoints"
 
 LAYOUT_DISTINCT_M = 2.0  # [m] the project's layout distance (campaign_metrics.layout_distance) for distinct layouts
 
@@ -57,7 +59,7 @@ def cpu_hours(camp: dict) -> Optional[float]:
     """The campaign's measured CPU-hours (every process of the run, references included), as
     protocol.py measures them; None when the export holds no measure."""
     from asg_analysis.exports import settings_of
-    from asg_analysis.protocol import measured_cpu_hours
+    from asg_analysis.protocol_analysis import measured_cpu_hours
 
     return measured_cpu_hours(settings_of(camp))
 
@@ -174,12 +176,12 @@ def write_block(doc: str, block: str, text: str) -> None:
     """Writes `text` as block BLOCK of `doc` (docblocks.rewrite; ValueError when it has none)."""
     from asg_analysis.docblocks import rewrite
 
-    if rewrite(doc, {block: text}, check=False, prog="endpoints") == 2:
+    if rewrite(doc, {block: text}, check=False, prog=PROG) == 2:
         raise ValueError(f"{doc}: no block {block!r}")
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python3 -m asg_analysis.endpoints", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     p.add_argument("exports", nargs="*")
     p.add_argument("--arm", action="append", default=[], help="NAME=GLOB of exports (the first is the default)")
     p.add_argument("--budget", type=int, default=None, help="count the first N jobs")
@@ -213,7 +215,3 @@ def main(argv=None) -> int:
         print(f"endpoints: {e}", file=sys.stderr)
         return 2
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -2,7 +2,7 @@
 campaign made in each block of its budget, arm by arm. A search that learns from its results finds
 more as its budget goes on; a sampler that learns nothing (route-random) stays level.
 
-    python3 -m asg_analysis.learning_curve results/flaw_study3 \
+    python3 -m asg_analysis learning-curve results/flaw_study3 \
         --arm default=flaw3-default-s10,flaw3-default-s11 --arm route-random=flaw3-route-random-s10 \
         [--budget 300] [--block 30] [--target flaw] [--markdown] [--json out.json] [--figure out.png]
 
@@ -14,6 +14,8 @@ import argparse
 import os
 import sys
 from typing import Dict, List
+
+PROG = "python3 -m asg_analysis learning-curve"
 
 
 def blocks(rows: List[dict], budget: int, block: int, target: str = "flaw") -> List[int]:
@@ -91,8 +93,8 @@ def figure(res: dict, out: str) -> Dict[str, List[float]]:
     return drawn
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="learning_curve", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     ap.add_argument("folder", help="the exports' folder")
     ap.add_argument("--arm", action="append", required=True, help="NAME=CAMPAIGN,CAMPAIGN,... (repeat per arm)")
     ap.add_argument("--budget", type=int, default=300, help="[scenarios] jobs counted per campaign (300)")
@@ -117,7 +119,3 @@ def main(argv=None) -> int:
     from asg_analysis.files import report
 
     return report(res, a.json, figure, a.figure, markdown, a.markdown)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

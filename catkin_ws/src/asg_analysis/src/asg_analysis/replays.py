@@ -3,7 +3,7 @@ campaign into FOLDER/replays/), as the table docs/experiments.md shows between i
 markers (issue #54: every flaw finding of the default's first confirmatory seed replays exactly).
 No ROS.
 
-    python3 -m asg_analysis.replays results/flaw_study [--doc docs/experiments.md]
+    python3 -m asg_analysis replays results/flaw_study [--doc docs/experiments.md]
 
 Each study folder has its own block in the page, its markers naming the folder (markers()).
 """
@@ -12,7 +12,6 @@ import argparse
 import glob
 import json
 import os
-import re
 import sys
 from typing import List
 
@@ -57,21 +56,16 @@ def markdown(records: List[dict]) -> str:
 
 def write_doc(doc: str, table: str, folder: str = os.path.join("results", "flaw_study"), check: bool = False) -> bool:
     """Rewrites the replays block of `doc` (check: write nothing, say whether it is current)."""
+    from asg_analysis.docblocks import rewrite_between
+
     begin, end = markers(folder)
-    with open(doc, encoding="utf-8") as f:
-        text = f.read()
-    pattern = re.escape(begin) + r"\n(?:.*?\n)?" + re.escape(end)  # an empty block too
-    if not re.search(pattern, text, re.S):
+    rc = rewrite_between(doc, begin, end, f"{begin}\n{table}\n{end}", check, "replays")
+    if rc == 2:
         raise ValueError(f"{doc}: no replays block ({begin} ... {end})")
-    new = re.sub(pattern, lambda _: f"{begin}\n{table}\n{end}", text, flags=re.S)
-    if check:
-        return new == text
-    with open(doc, "w", encoding="utf-8") as f:
-        f.write(new)
-    return True
+    return rc == 0
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("folder", help="the study's folder (its replays/ holds the records)")
     p.add_argument("--doc", default="", help="rewrite this page's replays block")
@@ -89,7 +83,3 @@ def main(argv=None) -> int:
             return 1
     print(table)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

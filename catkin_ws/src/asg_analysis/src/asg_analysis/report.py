@@ -1,7 +1,7 @@
 """A campaign's HTML report from its store, without a display (no ROS; figures from bags of
 replays are asg_agent.ros.bag_figures).
 
-    python3 -m asg_analysis.report campaign STORE CAMPAIGN OUT_DIR [--top 10]
+    python3 -m asg_analysis report campaign STORE CAMPAIGN OUT_DIR [--top 10]
 
 `campaign` writes OUT_DIR/index.html (open it from disk, no server): first what the campaign
 searched for (its findings, their distinct places, the rules they have in common and the best
@@ -21,6 +21,8 @@ import sys
 import numpy as np
 from asg_agent.records.store import StoreError
 from asg_agent.scoring.attribution import FINDING, FINDING_STRONG
+
+PROG = "python3 -m asg_analysis report"
 
 
 def baseline_path(experiment: str, settings: dict) -> str:
@@ -291,8 +293,8 @@ workers {html.escape(', '.join(settings.get('workers', [])))}; store <code>{html
     return path
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(prog="asg_analysis.report", description=__doc__.split("\n\n")[0])
+def run(argv=None):
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     b = sub.add_parser("campaign")
     b.add_argument("store")
@@ -306,7 +308,3 @@ def main(argv=None):
         print(f"report: {e}", file=sys.stderr)
         return 2
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

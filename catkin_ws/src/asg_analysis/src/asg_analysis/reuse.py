@@ -5,8 +5,8 @@ The results digest of an export is the SHA-256 of, job by job in job order, its 
 positions, termination, proxy (to 1e-9), the obstacle hit and its attribution class: what the
 protocol counts and what the search saw, not the wall times, the workers or the campaign's name.
 
-    python3 -m asg_analysis.reuse check NEW.jsonl.gz OLD.jsonl.gz [--budget 300]
-    python3 -m asg_analysis.reuse adopt OLD.jsonl.gz NEW_NAME FOLDER --proof NEW.jsonl.gz [--budget 300]
+    python3 -m asg_analysis reuse check NEW.jsonl.gz OLD.jsonl.gz [--budget 300]
+    python3 -m asg_analysis reuse adopt OLD.jsonl.gz NEW_NAME FOLDER --proof NEW.jsonl.gz [--budget 300]
 
 `check` says whether two exports have the same results over the first `budget` jobs, and where
 they first differ. `adopt` copies an old export into FOLDER as NEW_NAME.jsonl.gz (its campaign
@@ -23,6 +23,8 @@ import json
 import os
 import sys
 from typing import List, Optional, Tuple
+
+PROG = "python3 -m asg_analysis reuse"
 
 
 def _read(path: str) -> Tuple[dict, List[dict]]:
@@ -66,7 +68,7 @@ def _shared_in_its_study(old: str, name: str) -> List[str]:
     """The lines of the old export's own study log (machine.log beside it) that list its campaign as
     sharing the machine, each as 'FOLDER/machine.log line K' (FOLDER relative to the repository)."""
     from asg_agent.paths import REPO
-    from asg_analysis.protocol import log_lines
+    from asg_analysis.protocol_analysis import log_lines
 
     folder = os.path.dirname(os.path.abspath(old))
     rel = os.path.relpath(folder, REPO)
@@ -109,8 +111,8 @@ def adopt(old: str, new_name: str, folder: str, proof: str, budget: int) -> dict
     return record
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="reuse", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     c = sub.add_parser("check")
     c.add_argument("new")
@@ -142,7 +144,3 @@ def main(argv=None) -> int:
         else f"not adopted: results differ from job {r['first_difference']}"
     )
     return 0 if r["adopted"] else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,9 +1,9 @@
 """What a campaign's failures have in common (issue #78): rules over the scene's generic
 attributes, learnt from the campaign's own results, and their check on fresh samples. No ROS.
 
-    python3 -m asg_analysis.rules learn EXPORT.jsonl.gz [EXPORT ...] [--out rules.json]
-    python3 -m asg_analysis.rules learn --store STORE [--campaign NAME] [--out rules.json]
-    python3 -m asg_analysis.rules check rules.json RULE_EXPORT.jsonl.gz [...] --base BASE_EXPORT.jsonl.gz [...]
+    python3 -m asg_analysis rules learn EXPORT.jsonl.gz [EXPORT ...] [--out rules.json]
+    python3 -m asg_analysis rules learn --store STORE [--campaign NAME] [--out rules.json]
+    python3 -m asg_analysis rules check rules.json RULE_EXPORT.jsonl.gz [...] --base BASE_EXPORT.jsonl.gz [...]
 
 `learn` fits a shallow decision tree (scikit-learn, depth DEPTH, leaves of at least MIN_LEAF
 scenarios) that tells the campaign's findings from its other scenarios over the features the
@@ -28,6 +28,8 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from asg_agent.scoring.places import PRIMARY_RADIUS_M, distinct_flags, place_of_row
+
+PROG = "python3 -m asg_analysis rules"
 
 DEPTH = 3  # [-] the tree's depth: rules of at most three conditions
 MIN_LEAF = 10  # [scenarios] the smallest leaf
@@ -244,8 +246,8 @@ def markdown(learnt: Dict, checked: Optional[Dict] = None, top: int = 5) -> str:
     return "\n".join(rows) + "\n"
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python3 -m asg_analysis.rules", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     le = sub.add_parser("learn", help="rules from a campaign's results")
     le.add_argument("exports", nargs="*", help="compact exports (.jsonl.gz) of one experiment")
@@ -284,7 +286,3 @@ def main(argv=None) -> int:
         with open(a.out, "w") as f:
             json.dump(result, f, indent=1, sort_keys=True)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -20,8 +20,18 @@ from typing import Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
+PROG = "python3 -m asg_analysis stats"
+
 LEVEL = 0.95  # [-] interval coverage
 RESAMPLES = 10_000  # bootstrap resamples
+
+
+def exact_interval(k: int, n: int, level: float = LEVEL) -> list:
+    """Clopper-Pearson interval of a binomial rate k / n."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(k, n).proportion_ci(confidence_level=level, method="exact")
+    return [float(ci.low), float(ci.high)]
 
 
 def bootstrap_ci(
@@ -209,13 +219,13 @@ def markdown(rows: list, label: str) -> str:
     return "\n".join(out)
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     import argparse
     import sys
 
     from asg_agent.records.export import read_export
 
-    p = argparse.ArgumentParser(prog="stats", description="arms of campaign exports compared on one score, over seeds")
+    p = argparse.ArgumentParser(prog=PROG, description="arms of campaign exports compared on one score, over seeds")
     p.add_argument("arms", nargs="+", help="ARM=EXPORT[,EXPORT...] (one export per seed)")
     p.add_argument("--default", required=True, help="the arm the others are compared with")
     p.add_argument("--score", default="flaw", choices=sorted(SCORES))
@@ -234,7 +244,3 @@ def main(argv=None) -> int:
         return 2
     print(markdown(rows, SCORES[a.score][0]))
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

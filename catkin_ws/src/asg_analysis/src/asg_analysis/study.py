@@ -4,15 +4,15 @@ A protocol's `report:` list names every generated block of its study record, wha
 from which exports, so that a new study is a protocol file and the record regenerates with one
 command:
 
-    python3 -m asg_analysis.study experiments/protocol-NAME.yaml            # rewrite every block
-    python3 -m asg_analysis.study experiments/protocol-NAME.yaml --check    # exit 1 if one is stale
+    python3 -m asg_analysis study experiments/protocol-NAME.yaml            # rewrite every block
+    python3 -m asg_analysis study experiments/protocol-NAME.yaml --check    # exit 1 if one is stale
 
 Each entry of `report:`:
 
     - page: docs/studies/DATE-NAME.md         # the record (relative to the repository)
       block: NAME                              # its <!-- NAME: begin --> ... <!-- NAME: end -->
       table: campaigns                         # one row a campaign (endpoints.markdown)
-      exports: results/STUDY/GLOB.jsonl.gz     # the campaigns' compact exports
+      exports: results/STUDY/GLOB.jsonl.gz     # the campaigns' compact exports (a glob or a list)
       budget: 150                              # count the first N jobs (optional)
       target: flaw                             # flaw, regression or failure (default flaw)
 
@@ -36,7 +36,7 @@ Each entry of `report:`:
       digests: {"before (COMMIT)": results/bench/TAG-before-1.digest, ...}
 
     - table: command                           # a generator of its own that writes its block(s)
-      module: asg_analysis.protocol            # run as python3 -m MODULE ARGS (from the repository)
+      command: protocol                        # python3 -m asg_analysis COMMAND ARGS, run in-process
       args: [status, experiments/protocol-NAME.yaml, results/STUDY, --doc, docs/studies/DATE-NAME.md]
       check: [--check]                          # added with --check (the default)
       blocks: [NAME, ...]                      # the blocks it writes (what the record tests match)
@@ -57,12 +57,16 @@ import yaml
 from asg_agent.paths import REPO
 from asg_analysis.docblocks import block_text
 
+PROG = "python3 -m asg_analysis study"
+
 TABLES = ("campaigns", "arms", "rules", "digests", "coverage")
 KINDS = TABLES + ("command",)
 
 
-def _paths(pattern: str) -> List[str]:
-    return sorted(glob.glob(os.path.join(REPO, pattern)))
+def _paths(pattern) -> List[str]:
+    """The files of one glob, or of a list of them, sorted."""
+    patterns = [pattern] if isinstance(pattern, str) else list(pattern)
+    return sorted({p for pat in patterns for p in glob.glob(os.path.join(REPO, pat))})
 
 
 def render(entry: Dict) -> str:
@@ -128,24 +132,33 @@ def _digests(digests: Dict[str, str]) -> str:
 
 
 def _command(e: Dict, check: bool, out) -> int:
-    """Runs a `command` entry (its module writes its own blocks); 1 when --check finds it stale."""
-    import subprocess
+    """Runs a `command` entry in this process (a command of asg_analysis.commands that writes its
+    own blocks); 1 when --check finds it stale."""
+    import contextlib
+    import io
 
+    from asg_analysis import commands
+
+    name = e.get("command")
+    if name not in commands.COMMANDS:
+        raise ValueError(f"report entry {e.get('blocks')}: command {name!r} is not one of python3 -m asg_analysis's")
     args = [str(x) for x in e.get("args", [])]
     if check:
         args += [str(x) for x in e.get("check", ["--check"])]
-    r = subprocess.run([sys.executable, "-m", e["module"], *args], cwd=REPO, capture_output=True, text=True)
-    what = f"{e['module']} {' '.join(args[:3])}"
-    if r.returncode == 0:
+    said = io.StringIO()
+    with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+        rc = commands.call(name, args)
+    what = f"{name} {' '.join(args[:3])}"
+    if rc == 0:
         print(f"{what}: {'in step' if check else 'written'}", file=out)
         return 0
     if check:
-        print(f"{what}: stale (exit {r.returncode}) {r.stderr.strip()[-300:]}", file=out)
+        print(f"{what}: stale (exit {rc}) {said.getvalue().strip()[-300:]}", file=out)
         return 1
-    raise ValueError(f"{what} failed (exit {r.returncode}): {r.stderr.strip()[-500:]}")
+    raise ValueError(f"{what} failed (exit {rc}): {said.getvalue().strip()[-500:]}")
 
 
-def run(protocol_path: str, check: bool = False, out=None) -> int:
+def regenerate(protocol_path: str, check: bool = False, out=None) -> int:
     from asg_analysis.endpoints import write_block  # docblocks
 
     out = out or sys.stdout
@@ -176,17 +189,13 @@ def run(protocol_path: str, check: bool = False, out=None) -> int:
     return 1 if stale else 0
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python3 -m asg_analysis.study", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     p.add_argument("protocol", help="a protocol file with a `report:` list")
     p.add_argument("--check", action="store_true", help="exit 1 if a block is stale; write nothing")
     a = p.parse_args(argv)
     try:
-        return run(a.protocol, a.check)
+        return regenerate(a.protocol, a.check)
     except (OSError, ValueError, KeyError, yaml.YAMLError) as e:
         print(f"study: {e}", file=sys.stderr)
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

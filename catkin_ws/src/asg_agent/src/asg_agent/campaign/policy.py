@@ -27,9 +27,16 @@ def worker_names(spec: str):
     return ["/" + s.strip().strip("/") for s in spec.split(",") if s.strip()]
 
 
-def reference_roles(a, workers):
+def numbered_workers(role: str, first: int, n: int):
+    """The namespaces of `n` workers of a reference role given as a count: /worker_FIRST on, FIRST
+    the count of the workers named before them."""
+    return [f"/worker_{first + i}" for i in range(n)]
+
+
+def reference_roles(a, workers, numbered=numbered_workers):
     """{role: worker namespaces} of the reference stacks: --reference ROLE=WORKERS (each count
-    numbered after the workers named before it), or --reference-workers (ground truth)."""
+    numbered after the workers named before it, by `numbered(role, first, n)`), or
+    --reference-workers (ground truth)."""
     specs = [r.partition("=")[::2] for r in a.reference]
     if a.reference_workers:
         specs = [(attr.TRUTH, a.reference_workers)]
@@ -39,10 +46,7 @@ def reference_roles(a, workers):
             n = int(spec)
             if n < 1:
                 raise ValueError(f"reference {role}: at least one worker")
-            first = len(taken)
-            ws = (
-                [f"fake_{role}_{i}" for i in range(n)] if a.fake_workers else [f"/worker_{first + i}" for i in range(n)]
-            )
+            ws = numbered(role, len(taken), n)
         else:
             ws = worker_names(spec)
         if not ws or set(ws) & set(taken):
@@ -100,7 +104,6 @@ def campaign_settings(a, exp, workers, roles, candidates) -> dict:
         "model": exp.model,
         "unet_backend": exp.unet_backend,
         "planner_config": exp.planner_config,
-        "fake": bool(a.fake_workers),
     }
 
 

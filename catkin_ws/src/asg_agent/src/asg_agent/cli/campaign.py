@@ -5,9 +5,8 @@
 
 Workers are the namespaces /worker_0 .. /worker_{N-1} (or a comma-separated list of
 namespaces), started by `roslaunch launch/worker.launch ns:=worker_i ...` on this host or any
-other host of the same ROS master, or by launch/train.launch (the tests run it on an in-process
-stand-in: asg_agent.testing.campaign). Prints a progress
-bar and ends with a summary: the findings of its reward, their distinct places and the replay
+other host of the same ROS master, or by launch/train.launch (the tests hand main() the workers
+of their in-process stand-in instead). Prints a progress bar and ends with a summary: the findings of its reward, their distinct places and the replay
 command of the best of them first (issue #78), then the attribution and the paper's proxy counts.
 """
 
@@ -26,8 +25,8 @@ from asg_agent.campaign.config import CampaignConfig, FunctionCallback  # noqa: 
 from asg_agent.campaign.loop import Campaign  # noqa: E402
 from asg_agent.campaign.policy import CANDIDATE_RULES  # noqa: E402
 from asg_agent.scoring.rewards import REWARDS  # noqa: E402
-from asg_agent.campaign.policy import CampaignError, campaign_settings, reference_roles, worker_names  # noqa: E402
-from asg_agent.ros.campaign_pools import check_stacks, make_pools, stage_collector  # noqa: E402
+from asg_agent.campaign.policy import CampaignError, campaign_settings, reference_roles  # noqa: E402
+from asg_agent.ros.campaign_pools import RosWorkers  # noqa: E402
 from asg_agent.cli.signals import stop_on_signals  # noqa: E402
 from asg_agent.scoring import attribution as attr  # noqa: E402
 from asg_agent.scoring import rewards  # noqa: E402
@@ -54,15 +53,13 @@ def open_tensorboard(a, store, name, c):
         return None
 
 
-def parse(argv, stand_in: bool = False):
-    """The parsed arguments; `stand_in` (asg_agent.testing.campaign) adds --fake-workers."""
+def parse(argv, options=None):
+    """The parsed arguments; `options(parser)` adds the workers' own (see main's `workers`)."""
     p = argparse.ArgumentParser(prog="campaign", description=__doc__.split("\n\n")[0])
     _search_options(p)
     _run_options(p)
-    if stand_in:
-        p.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
-    else:
-        p.set_defaults(fake_workers=0)
+    if options is not None:
+        options(p)
     a = p.parse_args(argv)
     _check(p, a)
     return a
@@ -132,11 +129,11 @@ def _search_options(p):
         help="[-] route-random: the share of obstacles placed in the band, the rest anywhere (default 1)",
     )
     p.add_argument(
-        "--tabu",
+        "--tabu-m",
         type=float,
-        default=D["tabu"].value,
+        default=D["tabu_m"].value,
         help=f"[m] novelty-ts: no proposal puts an obstacle this close to a found failure's place of its "
-        f"class (default {defaults.text('tabu')}, protocol v4's distinct radius)",
+        f"class (default {defaults.text('tabu_m')}, protocol v4's distinct radius)",
     )
     p.add_argument(
         "--generators",
@@ -543,7 +540,7 @@ def make_search(a, exp):
     td3.bc_weight = a.bc_weight
     options = {
         "route-random": {"band": a.route_band, "share": a.route_share},
-        "novelty-ts": {"tabu_m": a.tabu},
+        "novelty-ts": {"tabu_m": a.tabu_m},
         "coverage-ts": {"generators": tuple(a.generators.split(","))},
         "rule-sampler": {"rule_file": a.rule},
     }.get(a.method)
@@ -646,29 +643,35 @@ def run(a, c: Campaign, store: Store, name: str, bar, progress, collector, worke
     return 0
 
 
-def main(argv=None, stand_in=None):
-    """`stand_in(a, roles)` -> (pool, references): the tests' pools instead of ROS workers."""
-    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv, stand_in is not None)
+def main(argv=None, workers=None):
+    """`workers`: what runs the scenarios (default RosWorkers(), the scene workers of the ROS master;
+    the tests pass their in-process stand-in's). It adds its options to the parser (`options(p)`),
+    names the workers under test (`names(a)`) and a reference role's counted ones (`numbered(role,
+    first, n)`), makes the pools (`pools(a, exp, workers, roles)` -> (pool, {role: pool})), checks
+    that they run the experiment's stack (`check(exp, settings, workers, roles)`), gives the
+    --stage-report collector (`collector(a, exp, settings, workers, roles)`, or None) and what the
+    store records of it beside the campaign's settings (`settings`)."""
+    workers_of = workers or RosWorkers()
+    a = parse([x for x in sys.argv[1:] if ":=" not in x] if argv is None else argv, workers_of.options)
     stop_on_signals()
     try:
         exp = load_experiment(a.experiment)
         name = a.name or f"{exp.name}-{a.method}-s{a.seed}"
-        workers = [f"fake_{i}" for i in range(a.fake_workers)] if a.fake_workers else worker_names(a.workers)
-        roles = reference_roles(a, workers)
+        workers = workers_of.names(a)
+        roles = reference_roles(a, workers, workers_of.numbered)
         candidates = a.candidates or ("all" if a.reference_workers else "failures")
         store = open_store(a, name)
-        pool, references = stand_in(a, roles) if a.fake_workers else make_pools(a, exp, workers, roles)
+        pool, references = workers_of.pools(a, exp, workers, roles)
         method = make_search(a, exp)
-        settings = campaign_settings(a, exp, workers, roles, candidates)
+        settings = {**campaign_settings(a, exp, workers, roles, candidates), **workers_of.settings}
         settings["agent_blas"] = blas_identity()  # the search's arithmetic (asg_agent/blas.py)
         atlas = campaign_atlas(a.atlas, exp, settings)
-        if not a.fake_workers:
-            check_stacks(exp, settings, workers, roles)
+        workers_of.check(exp, settings, workers, roles)
     except (ExperimentError, ValueError, CampaignError) as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2
     bar, progress = progress_bar(a)
-    collector = stage_collector(exp, settings, workers, roles) if a.stage_report and not a.fake_workers else None
+    collector = workers_of.collector(a, exp, settings, workers, roles)
     c = Campaign(
         CampaignConfig(
             name=name,

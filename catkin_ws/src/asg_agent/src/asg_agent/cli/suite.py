@@ -10,7 +10,7 @@ outcomes recorded under --against (a regression: passed there, fails now; change
 verdict but another trajectory), writes JUnit XML and JSON, and exits 1 on a regression, a change,
 or (without --against) any failing scenario. `--record LABEL` stores this run's outcomes in the
 suite under LABEL (and, without --against, exits 0: its failures are what it records). The tests
-run it on an in-process stand-in (asg_agent.testing.suite).
+run it on their in-process stand-in, handing main() its workers instead of RosWorkers.
 """
 
 import argparse
@@ -21,8 +21,37 @@ import sys
 from asg_agent.campaign.suite import SuiteError, compare, export_suite, junit, load_suite, record, run_suite
 
 
-def main(argv=None, stand_in=None) -> int:
-    """`stand_in(n)`: the tests' pool of n stand-in workers (adds --fake-workers to `run`)."""
+class RosWorkers:
+    """The suite's workers: scene workers of the running ROS master, named by --workers. Another
+    `workers` of main() has the same three methods."""
+
+    def options(self, r):
+        """Options of `run` of the workers' own (none: --workers is the command's)."""
+
+    def pool(self, a):
+        """The pool of the workers (RuntimeError or ValueError: none to run on)."""
+        from asg_agent.campaign.policy import worker_names
+        from asg_agent.ros.node import init_node
+        from asg_agent.ros.pool import WorkerPool
+
+        init_node("suite", anonymous=True, disable_signals=True)
+        return WorkerPool(worker_names(a.workers))
+
+    def numerics(self, a) -> str:
+        """The numerics the segmenter runs on the first worker (none for a ground-truth stack)."""
+        import rospy
+
+        from asg_agent.campaign.policy import worker_names
+        from asg_agent.ros.stack_identity import segmenter_numerics
+
+        first = worker_names(a.workers)[0]
+        return segmenter_numerics(first, timeout=60.0) if rospy.has_param(f"{first}/segmenter/model") else ""
+
+
+def main(argv=None, workers=None) -> int:
+    """`workers`: what runs the suite's scenarios (default RosWorkers(); the tests pass their
+    in-process stand-in's)."""
+    workers = workers or RosWorkers()
     p = argparse.ArgumentParser(prog="suite", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("export")
@@ -40,10 +69,7 @@ def main(argv=None, stand_in=None) -> int:
     r = sub.add_parser("run")
     r.add_argument("suite")
     r.add_argument("--workers", default="1", help="worker count N (/worker_0..) or namespaces, comma-separated")
-    if stand_in is not None:
-        r.add_argument("--fake-workers", type=int, default=0, help="N in-process stand-in workers (no ROS)")
-    else:
-        r.set_defaults(fake_workers=0)
+    workers.options(r)
     r.add_argument("--against", default="", help="compare with the outcomes recorded under this label")
     r.add_argument("--record", default="", help="store this run's outcomes under this label")
     r.add_argument("--junit", default="")
@@ -68,29 +94,12 @@ def main(argv=None, stand_in=None) -> int:
     except (SuiteError, OSError, ValueError) as err:  # OverlapError is a ValueError
         print(f"suite: {err}", file=sys.stderr)
         return 2
-    if a.fake_workers:
-        pool = stand_in(a.fake_workers)
-    else:
-        import rospy
-
-        from asg_agent.campaign.policy import worker_names
-        from asg_agent.ros.pool import WorkerPool
-
-        from asg_agent.ros.node import init_node
-
-        init_node("suite", anonymous=True, disable_signals=True)
-        try:
-            pool = WorkerPool(worker_names(a.workers))
-        except (RuntimeError, ValueError) as err:
-            print(f"suite: {err}", file=sys.stderr)
-            return 2
-    numerics = ""
-    if not a.fake_workers:  # the numerics the segmenter runs here (none for a ground-truth stack)
-        from asg_agent.ros.stack_identity import segmenter_numerics
-
-        first = worker_names(a.workers)[0]
-        if rospy.has_param(f"{first}/segmenter/model"):
-            numerics = segmenter_numerics(first, timeout=60.0)
+    try:
+        pool = workers.pool(a)
+    except (RuntimeError, ValueError) as err:
+        print(f"suite: {err}", file=sys.stderr)
+        return 2
+    numerics = workers.numerics(a)
     results = compare(suite, run_suite(suite, pool), a.against, numerics)
     name = os.path.basename(os.path.abspath(a.suite))
     for res in results:

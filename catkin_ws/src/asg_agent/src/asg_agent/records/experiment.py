@@ -30,6 +30,10 @@ from [-1, 1] to its range. Keys (docs/agent.md):
                                        #   landscape's edge; issue #67)
     route_lateral_m: 10.0              # route, route-wide: [m] the offset's dense part (below)
 
+A file may build on others: `base: exp1.yaml` (or a list, applied in order), relative to its own
+folder, and its keys override theirs (mappings merged key by key, anything else replaced;
+`effective`). A campaign stores the effective experiment (`Experiment.text`).
+
 With `action_space: route` each obstacle's two values are (u, v) in [-1, 1]: u sets the fraction
 of the way from start to goal over the part outside the safety radii, v the lateral offset
 v * route_lateral_m (asg_scenario.layout.RouteFrame). The scene space is the route band; what the
@@ -113,7 +117,9 @@ class Experiment:
     source: str = ""
     stack_file: str = ""  #: the stack's registration launch file, absolute (records.stacks)
     sim_time: bool = False  #: the stack runs on simulated time (its registration's sim_time)
-    text: str = field(default="", repr=False)  #: the file as read (stored with the campaign)
+    #: the experiment as a campaign stores it: the file as read, or, for a file with a base, the
+    #: effective mapping (`effective`) as YAML
+    text: str = field(default="", repr=False)
     #: (textural key, lo, hi) the search sets, in this order after the positions in the action
     textural_free: list = field(default_factory=list)
     #: (lo, hi) [m] of the rolling ground's amplitude the search sets, or None
@@ -245,6 +251,89 @@ def _read(path: str):
     return text, data
 
 
+#: the key naming the file(s) an experiment file builds on (docs/agent.md, "Problem framing")
+BASE_KEY = "base"
+#: the keys whose relative paths are read from the file's folder (a stack's only as a .launch file)
+PATH_KEYS = ("scenario", "stack")
+
+
+def _merge(under: dict, over: dict) -> dict:
+    """`under` overridden by `over`: mappings merged key by key, any other value replaced."""
+    out = dict(under)
+    for k, v in over.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def _rebased(data: dict, src: str, dst: str) -> dict:
+    """A base's mapping with its relative paths (PATH_KEYS) read from folder `dst` instead of `src`."""
+    out = dict(data)
+    for k in PATH_KEYS:
+        v = out.get(k)
+        if src != dst and isinstance(v, str) and v and not os.path.isabs(v) and not v.startswith("~"):
+            if k == "scenario" or v.endswith(".launch"):
+                out[k] = os.path.relpath(os.path.join(src, v), dst)
+    return out
+
+
+def _compose(path: str, within: tuple = ()):
+    """(text, effective mapping, the base files it was composed of) of an experiment file:
+    each base's effective mapping in order, then the file's own keys (`_merge`). `within`: the
+    files whose bases are being read (a cycle); ExperimentError naming the file."""
+    here = os.path.abspath(path)
+    text, data = _read(path)
+    if BASE_KEY not in data:
+        return text, data, []
+    names = data.pop(BASE_KEY)
+    names = [names] if isinstance(names, str) else names
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) and n.strip() for n in names):
+        raise ExperimentError(f"{path}: base: {names!r}, must be a file name or a list of them (relative to this file)")
+    merged, used, chain = {}, [], within + (here,)
+    for name in names:
+        base = os.path.normpath(os.path.join(os.path.dirname(here), name))
+        if base in chain:
+            cycle = " -> ".join(os.path.basename(f) for f in chain[chain.index(base) :] + (base,))
+            raise ExperimentError(f"{path}: base {name}: a cycle of bases ({cycle})")
+        if not os.path.isfile(base):
+            raise ExperimentError(f"{path}: base {name}: no such file ({base})")
+        _, bdata, bused = _compose(base, chain)
+        merged = _merge(merged, _rebased(bdata, os.path.dirname(base), os.path.dirname(here)))
+        used += bused + [base]
+    return text, _merge(merged, data), used
+
+
+def _composed(path: str):
+    try:
+        return _compose(path)
+    except RecursionError:
+        raise ExperimentError(f"{path}: nested too deeply to be an experiment file") from None
+
+
+def effective(path: str) -> dict:
+    """The effective mapping of an experiment file: its own keys over its bases' (`base`), not
+    checked (load_experiment checks it). ExperimentError naming the file."""
+    return _composed(path)[1]
+
+
+class _Dumper(yaml.SafeDumper):
+    """Block style, but a list of scalars on one line (`[25.0, 500.0]`), as the files write it."""
+
+    def represent_flat_list(self, data):
+        flat = not any(isinstance(v, (list, dict)) for v in data)
+        return self.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flat)
+
+
+_Dumper.add_representer(list, _Dumper.represent_flat_list)
+
+
+def _effective_text(path: str, data: dict, used: list) -> str:
+    """The effective mapping of a file with a base as YAML, headed by the files it came from."""
+    here = os.path.dirname(os.path.abspath(path))
+    head = ", ".join(os.path.relpath(f, here) for f in dict.fromkeys(used))
+    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, default_flow_style=False, allow_unicode=True)
+    return f"# {os.path.basename(path)} over its bases ({head}): the effective experiment\n" + body
+
+
 def _textural_free(data: dict, problems: list) -> list:
     """[(key, lo, hi)] of the file's textural_free; each problem appended to `problems`."""
     free = []
@@ -327,8 +416,9 @@ def _check_terrain(scenario: dict, ranges: dict, hill_positions: bool, problems:
 
 
 def load_experiment(path: str) -> Experiment:
-    text, data = _read(path)
-    problems = [f"{k}: unknown key (allowed: {', '.join(sorted(KEYS))})" for k in data if k not in KEYS]
+    text, data, used = _composed(path)
+    text = _effective_text(path, data, used) if used else text
+    problems = [f"{k}: unknown key (allowed: {', '.join(sorted(KEYS | {BASE_KEY}))})" for k in data if k not in KEYS]
     for key in ("name", "scenario"):
         if not isinstance(data.get(key), str) or not data.get(key):
             problems.append(f"{key}: required, a non-empty string")

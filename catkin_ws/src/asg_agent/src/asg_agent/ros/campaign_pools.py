@@ -1,10 +1,40 @@
 """The campaign's ROS side: its node, the pools of workers under test and of each reference
-stack, and the checks that the running workers are the experiment's stack (rospy)."""
+stack, and the checks that the running workers are the experiment's stack (rospy).
+
+RosWorkers gathers them as the campaign command's `workers` (asg_agent.cli.campaign.main): the
+command asks its workers for their options, names, pools, checks and stage collector, and the
+tests hand it their in-process stand-in's instead (catkin_ws/src/asg_agent/test/stand_in)."""
 
 import sys
 
-from asg_agent.campaign.policy import CampaignError
+from asg_agent.campaign.policy import CampaignError, numbered_workers, worker_names
 from asg_agent.scoring import attribution as attr
+
+
+class RosWorkers:
+    """The campaign's workers: scene workers of the running ROS master, named by --workers (the
+    references' by --reference / --reference-workers), checked to run the experiment's stack."""
+
+    #: what the store records of the workers beside the campaign's settings (nothing more)
+    settings: dict = {}
+
+    def options(self, p):
+        """Options of the workers' own (none: --workers and the references' are the campaign's)."""
+
+    def names(self, a):
+        return worker_names(a.workers)
+
+    def numbered(self, role, first, n):
+        return numbered_workers(role, first, n)
+
+    def pools(self, a, exp, workers, roles):
+        return make_pools(a, exp, workers, roles)
+
+    def check(self, exp, settings, workers, roles):
+        check_stacks(exp, settings, workers, roles)
+
+    def collector(self, a, exp, settings, workers, roles):
+        return stage_collector(exp, settings, workers, roles) if a.stage_report else None
 
 
 def make_pools(a, exp, workers, roles):

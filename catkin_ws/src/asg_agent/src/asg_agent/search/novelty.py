@@ -49,7 +49,7 @@ class NoveltyTS(SurrogateTS):
     name = "novelty-ts"
 
     def __init__(
-        self, experiment, seed: int, tabu_m: float = DEFAULTS["tabu"].value, shift_sigma: float = 0.1, **surrogate
+        self, experiment, seed: int, tabu_m: float = DEFAULTS["tabu_m"].value, shift_sigma: float = 0.1, **surrogate
     ):
         super().__init__(experiment, seed, **surrogate)
         if not shift_sigma > 0.0:
@@ -153,7 +153,7 @@ class NoveltyTS(SurrogateTS):
     def state_dict(self):
         return dict(
             super().state_dict(),
-            tabu=self.tabu.state_dict(),
+            found=self.tabu.state_dict(),  # the places found so far (the tabu_m archive)
             parents=list(self.parents),
             children=list(self.children),
             outcomes={str(k): [list(p) if p else None, f] for k, (p, f) in self.outcomes.items()},
@@ -162,7 +162,7 @@ class NoveltyTS(SurrogateTS):
         )
 
     def load_state_dict(self, d):
-        self.tabu = DistinctPlaces.from_state(d["tabu"])
+        self.tabu = DistinctPlaces.from_state(d["found"])
         self.parents, self.children = [int(v) for v in d["parents"]], [int(v) for v in d["children"]]
         self.outcomes = {int(k): (tuple(p) if p else None, bool(f)) for k, (p, f) in d["outcomes"].items()}
         self.operator_of = {int(k): str(v) for k, v in d["operator_of"].items()}

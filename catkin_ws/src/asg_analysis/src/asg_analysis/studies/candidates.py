@@ -2,7 +2,7 @@
 both reference stacks whatever they were (`rerun run EXPORT --select first --top N`, once per
 stack), classed by the one rule of scoring/attribution.py, against what the campaign stored.
 
-    python3 -m asg_analysis.studies.candidates EXPORT.jsonl.gz FULL.jsonl GROUND_TRUTH.jsonl [--json OUT]
+    python3 -m asg_analysis candidates EXPORT.jsonl.gz FULL.jsonl GROUND_TRUTH.jsonl [--json OUT]
 
 Prints, for the candidates, whether the full re-run gives each the class the campaign stored
 (the runs are deterministic, so it must), and for the scenarios that were not candidates, the
@@ -16,6 +16,8 @@ import sys
 
 from asg_agent.records.export import read_export
 from asg_agent.scoring import attribution as attr
+
+PROG = "python3 -m asg_analysis candidates"
 
 
 def _read_jsonl(path):
@@ -54,8 +56,8 @@ def check(rows, full: dict, truth: dict) -> dict:
     return out
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="candidates", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     p.add_argument("export")
     p.add_argument("full")
     p.add_argument("ground_truth")
@@ -78,7 +80,3 @@ def main(argv=None) -> int:
             json.dump(out, f, indent=1, sort_keys=True)
             f.write("\n")
     return 0 if not out["candidates_differing"] else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

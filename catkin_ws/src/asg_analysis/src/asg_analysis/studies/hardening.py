@@ -2,8 +2,8 @@
 figures on held-apart frames (evaluation-SET-ROUND.json of scripts/repro/harden.sh) and the pass
 rate on each suite from the outcomes recorded in it.
 
-    python3 -m asg_analysis.studies.hardening results/hardening [--json OUT] [--markdown]
-    python3 -m asg_analysis.studies.hardening picture SUITE SCENARIO OUT.png LABEL=RESULTS.json ...
+    python3 -m asg_analysis hardening results/hardening [--json OUT] [--markdown]
+    python3 -m asg_analysis hardening picture SUITE SCENARIO OUT.png LABEL=RESULTS.json ...
 
 `picture`: one suite scenario as each stack drove it (the results are `suite run --json` files),
 the paths on the scene top-down: a failure before and after hardening.
@@ -17,6 +17,8 @@ import re
 import sys
 
 import yaml
+
+PROG = "python3 -m asg_analysis hardening"
 
 SUITES = ("suite-exp1c", "suite-r4pilot")
 SUITE_WORDS = {
@@ -144,10 +146,10 @@ def picture(suite_folder: str, scenario: str, runs: dict, out: str) -> dict:
     return {label: outcome for label, (_, outcome) in got.items()}
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["picture"]:
-        q = argparse.ArgumentParser(prog="analysis.hardening picture", description=picture.__doc__.split("\n")[0])
+        q = argparse.ArgumentParser(prog=PROG + " picture", description=picture.__doc__.split("\n")[0])
         q.add_argument("suite")
         q.add_argument("scenario")
         q.add_argument("out")
@@ -168,7 +170,7 @@ def main(argv=None) -> int:
             return 2
         print(f"wrote {b.out}")
         return 0
-    p = argparse.ArgumentParser(prog="analysis.hardening", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     p.add_argument("folder")
     p.add_argument("--json", default="")
     p.add_argument("--markdown", action="store_true")
@@ -182,7 +184,3 @@ def main(argv=None) -> int:
             json.dump(t, f, indent=1)
     print(markdown(t) if a.markdown else json.dumps(t, indent=1))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

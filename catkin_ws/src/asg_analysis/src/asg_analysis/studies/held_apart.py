@@ -8,8 +8,8 @@ per-pixel evaluation files pool the frames, so the frame set is rendered again a
 evaluated with and without the twins' frames (scripts/repro/heldout_twins.sh writes
 results/hardening/twins/; the block shows those columns once they are there).
 
-    python3 -m asg_analysis.studies.held_apart [results/hardening] [--doc docs/design-loop.md] [--check]
-    python3 -m asg_analysis.studies.held_apart --frames-without-twins SET/frames OUT   # a dataset without them
+    python3 -m asg_analysis held-apart [results/hardening] [--doc docs/design-loop.md] [--check]
+    python3 -m asg_analysis held-apart --frames-without-twins SET/frames OUT   # a dataset without them
 
 `--doc` rewrites the page's `<!-- twins:begin -->` block; `--check` exits 1 when it is not in
 step (tests/test_held_apart.py checks it too, with code of its own).
@@ -26,10 +26,12 @@ import yaml
 
 from asg_agent.paths import REPO
 
+PROG = "python3 -m asg_analysis held-apart"
+
 HARD = os.path.join(REPO, "results", "hardening")
 SET = "heldout-findings"
 SUITE = "suite-r4pilot"
-BEGIN = "<!-- twins:begin (python3 -m asg_analysis.studies.held_apart --doc docs/design-loop.md; tests/test_held_apart.py) -->"
+BEGIN = "<!-- twins:begin (python3 -m asg_analysis held-apart --doc docs/design-loop.md; tests/test_held_apart.py) -->"
 END = "<!-- twins:end -->"
 #: what rebuilds the sets at the radius (scripts/repro/harden.sh skips an output that exists)
 TWINS = "twins"  # results/hardening/twins: the set rendered again, evaluated with and without the twins
@@ -261,19 +263,15 @@ def in_doc(doc: str) -> str:
 
 
 def write_doc(doc: str, text: str) -> None:
-    with open(doc, encoding="utf-8") as f:
-        page = f.read()
-    pattern = re.escape(BEGIN) + r".*?" + re.escape(END)
-    if not re.search(pattern, page, re.S):
+    """Writes `text` (markers included) as the page's twins block (asg_analysis.docblocks)."""
+    from asg_analysis.docblocks import rewrite_between
+
+    if rewrite_between(doc, BEGIN, END, text, False, PROG) == 2:
         raise ValueError(f"{doc}: no {BEGIN} ... {END} block to fill")
-    with open(doc, "w", encoding="utf-8") as f:
-        f.write(re.sub(pattern, lambda _: text, page, flags=re.S))
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(
-        prog="python3 -m asg_analysis.studies.held_apart", description=__doc__.split("\n\n")[0]
-    )
+def run(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     ap.add_argument("folder", nargs="?", default=HARD, help="results/hardening")
     ap.add_argument("--tol-m", type=float, default=None, help="[m] (default: overlap's, the augmentation's radius)")
     ap.add_argument("--doc", help="a Markdown file whose twins block to rewrite")
@@ -304,7 +302,3 @@ def main(argv=None) -> int:
         print(f"held_apart: {e}", file=sys.stderr)
         return 2
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

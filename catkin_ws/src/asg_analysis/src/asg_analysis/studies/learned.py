@@ -13,7 +13,7 @@ the scene says of each obstacle, computed here apart from any search method's ow
 - `class, beside`: both at once (every layout holds each class in the scenario's counts, so a
   class's share among the obstacles of any layout is fixed; where each class stands is not).
 
-    python3 -m asg_analysis.studies.learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
+    python3 -m asg_analysis learned results/flaw_study3 flaw3-pilot-surrogate-wide-s20 [...] \
         [--budget 250] [--target flaw] [--json out.json] [--markdown] [--figure out.png]
 
 Each campaign is split at half its budget (jobs below budget / 2: early; the rest: late), or at
@@ -26,6 +26,8 @@ import sys
 from typing import Dict, List
 
 import numpy as np
+
+PROG = "python3 -m asg_analysis learned"
 
 #: [m] the `beside` bands' upper edges, the last open
 LATERAL_BANDS = (2.0, 5.0, 10.0, 20.0)
@@ -200,8 +202,8 @@ def figure(res: dict, out: str) -> Dict[str, List[List[float]]]:
     return drawn
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="learned", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     ap.add_argument("folder", help="the exports' folder")
     ap.add_argument("campaigns", nargs="+", help="campaign names (NAME.jsonl.gz in the folder)")
     ap.add_argument("--budget", type=int, default=300, help="[scenarios] each campaign's budget (300)")
@@ -230,7 +232,3 @@ def main(argv=None) -> int:
     from asg_analysis.files import report
 
     return report(res, a.json, figure, a.figure, markdown, a.markdown)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -19,9 +19,9 @@ bootstrap intervals apart, "saturate" otherwise.
 A campaign whose export is missing or short is listed as not complete; nothing is computed from a
 partial export.
 
-    python3 -m asg_analysis.studies.loop_study            # rewrites both blocks in docs/design-loop.md
-    python3 -m asg_analysis.studies.loop_study --check    # exit 1 when a block is stale
-    python3 -m asg_analysis.studies.loop_study --json results/hardening/loop.json --figure docs/images/design_loop.png
+    python3 -m asg_analysis loop-study            # rewrites both blocks in docs/design-loop.md
+    python3 -m asg_analysis loop-study --check    # exit 1 when a block is stale
+    python3 -m asg_analysis loop-study --json results/hardening/loop.json --figure docs/images/design_loop.png
 """
 
 import argparse
@@ -34,11 +34,13 @@ from typing import Dict, List, Optional
 import yaml
 
 from asg_analysis import stats
-from asg_analysis.protocol import interruptions
+from asg_analysis.protocol_analysis import interruptions
 from asg_agent.scoring.attribution import FINDING
 
 from asg_agent.paths import REPO
 from asg_analysis.files import write_json
+
+PROG = "python3 -m asg_analysis loop-study"
 
 DOC = os.path.join(REPO, "docs", "design-loop.md")
 PROTOCOL = os.path.join(REPO, "experiments", "protocol-design-loop.yaml")
@@ -65,7 +67,7 @@ def plan_campaigns(plan: str) -> Dict[tuple, str]:
 
 def campaign_figures(rows: List[dict], budget: int) -> Dict:
     """One campaign's endpoint over its first `budget` scenarios."""
-    from asg_analysis.studies.stack_study import exact_interval
+    from asg_analysis.stats import exact_interval
 
     keep = [r for r in rows if r["job"] < budget]
     flaw = sum(r.get("attribution") == "flaw" for r in keep)
@@ -312,8 +314,8 @@ def figure(s: Dict, out: str) -> None:
     plt.close(fig)
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="loop_study", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     p.add_argument("--check", action="store_true", help="exit 1 when a block of docs/design-loop.md is stale")
     p.add_argument("--json", default="", help="also write the figures here")
     p.add_argument("--figure", default="", help="also draw the per-seed rates here (PNG)")
@@ -331,7 +333,3 @@ def main(argv=None) -> int:
 
     rc = rewrite_block(DOC, BEGIN, END, f"{BEGIN}\n{markdown(s)}\n{END}", a.check, "loop_study")
     return max(rc, rewrite_block(DOC, BEGIN2, END2, f"{BEGIN2}\n{markdown_round2(s)}\n{END2}", a.check, "loop_study"))
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -16,7 +16,7 @@ camera image. Per frame, on four sets of pixels:
 
 Shares are pooled over pixels, by the class (mesh) of the obstacle hit. Frames where the hit
 obstacle covers fewer than MIN_HIT_PX pixels (behind the camera, hidden) count only for the
-ground rows. `python3 -m asg_analysis.studies.mechanism EXPORT... --out results/hardening/mechanism`
+ground rows. `python3 -m asg_analysis mechanism EXPORT... --out results/hardening/mechanism`
 writes `mechanism.json`; `--doc docs/design-loop.md` writes its table between the
 `<!-- mechanism:begin -->` markers (tests/test_mechanism.py checks both against the exports).
 """
@@ -24,11 +24,12 @@ writes `mechanism.json`; `--doc docs/design-loop.md` writes its table between th
 import argparse
 import json
 import os
-import re
 import subprocess
 from typing import Dict, List, Sequence
 
 import numpy as np
+
+PROG = "python3 -m asg_analysis mechanism"
 
 SECONDS = (4.0, 3.0, 2.0, 1.0, 0.5)  #: [s] before the contact (the trajectory's last point)
 HZ = 10.0  #: [Hz] the exports' trajectory rate
@@ -212,27 +213,22 @@ def markdown(result: dict) -> str:
     return "\n".join(lines)
 
 
-BEGIN = "<!-- mechanism:begin (python3 -m asg_analysis.studies.mechanism; tests/test_mechanism.py) -->"
+BEGIN = "<!-- mechanism:begin (python3 -m asg_analysis mechanism; tests/test_mechanism.py) -->"
 END = "<!-- mechanism:end -->"
 
 
 def write_doc(doc: str, table: str) -> None:
-    with open(doc, encoding="utf-8") as f:
-        text = f.read()
-    block = f"{BEGIN}\n{table}\n{END}"
-    pattern = re.escape(BEGIN) + r".*?" + re.escape(END)
-    if re.search(pattern, text, re.S):
-        text = re.sub(pattern, lambda _: block, text, flags=re.S)
-    else:
+    """Writes the table as the page's mechanism block (the one writer, asg_analysis.docblocks)."""
+    from asg_analysis.docblocks import rewrite_between
+
+    if rewrite_between(doc, BEGIN, END, f"{BEGIN}\n{table}\n{END}", False, PROG) == 2:
         raise MechanismError(f"{doc}: no {BEGIN} ... {END} block to fill")
-    with open(doc, "w", encoding="utf-8") as f:
-        f.write(text)
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     from asg_perception.segmenter_node import resolve_model
 
-    ap = argparse.ArgumentParser(prog="python3 -m asg_analysis.studies.mechanism", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n")[0])
     ap.add_argument("exports", nargs="+", help="campaign exports (CAMPAIGN.jsonl.gz) of the stack under test")
     ap.add_argument("--out", required=True, help="folder for scenarios, poses, frames and mechanism.json")
     ap.add_argument("--under-test", default="flawed", help="the stack under test's U-Net (name or .pt)")
@@ -255,9 +251,3 @@ def main(argv=None) -> int:
         print(f"mechanism: {e}")
         return 2
     return 0
-
-
-if __name__ == "__main__":
-    import sys
-
-    sys.exit(main())

@@ -3,8 +3,8 @@ scenario file (terrain removed, fog, overcast) rendered from one camera pose wit
 camera RGB above and ground-truth labels below. No ROS. (In asg_analysis since issue #80: it runs
 asg_sim's renderer, and asg_sim builds on asg_scenario, where it was.)
 
-    python3 -m asg_analysis.studies.pictures terrain [--out docs/images/terrain_panel.png] [--pose 22 50 0.3]
-    python3 -m asg_analysis.studies.pictures weather [--out docs/images/weather_panel.png]
+    python3 -m asg_analysis pictures terrain [--out docs/images/terrain_panel.png] [--pose 22 50 0.3]
+    python3 -m asg_analysis pictures weather [--out docs/images/weather_panel.png]
 """
 
 import argparse
@@ -16,6 +16,8 @@ import tempfile
 from typing import Dict, List, Tuple
 
 import yaml
+
+PROG = "python3 -m asg_analysis pictures"
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.realpath(__file__)), *[".."] * 6))
 
@@ -111,8 +113,8 @@ def compose(folder: str, panel: dict, out: str):
     plt.close(fig)
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="asg_analysis.studies.pictures", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    p = argparse.ArgumentParser(prog=PROG + " picture", description=__doc__.split("\n\n")[0])
     p.add_argument("panel", choices=sorted(PANELS))
     p.add_argument("--out", default="", help="PNG (default: docs/images/PANEL_panel.png)")
     p.add_argument("--pose", type=float, nargs=3, default=None, help="[m m rad] camera x, y, yaw")
@@ -130,7 +132,3 @@ def main(argv=None) -> int:
         compose(tmp, panel, out)
     print(out)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,7 +1,7 @@
 """docs/reliability.md's soak table, generated from the soak's report (results/reliability/soak.json,
 written by asg_agent.cli.soak through asg_agent.campaign.soak_check; no ROS):
 
-    python3 -m asg_analysis.studies.reliability results/reliability/soak.json --doc docs/reliability.md [--check]
+    python3 -m asg_analysis reliability results/reliability/soak.json --doc docs/reliability.md [--check]
 
 One row: scenarios run, kills (SIGKILL) by node type, agent restarts, re-queues, lost, duplicates,
 stored as ERROR, SQLite integrity, and for three-stack attribution the classes and the candidates
@@ -10,6 +10,8 @@ left pending; then the re-queues by what the pool saw."""
 import argparse
 import json
 import sys
+
+PROG = "python3 -m asg_analysis reliability"
 
 BEGIN, END = "<!-- soak: begin (generated) -->", "<!-- soak: end -->"
 KINDS = (("planner", "planners"), ("scene_worker", "scene workers"), ("segmenter", "segmenters"))
@@ -46,8 +48,8 @@ def markdown(res: dict) -> str:
     return "\n".join(lines)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="reliability", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     ap.add_argument("report", help="the soak's JSON report")
     ap.add_argument("--doc", default="", help="rewrite the page's soak block")
     ap.add_argument("--check", action="store_true", help="with --doc: only say whether the block is stale (exit 1)")
@@ -65,7 +67,3 @@ def main(argv=None) -> int:
     from asg_analysis.docblocks import rewrite_between as rewrite_block
 
     return rewrite_block(a.doc, BEGIN, END, block, a.check, "reliability")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -10,7 +10,7 @@ verdict equals the stored one. Reported: scenarios, repetitions, the share that 
 exact 95 % interval), the stored failures that fail again in every repetition, in some, in none,
 and each scenario's proxy range over the stored run and its repetitions.
 
-    python3 -m asg_analysis.studies.run_spread EXPORT.jsonl.gz r1.jsonl r2.jsonl ... [--json OUT] [--markdown]
+    python3 -m asg_analysis run-spread EXPORT.jsonl.gz r1.jsonl r2.jsonl ... [--json OUT] [--markdown]
 """
 
 import argparse
@@ -22,7 +22,7 @@ import numpy as np
 
 from asg_agent.records.export import read_export
 from asg_agent.scoring.attribution import RunOutcome
-from asg_analysis.studies.stack_study import exact_interval
+from asg_analysis.stats import exact_interval
 from asg_analysis.files import write_json
 
 
@@ -111,7 +111,7 @@ def markdown(s: Dict) -> str:
     return "\n".join(rows)
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("export", help="the campaign's export (NAME.jsonl.gz) the scenarios came from")
     p.add_argument("reruns", nargs="+", help="asg_agent.ros.rerun outputs, one a repetition")
@@ -127,7 +127,3 @@ def main(argv=None) -> int:
         write_json(a.json, s)
     print(markdown(s) if a.markdown else json.dumps({k: v for k, v in s.items() if k != "per_scenario"}, indent=1))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

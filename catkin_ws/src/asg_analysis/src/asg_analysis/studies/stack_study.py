@@ -10,7 +10,7 @@ beats another in general. Secondary, descriptive: each arm's proxy distribution 
 percentile, largest, the share of scenarios at or above CANDIDATE) and the Mann-Whitney U test
 of the proxies of the two arms' scenarios.
 
-    python3 -m asg_analysis.studies.stack_study results/depth exp1-depth-td3-per-asp-s0 exp1-depth-random-s0 \\
+    python3 -m asg_analysis stack-study results/depth exp1-depth-td3-per-asp-s0 exp1-depth-random-s0 \\
         [--json results/depth/comparison.json] [--markdown]
 
 Several seeds an arm (comma-separated campaign names, one per seed; results/depth/plan-seeds.txt):
@@ -19,7 +19,7 @@ the round-4 protocol compares arms (asg_analysis.stats.compare: each arm's mean 
 bootstrap 95 % interval, the ratio of the means, the Mann-Whitney U test of the per-seed rates),
 with Fisher's exact test of the pooled counts beside it.
 
-    python3 -m asg_analysis.studies.stack_study results/depth \\
+    python3 -m asg_analysis stack-study results/depth \\
         exp1-depth-td3-per-asp-s0,exp1-depth-td3-per-asp-s1,exp1-depth-td3-per-asp-s2 \\
         exp1-depth-random-s0,exp1-depth-random-s1,exp1-depth-random-s2 --json results/depth/seeds.json --markdown
 """
@@ -33,17 +33,9 @@ from typing import Dict, List
 import numpy as np
 
 from asg_agent.records.export import read_export
-from asg_analysis.stats import LEVEL, mann_whitney_scipy
+from asg_analysis.stats import LEVEL, exact_interval, mann_whitney_scipy
 from asg_agent.scoring.attribution import CANDIDATE, RunOutcome
 from asg_analysis.files import write_json
-
-
-def exact_interval(k: int, n: int, level: float = LEVEL) -> List[float]:
-    """Clopper-Pearson interval of a binomial rate k / n."""
-    from scipy.stats import binomtest
-
-    ci = binomtest(k, n).proportion_ci(confidence_level=level, method="exact")
-    return [float(ci.low), float(ci.high)]
 
 
 def arm(rows: List[dict]) -> Dict:
@@ -185,7 +177,7 @@ def markdown(s: Dict) -> str:
     return head + "".join(rows) + tail
 
 
-def main(argv=None) -> int:
+def run(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("folder", help="folder of the campaigns' exports (NAME.jsonl.gz)")
     p.add_argument("search", help="the search's campaign name (several seeds: comma-separated)")
@@ -204,7 +196,3 @@ def main(argv=None) -> int:
         write_json(a.json, s)
     print((markdown_seeds(s) if seeds else markdown(s)) if a.markdown else json.dumps(s, indent=1, sort_keys=True))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

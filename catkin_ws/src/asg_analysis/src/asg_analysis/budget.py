@@ -4,7 +4,7 @@ it learns, and what its warm-up costs), where it places obstacles relative to th
 lateral offset of every obstacle, and of the obstacle each flaw collision hit), and the share of
 its scenarios that are candidates re-run on the references (what attribution costs it).
 
-    python3 -m asg_analysis.studies.flaw_budget results/flaw_study --figure docs/images/flaw_study_budget.png
+    python3 -m asg_analysis budget results/flaw_study --figure docs/images/flaw_study_budget.png
 
 Read by `protocol analyse --doc` once every confirmatory campaign is in (it writes the table and
 the figure beside the result)."""
@@ -16,6 +16,8 @@ import sys
 from typing import Dict, List
 
 import numpy as np
+
+PROG = "python3 -m asg_analysis budget"
 
 WINDOW = 50  # [scenarios] the learning curve's window, in job order
 NEAR = 2.0  # [m] an obstacle this close to the route's line is "on the route" for the table
@@ -132,15 +134,15 @@ def figure(res: Dict[str, dict], order: List[str], out: str) -> None:
     plt.close(fig)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="flaw_budget", description=__doc__.split("\n\n")[0])
+def run(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     ap.add_argument("folder")
     ap.add_argument("--budget", type=int, default=300)
     ap.add_argument("--figure", default="")
     a = ap.parse_args(argv)
     res = read(a.folder, a.budget)
     if not res:
-        print(f"flaw_budget: no complete confirmatory export in {a.folder}", file=sys.stderr)
+        print(f"budget: no complete confirmatory export in {a.folder}", file=sys.stderr)
         return 2
     order = ["default", "random", "route-random", "cmaes", "map-elites"]
     order += sorted(set(res) - set(order))
@@ -148,7 +150,3 @@ def main(argv=None) -> int:
     if a.figure:
         figure(res, order, a.figure)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,4 +1,4 @@
-"""An in-process stand-in for the worker pool (tests, dry runs; no ROS, no simulator).
+"""An in-process stand-in for the worker pool (tests, no ROS, no simulator; not installed).
 
 It "drives" the optimal path with a lateral wiggle that grows near obstacles, so proxies vary
 with the layout, and returns results out of order after a seeded random number of polls, like
