@@ -92,22 +92,33 @@ def test_the_readmes_answer_is_the_recount_of_the_default_and_route_random():
     assert ("Not shown" in answer) == (p >= 0.05), p
 
 
-def test_the_records_atlas_v3_sentence_is_the_atlas_files():
-    # the record's prose on the current atlas and on v2, which the pilot was read against
+def test_the_records_atlas_v3_and_v4_sentences_are_the_atlas_files():
+    # the record's prose on v3 (kept as results/coverage_v5/exp1-flaw.v3.json), on v2, which the
+    # pilot was read against, and on the current atlas
     def at5(path):
         with open(os.path.join(REPO, path), encoding="utf-8") as f:
             a = json.load(f)
         g = [g for g in a["groupings"] if g["radius_m"] == 5.0][0]
-        return a["version"], len(g["places"]), g["chao1"]["completeness"], g["chao2"]["completeness"]
+        return a["version"], len(g["places"]), g["chao1"]["completeness"], g["chao2"]["completeness"], a, g
 
-    v, n, c1, c2 = at5("results/atlas/exp1-flaw.json")
-    v2, n2, c1_2, c2_2 = at5("results/coverage_v5/exp1-flaw.v2.json")
-    assert v2 == 2 and v == 3
+    v3, n3, c1_3, c2_3, _, _ = at5("results/coverage_v5/exp1-flaw.v3.json")
+    v2, n2, c1_2, c2_2, _, _ = at5("results/coverage_v5/exp1-flaw.v2.json")
+    v, n, c1, c2, a, g = at5("results/atlas/exp1-flaw.json")
+    assert (v2, v3) == (2, 3)
     page = os.path.join(REPO, "docs", "studies", "2026-12-06-coverage-v5.md")
     text = " ".join(open(page, encoding="utf-8").read().split())
     said = (
-        f"version {v}, {n} places at 5 m, estimated completeness {c1:.2f} by Chao1 and {c2:.2f} by Chao2 "
+        f"version {v3}, {n3} places at 5 m, estimated completeness {c1_3:.2f} by Chao1 and {c2_3:.2f} by Chao2 "
         f"(v2: {c1_2:.2f} and {c2_2:.2f})"
     )
     assert said in text, said
-    assert (n < n2) == ("One place fewer than v2" in text) and c1 < 0.90 and "it is not frozen" in text
+    assert (n3 < n2) == ("One place fewer than v2" in text)
+    # the current atlas: its version, places per class, campaigns, scenarios and completeness
+    by_class = ", ".join(f"{k} {m}" for k, m in sorted(g["by_class"].items()))
+    said = (
+        f"Version {v} pools it: {n} places at 5 m ({by_class}) from {len(a['sources'])} campaigns and "
+        f"{a['scenarios']:,} scenarios, estimated completeness {c1:.2f} by Chao1 and {c2:.2f} by Chao2"
+    )
+    assert said in text, said
+    assert f"added {['no', 'one', 'two', 'three', 'four', 'five', 'six'][n - n3]} places" in text
+    assert (c1 < 0.90) == ("the atlas is not frozen" in text)

@@ -122,6 +122,7 @@ def record_blocks() -> Dict[str, str]:
     out["pilot"] = _block("pilot", arms_text(t))
     out["rates"] = _block("rates", rates_text(t))
     out["current atlas"] = _block("current atlas", arms_text(arms(CURRENT, base, 300)))
+    out["current fringe"] = _block("current fringe", fringe(CURRENT))
     return out
 
 
