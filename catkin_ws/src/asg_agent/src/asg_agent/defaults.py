@@ -43,7 +43,7 @@ DEFAULTS: Dict[str, Default] = {
     "generators": Default(
         "uniform,band",
         "",
-        "coverage-ts: its generators, some of uniform, band, route and mutate",
+        "coverage-ts, coverage-veto: its generators, some of uniform, band, route and mutate",
         ("--coverage-generators",),
     ),
     "atlas": Default("auto", "", "the failure atlas the campaign counts coverage of: auto, a file or none"),

@@ -114,7 +114,7 @@ def record_blocks() -> Dict[str, str]:
     out["fringe"] = _block("fringe", fringe(V2))
     pilot = os.path.join(REPO, "results", "coverage_v5")
     specs = dict(base)
-    for arm in ("cov-wide", "cov-abs", "cov-filter", "cov-mutate"):
+    for arm in ("cov-wide", "cov-abs", "cov-filter", "cov-mutate", "cov-veto"):
         found = sorted(glob.glob(os.path.join(pilot, f"cov5-pilot-{arm}-s*.jsonl.gz")))
         if found:
             specs[f"pilot {arm}"] = found

@@ -140,7 +140,7 @@ def _search_options(p):
         *D["generators"].aliases,
         dest="generators",
         default=D["generators"].value,
-        help=f"coverage-ts: its generators, comma-separated, some of {', '.join(GENERATORS)} "
+        help=f"coverage-ts, coverage-veto: its generators, comma-separated, some of {', '.join(GENERATORS)} "
         f"(default {D['generators'].value}; docs/agent.md)",
     )
     p.add_argument(
@@ -542,6 +542,7 @@ def make_search(a, exp):
         "route-random": {"band": a.route_band, "share": a.route_share},
         "novelty-ts": {"tabu_m": a.tabu_m},
         "coverage-ts": {"generators": tuple(a.generators.split(","))},
+        "coverage-veto": {"generators": tuple(a.generators.split(","))},
         "rule-sampler": {"rule_file": a.rule},
     }.get(a.method)
     try:

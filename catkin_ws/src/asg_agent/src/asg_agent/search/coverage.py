@@ -35,6 +35,14 @@ proposals at the cells no finding covers yet:
   its scene. The first `init_random` proposals draw the generator at random among those that need
   no archive and the layout uniformly from it; `mutate` joins the draw once the archive holds a
   layout.
+- **Two ways to choose among the candidates** (`selection`). `best` (coverage-ts) proposes the
+  candidate of the largest score. `veto` (registered as `coverage-veto`) keeps the generator's own
+  distribution and only turns away what would repeat: it takes the candidates in the order drawn
+  and proposes the first whose expected chance of a finding at a covered place (the sum of its
+  covered obstacles' chances) is no larger than its expected chance of a finding at a new place
+  (the sum of the others'); when none is, the one where the second most exceeds the first. With
+  nothing covered yet it proposes the generator's first candidate, so it starts as its generator
+  does, and it moves away only from layouts whose likely finding is a place already shown.
 
 Learns, does not know: nothing here names a class, a size or a place, or holds a prior about
 where a stack fails; every class of the scenario gets the same features and the same generators.
@@ -59,6 +67,7 @@ DEFAULT_GENERATORS = tuple(DEFAULTS["generators"].value.split(","))  # asg_agent
 AHEAD_BINS = 4  # other obstacles on the route before this one: 0, 1, 2, 3 or more
 MATCH_M = 0.05  # [m] a finding's place is the obstacle of its class standing this close to it
 MUTATE_SIGMAS = (0.05, 0.1, 0.2)  # [-] the steps of `mutate`'s children, of the action's range [-1, 1]
+SELECTIONS = ("best", "veto")  # how a proposal is chosen among the candidates (the module's text)
 
 
 class CoverageTS(SearchMethod):
@@ -77,6 +86,7 @@ class CoverageTS(SearchMethod):
         along_bins: int = 8,
         generators=DEFAULT_GENERATORS,
         mutate_sigmas=MUTATE_SIGMAS,
+        selection: str = "best",
     ):
         if not (init_random >= 1 and candidates >= 1 and along_bins >= 1):
             raise ValueError("coverage-ts: init_random, candidates and along_bins must be >= 1")
@@ -92,7 +102,12 @@ class CoverageTS(SearchMethod):
             raise ValueError(f"coverage-ts: mutate_sigmas {mutate_sigmas} [-] must be > 0")
         if not 0.0 <= covered_weight <= 1.0:
             raise ValueError(f"coverage-ts: covered_weight {covered_weight} must be in [0, 1]")
+        if selection not in SELECTIONS:
+            raise ValueError(f"coverage-ts: selection {selection!r}: one of {', '.join(SELECTIONS)}")
         super().__init__(experiment, seed)
+        self.selection = selection
+        if selection == "veto":
+            self.name = "coverage-veto"
         self.init_random, self.candidates, self.generators = int(init_random), int(candidates), generators
         self.radius, self.covered_weight, self.along_bins = float(radius_m), float(covered_weight), int(along_bins)
         self.feat = ObstacleFeatures(experiment)
@@ -207,20 +222,32 @@ class CoverageTS(SearchMethod):
         draw = [rng.beta(1 + w, 1 + n - w) for w, n in (self.wins[g] for g in gens)]
         return gens[int(np.argmax(draw))]
 
-    def _novelty(self, xy: np.ndarray) -> np.ndarray:
-        """(m, n) novelty weights: 1 where an obstacle stands `radius` from every found or aimed
-        place of its class, else covered_weight."""
+    def _covered(self, xy: np.ndarray) -> np.ndarray:
+        """(m, n) True where an obstacle stands within `radius` of a found or aimed place of its
+        class (proposals in flight count as found)."""
         m = xy.shape[0]
         known = DistinctPlaces.from_state(self.found.state_dict())
         for p in self.aims.values():
             known.by_class.setdefault(p[0], []).append((p[1], p[2]))
-        out = np.ones((m, self.n))
+        out = np.zeros((m, self.n), bool)
         for cls, pts in known.by_class.items():
             cols = np.flatnonzero(self.meshes == cls)
             if len(cols) and pts:
-                near = known.near(cls, xy[:, cols].reshape(-1, 2)).reshape(m, len(cols))
-                out[:, cols] = np.where(near, self.covered_weight, 1.0)
+                out[:, cols] = known.near(cls, xy[:, cols].reshape(-1, 2)).reshape(m, len(cols))
         return out
+
+    def _novelty(self, xy: np.ndarray) -> np.ndarray:
+        """(m, n) novelty weights: 1 where an obstacle stands `radius` from every found or aimed
+        place of its class, else covered_weight."""
+        return np.where(self._covered(xy), self.covered_weight, 1.0)
+
+    def _veto(self, chance: np.ndarray, covered: np.ndarray) -> int:
+        """The candidate `veto` proposes: the first (in the order drawn) whose chance of a finding
+        at a covered place is at most its chance of one at a new place; else the largest margin."""
+        at_new = np.where(covered, 0.0, chance).sum(axis=1)
+        at_covered = np.where(covered, chance, 0.0).sum(axis=1)
+        ok = np.flatnonzero(at_covered <= at_new)
+        return int(ok[0]) if len(ok) else int(np.argmax(at_new - at_covered))
 
     # -- the SearchMethod interface ----------------------------------------------------------
     def _rng(self, *keys):
@@ -238,8 +265,9 @@ class CoverageTS(SearchMethod):
         cov = self.model.sigma_ + 1e-9 * np.eye(self.dim)
         w = rng.multivariate_normal(self.model.coef_, cov, method="cholesky")
         chance = np.clip(w[self.obstacle_cells(xy)].sum(axis=2) + self.model.intercept_, 0.0, 1.0)
-        value = chance * self._novelty(xy)
-        best = int(np.argmax(value.sum(axis=1)))
+        covered = self._covered(xy)
+        value = chance * np.where(covered, self.covered_weight, 1.0)
+        best = self._veto(chance, covered) if self.selection == "veto" else int(np.argmax(value.sum(axis=1)))
         i = int(np.argmax(value[best]))
         self.aims[int(job)] = (str(self.meshes[i]), float(xy[best, i, 0]), float(xy[best, i, 1]))
         return cand[best].astype(np.float32)
@@ -309,6 +337,7 @@ class CoverageTS(SearchMethod):
             "lateral_edges": list(LATERAL_EDGES),
             "generators": list(self.generators),
             "mutate_sigmas": list(self.mutate_sigmas),
+            "selection": self.selection,
         }
 
     def state_dict(self):

@@ -48,6 +48,7 @@ METHODS = (
     "surrogate-ts",
     "novelty-ts",
     "coverage-ts",
+    "coverage-veto",
     "rule-sampler",
 )
 
@@ -406,10 +407,12 @@ def make_method(
         from asg_agent.search.novelty import NoveltyTS
 
         return NoveltyTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
-    if name == "coverage-ts":
+    if name in ("coverage-ts", "coverage-veto"):
         from asg_agent.search.coverage import CoverageTS
 
-        return CoverageTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
+        selection = "veto" if name == "coverage-veto" else "best"
+        init = max(1, min(100, budget // 10))
+        return CoverageTS(experiment, seed, init_random=init, selection=selection, **(options or {}))
     if name == "rule-sampler":
         from asg_agent.search.rules import RuleSampler, load_rule
 
