@@ -168,3 +168,25 @@ def test_round_7_against_round_6s_end_back_to_back_after_the_speed_ups():
         f"the {len(both)} files both ran took {sum(r6['files'][k] for k in both):,.0f} s of job time before and "
         f"{sum(r7['files'][k] for k in both):,.0f} s after"
     ) in text
+
+
+def test_round_8_against_round_7s_end_back_to_back_is_what_the_records_say():
+    """Issue #94: round 8 no slower than round 7's end, back to back on one machine."""
+    r7 = record("r7-18c8fe5-epyc-bf16.json")
+    r8 = record("r8-39c3f09-epyc-bf16.json")
+    assert r8["cpu_class"] == r7["cpu_class"] and r8["cpu"] == r7["cpu"]
+    both = set(r8["files"]) & set(r7["files"])
+    new = set(r8["files"]) - both
+    text = prose()
+    assert f"`r7-18c8fe5-epyc-bf16.json` took {wall_s(r7):,} s for {len(r7['files'])} files" in text
+    assert f"`r8-39c3f09-epyc-bf16.json` {wall_s(r8):,} s for {len(r8['files'])} files" in text
+    assert f"{wall_s(r8) / wall_s(r7):.2f}x, no slower, with {len(new)} more files" in text
+    assert wall_s(r8) <= wall_s(r7)
+    assert (
+        f"the {len(both)} files both ran took {sum(r7['files'][k] for k in both):,.0f} s before and "
+        f"{sum(r8['files'][k] for k in both):,.0f} s after, the {len(new)} new files "
+        f"{sum(r8['files'][k] for k in new):,.0f} s"
+    ) in text
+    before = open(os.path.join(REPO, "results", "bench", "r8-one-before-1.digest")).read().split()
+    after = open(os.path.join(REPO, "results", "bench", "r8-one-after-1.digest")).read().split()
+    assert before == after and f"{after[1][:8]})" in text
