@@ -314,28 +314,29 @@ def test_coverage_ts_covers_more_places_than_sampling_in_its_own_space_and_learn
     assert sum(c for c, _ in counts) > sum(r for _, r in counts), counts  # and more over the seeds
 
 
+def _replayed(name, exp, seed, opts, resume_at=None, n=60):
+    """(the n proposals, the method) of `name` on the toy stack, one job at a time; at job
+    `resume_at` the method is rebuilt from its state_dict (through JSON) and goes on."""
+    run = _toy(exp)
+    m = make_method(name, exp, seed, budget=n, options=opts)
+    out = []
+    for job in range(n):
+        if job == resume_at:
+            state = json.loads(json.dumps(m.state_dict()))
+            m = make_method(name, exp, seed, budget=n, options=opts)
+            m.load_state_dict(state)
+        a = m.propose(job, 0, 0, None)
+        r, where, finding = run(a)
+        m.outcome(job, where, finding)
+        m.observe(job, 0, 0, None, a, r, None, True)
+        out.append(a)
+    return np.stack(out), m
+
+
 def test_coverage_ts_is_a_function_of_its_seed_and_resumes_exactly():
     exp = load_experiment(WIDE)
-    run = _toy(exp)
-
     opts = {"candidates": 300, "generators": ("route", "mutate")}
-
-    def go(resume_at=None):
-        m = make_method("coverage-ts", exp, 5, budget=60, options=opts)
-        out = []
-        for job in range(60):
-            if job == resume_at:
-                state = json.loads(json.dumps(m.state_dict()))
-                m = make_method("coverage-ts", exp, 5, budget=60, options=opts)
-                m.load_state_dict(state)
-            a = m.propose(job, 0, 0, None)
-            r, where, finding = run(a)
-            m.outcome(job, where, finding)
-            m.observe(job, 0, 0, None, a, r, None, True)
-            out.append(a)
-        return np.stack(out), m
-
-    (a, ma), (b, _), (c, mc) = go(), go(), go(resume_at=30)
+    (a, ma), (b, _), (c, mc) = (_replayed("coverage-ts", exp, 5, opts, at) for at in (None, None, 30))
     assert np.array_equal(a, b) and np.array_equal(a, c)
     assert ma.found.state_dict() == mc.found.state_dict() and ma.wins == mc.wins
     assert ma.wins["mutate"][1] > 0 and sorted(ma.archive) == sorted(mc.archive)
@@ -422,24 +423,7 @@ def test_coverage_veto_repeats_a_place_less_often_than_its_generator_alone():
 
 def test_coverage_veto_is_a_function_of_its_seed_and_resumes_exactly():
     exp = load_experiment(EXP1)
-    run = _toy(exp)
     opts = {"candidates": 300, "generators": ("route",)}
-
-    def go(resume_at=None):
-        m = make_method("coverage-veto", exp, 4, budget=60, options=opts)
-        out = []
-        for job in range(60):
-            if job == resume_at:
-                state = json.loads(json.dumps(m.state_dict()))
-                m = make_method("coverage-veto", exp, 4, budget=60, options=opts)
-                m.load_state_dict(state)
-            a = m.propose(job, 0, 0, None)
-            r, where, finding = run(a)
-            m.outcome(job, where, finding)
-            m.observe(job, 0, 0, None, a, r, None, True)
-            out.append(a)
-        return np.stack(out), m
-
-    (a, ma), (b, _), (c, mc) = go(), go(), go(resume_at=25)
+    (a, ma), (b, _), (c, mc) = (_replayed("coverage-veto", exp, 4, opts, at) for at in (None, None, 25))
     assert np.array_equal(a, b) and np.array_equal(a, c)
     assert ma.found.state_dict() == mc.found.state_dict() and len(ma.found) > 0
