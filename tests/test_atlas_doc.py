@@ -5,6 +5,7 @@ import gzip
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -122,3 +123,34 @@ def test_the_records_atlas_v3_and_v4_sentences_are_the_atlas_files():
     assert said in text, said
     assert f"added {['no', 'one', 'two', 'three', 'four', 'five', 'six'][n - n3]} places" in text
     assert (c1 < 0.90) == ("the atlas is not frozen" in text)
+
+
+def test_the_records_amendment_3_sentence_is_its_blocks():
+    # the prose on cov-veto reads the pilot and rates blocks (themselves checked against the exports)
+    page = open(os.path.join(REPO, "docs", "studies", "2026-12-06-coverage-v5.md"), encoding="utf-8").read()
+    text = " ".join(page.split())
+    pilot = page.split("<!-- pilot: begin -->")[1].split("<!-- pilot: end -->")[0]
+    rates = page.split("<!-- rates: begin -->")[1].split("<!-- rates: end -->")[0]
+
+    def arm(name):
+        m = re.search(rf"^  {re.escape(name)}: (\d\.\d+) \(per seed ([\d., ]+)\)", pilot, re.M)
+        return float(m.group(1)), [float(x) for x in m.group(2).split(", ")]
+
+    def rate(name):
+        m = re.search(rf"^{re.escape(name)}: .*\(1 in ([\d.]+)\), .*\((\d\.\d\d) of them\)", rates, re.M)
+        return m.group(1), m.group(2)
+
+    mean, seeds = arm("pilot cov-veto")
+    _, filt = arm("pilot cov-filter")
+    ratio = re.search(
+        r"pilot cov-veto / route-random: (\d\.\d\dx \(\d\.\d\d-\d\.\d\d\)), exact Mann-Whitney p = (\d\.\d+)", pilot
+    )
+    (vr, vd), (rr, rd) = rate("pilot cov-veto"), rate("route-random")
+    said = (
+        f"kept route-random's rate of findings (1 in {vr} scenarios against 1 in {rr}) but not much more of them at "
+        f"new places ({vd} of its findings distinct at 5 m against route-random's {rd}): "
+        f"{seeds[0]:.2f} and {seeds[1]:.2f}, mean {mean:.3f}, {ratio.group(1)[:-1].replace(' (', ' route-random (interval ')}"
+        f", exact p = {ratio.group(2)}), below `cov-filter` on both seeds"
+    )
+    assert said in text, said
+    assert all(v < min(filt) for v in seeds)
