@@ -8,7 +8,8 @@
 # store is.
 #   bash scripts/train.sh [SCENARIOS] [extra launch args, e.g. method:=random seed:=1 resume:=true]
 # Default 150 scenarios (minutes on a 2-core machine: docs/benchmarks.md, CPU classes). Idempotent: a finished campaign is
-# reported, an unfinished one resumed (resume:=true). ASG_LAUNCH=differential runs
+# reported, an unfinished one resumed (train.sh adds resume:=true; resume:=false refuses a name
+# already in the store). ASG_LAUNCH=differential runs
 # launch/differential.launch instead (2 workers under test, 2 reference workers).
 # The workers run from the launch file in the background (their roslaunch output in the log
 # folder); the campaign node runs in the foreground with the command line the launch file gives
@@ -26,6 +27,9 @@ STORE="${ASG_STORE:-$REPO/results/train.sqlite}"
 mkdir -p "$(dirname "$STORE")"
 LAUNCH="$REPO/launch/${ASG_LAUNCH:-train}.launch"
 ARGS=(scenarios:="$SCENARIOS" store:="$STORE" "$@")
+# Idempotent: run again, the campaign of the same name resumes (a finished one is reported at
+# once), unless the command line says resume:= itself
+[[ " $* " == *" resume:="* ]] || ARGS+=(resume:=true)
 if [ "${ASG_LAUNCH:-train}" = train ]; then
   # The experiment file decides the workers' stack (model, U-Net numerics, planner): the arguments
   # it implies that the command line leaves out; a contradiction is refused here (issue #53).

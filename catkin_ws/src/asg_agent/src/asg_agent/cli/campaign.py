@@ -533,18 +533,22 @@ def open_store(a, name: str) -> Store:
     return store
 
 
+#: the options each method takes from the campaign's arguments: {its argument: the argument (dest)}
+OPTIONS = {
+    "route-random": {"band": "route_band", "share": "route_share"},
+    "novelty-ts": {"tabu_m": "tabu_m"},
+    "coverage-ts": {"generators": "generators"},
+    "coverage-veto": {"generators": "generators"},
+    "rule-sampler": {"rule_file": "rule"},
+}
+
+
 def make_search(a, exp):
     td3 = TD3Config()
     if a.updates_per_step:
         td3.updates_per_step = a.updates_per_step
     td3.bc_weight = a.bc_weight
-    options = {
-        "route-random": {"band": a.route_band, "share": a.route_share},
-        "novelty-ts": {"tabu_m": a.tabu_m},
-        "coverage-ts": {"generators": tuple(a.generators.split(","))},
-        "coverage-veto": {"generators": tuple(a.generators.split(","))},
-        "rule-sampler": {"rule_file": a.rule},
-    }.get(a.method)
+    options = {opt: getattr(a, dest) for opt, dest in OPTIONS.get(a.method, {}).items()}
     try:
         return make_method(a.method, exp, a.seed, budget=a.scenarios, td3_config=td3, options=options)
     except ValueError as e:

@@ -20,12 +20,18 @@ reaches for first) and `map-elites` (quality diversity: MAP-Elites with the `rib
 grid archive and iso+line emitter, over two behaviour descriptors), and `surrogate-ts` (an online
 surrogate of the reward with credit per obstacle, sampled by Thompson sampling: surrogate.py), and
 `novelty-ts` (the same surrogate proposing away from the places of the failures already found:
-novelty.py), and `rule-sampler` (uniform layouts that satisfy a learned rule: the check of a rule on
-fresh samples; rules.py).
+novelty.py), `coverage-ts` and `coverage-veto` (an obstacle-level model of which obstacle a
+finding hits, aiming at places not yet covered or turning away layouts expected to repeat one:
+coverage.py), and `rule-sampler` (uniform layouts that satisfy a learned rule: the check of a rule
+on fresh samples; rules.py).
+
+REGISTRY is the one table of them, name -> builder; `make_method` builds from it and METHODS
+lists it. The options a campaign hands each method from its arguments are the CLI's
+(cli/campaign.py, OPTIONS).
 """
 
 import math
-from typing import Dict, Optional
+from typing import Callable, Dict, Optional, Tuple
 
 import numpy as np
 
@@ -34,23 +40,6 @@ from asg_agent.records.experiment import Experiment
 from asg_agent.search.base import SearchMethod, _rng
 from asg_agent.search.td3 import TD3Agent, TD3Config
 from asg_scenario.layout import RouteFrame
-
-METHODS = (
-    "td3-per-asp",
-    "td3-per",
-    "td3-asp",
-    "td3",
-    "random",
-    "route-random",
-    "annealing",
-    "cmaes",
-    "map-elites",
-    "surrogate-ts",
-    "novelty-ts",
-    "coverage-ts",
-    "coverage-veto",
-    "rule-sampler",
-)
 
 
 class RandomSearch(SearchMethod):
@@ -379,6 +368,70 @@ class MapElites(SearchMethod):
         self.added = d["added"]
 
 
+def _init(budget: int) -> int:
+    """The random proposals a model-based method starts with: a tenth of the budget, 1 to 100."""
+    return max(1, min(100, budget // 10))
+
+
+def _surrogate(e, seed, budget, td3, o):
+    from asg_agent.search.surrogate import SurrogateTS
+
+    return SurrogateTS(e, seed, init_random=_init(budget))
+
+
+def _novelty(e, seed, budget, td3, o):
+    from asg_agent.search.novelty import NoveltyTS
+
+    return NoveltyTS(e, seed, init_random=_init(budget), **o)
+
+
+def _coverage(selection):
+    def build(e, seed, budget, td3, o):
+        from asg_agent.search.coverage import CoverageTS
+
+        o = dict(o)
+        if isinstance(o.get("generators"), str):  # as the campaign gives it: comma-separated
+            o["generators"] = tuple(g.strip() for g in o["generators"].split(","))
+        return CoverageTS(e, seed, init_random=_init(budget), selection=selection, **o)
+
+    return build
+
+
+def _rule_sampler(e, seed, budget, td3, o):
+    from asg_agent.search.rules import RuleSampler, load_rule
+
+    if not o.get("rule_file"):
+        raise ValueError("rule-sampler: needs a rule file (--rule FILE, train.launch rule:=FILE)")
+    return RuleSampler(e, seed, load_rule(o["rule_file"]))
+
+
+def _td3(per: bool, asp: bool):
+    return lambda e, seed, budget, td3, o: TD3Search(e, seed, per=per, asp=asp, config=td3, budget=budget)
+
+
+#: a method's builder: (experiment, seed, budget, td3_config, its options) -> the method
+Builder = Callable[..., SearchMethod]
+
+#: every search method, by the name a campaign gives (--method, method:=), in the order listed
+REGISTRY: Dict[str, Builder] = {
+    "td3-per-asp": _td3(True, True),
+    "td3-per": _td3(True, False),
+    "td3-asp": _td3(False, True),
+    "td3": _td3(False, False),
+    "random": lambda e, seed, budget, td3, o: RandomSearch(e, seed),
+    "route-random": lambda e, seed, budget, td3, o: RouteRandom(e, seed, **o),
+    "annealing": lambda e, seed, budget, td3, o: Annealing(e, seed, budget=budget),
+    "cmaes": lambda e, seed, budget, td3, o: CMAES(e, seed),
+    "map-elites": lambda e, seed, budget, td3, o: MapElites(e, seed, init_random=_init(budget)),
+    "surrogate-ts": _surrogate,
+    "novelty-ts": _novelty,
+    "coverage-ts": _coverage("best"),
+    "coverage-veto": _coverage("veto"),
+    "rule-sampler": _rule_sampler,
+}
+METHODS: Tuple[str, ...] = tuple(REGISTRY)
+
+
 def make_method(
     name: str,
     experiment: Experiment,
@@ -387,38 +440,9 @@ def make_method(
     td3_config: Optional[TD3Config] = None,
     options: Optional[dict] = None,
 ) -> SearchMethod:
-    """The method `name`; `options`: its own settings (route-random: band [m], share [-];
-    novelty-ts: tabu_m [m]; rule-sampler: rule_file)."""
-    if name == "random":
-        return RandomSearch(experiment, seed)
-    if name == "route-random":
-        return RouteRandom(experiment, seed, **(options or {}))
-    if name == "annealing":
-        return Annealing(experiment, seed, budget=budget)
-    if name == "cmaes":
-        return CMAES(experiment, seed)
-    if name == "map-elites":
-        return MapElites(experiment, seed, init_random=max(1, min(100, budget // 10)))
-    if name == "surrogate-ts":
-        from asg_agent.search.surrogate import SurrogateTS
-
-        return SurrogateTS(experiment, seed, init_random=max(1, min(100, budget // 10)))
-    if name == "novelty-ts":
-        from asg_agent.search.novelty import NoveltyTS
-
-        return NoveltyTS(experiment, seed, init_random=max(1, min(100, budget // 10)), **(options or {}))
-    if name in ("coverage-ts", "coverage-veto"):
-        from asg_agent.search.coverage import CoverageTS
-
-        selection = "veto" if name == "coverage-veto" else "best"
-        init = max(1, min(100, budget // 10))
-        return CoverageTS(experiment, seed, init_random=init, selection=selection, **(options or {}))
-    if name == "rule-sampler":
-        from asg_agent.search.rules import RuleSampler, load_rule
-
-        if not (options or {}).get("rule_file"):
-            raise ValueError("rule-sampler: needs a rule file (--rule FILE, train.launch rule:=FILE)")
-        return RuleSampler(experiment, seed, load_rule(options["rule_file"]))
-    if name in ("td3-per-asp", "td3-per", "td3-asp", "td3"):
-        return TD3Search(experiment, seed, per="-per" in name, asp="-asp" in name, config=td3_config, budget=budget)
-    raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")
+    """The method `name` (REGISTRY); `options`: its own settings (route-random: band [m], share [-];
+    novelty-ts: tabu_m [m]; coverage-ts, coverage-veto: generators; rule-sampler: rule_file)."""
+    build = REGISTRY.get(name)
+    if build is None:
+        raise ValueError(f"method {name!r}: one of {', '.join(METHODS)}")
+    return build(experiment, seed, budget, td3_config, dict(options or {}))
