@@ -138,3 +138,24 @@ def test_a_free_running_stack_is_rerun_not_judged():
     assert free_running({"registration": {"mode": "free", "sim_time": True}})
     assert not free_running({"registration": {"mode": "lockstep"}})
     assert not free_running({}) and not free_running(None)
+
+
+def test_a_replays_own_master_never_joins_another_on_its_port():
+    # two replays at once, or a replay beside a sim-time stack's replay, each bring up a master of
+    # their own: a port something listens on is skipped, or refused when asked for by --port
+    import socket
+
+    from asg_agent.ros import replay
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen(1)
+        busy = held.getsockname()[1]
+        with pytest.raises(ValueError, match=f"--port {busy} is in use"):
+            replay.private_port(busy)
+        first = replay.private_port()
+        assert first >= replay.FIRST_PORT and replay._free(first)
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as other:
+            other.bind(("127.0.0.1", first))
+            other.listen(1)
+            assert replay.private_port() > first  # the next free one, not the one in use

@@ -9,8 +9,8 @@ difference between the replayed and the stored trajectory and the proxy recomput
 stored one, and exits 0 only if they match (difference under 1 cm, proxy equal to 1e-6). The
 worker must run the stack the campaign ran (perception, model, planner config: stored with
 the campaign). Without --worker, replay brings one up itself with the stored stack
-configuration (roslaunch launch/worker.launch on a private ROS master on loopback, port 11390
-by default) and shuts it down afterwards; with --worker it uses a running one, compares what it
+configuration (roslaunch launch/worker.launch on a private ROS master on loopback: the first
+free port from 11390 on, or --port, refused when in use) and shuts it down afterwards; with --worker it uses a running one, compares what it
 can read from the parameter server and refuses a mismatch. --bag records the worker's topics
 during the run with rosbag.
 """
@@ -181,7 +181,13 @@ def parser() -> argparse.ArgumentParser:
         "scenario of an attributed campaign, ground_truth replays its reference run and checks it",
     )
     p.add_argument("--model", default="", help="with --scenario: the U-Net model (default flawed)")
-    p.add_argument("--port", type=int, default=11390, help="ROS master port of the worker replay brings up")
+    p.add_argument(
+        "--port",
+        type=int,
+        default=0,
+        help="ROS master port of the worker replay brings up (default: the first free one from "
+        f"{FIRST_PORT} on; a port in use is refused: the master would not be private)",
+    )
     p.add_argument("--bag", default="", help="record the run's topics into this bag")
     p.add_argument(
         "--labels-beside",
@@ -272,7 +278,12 @@ def main(argv=None):
             "unet_backend": settings.get("unet_backend", LEGACY_UNET_BACKEND),
             "planner_config": settings.get("planner_config", "planner.yaml"),
         }
-        launched = bring_up_worker(stack, a.port)
+        try:
+            port = private_port(a.port)
+        except ValueError as e:
+            print(f"replay: {e}", file=sys.stderr)
+            return 2
+        launched = bring_up_worker(stack, port)
         a.force = True  # the worker is the stored stack by construction: no identity check
         a.worker = "/replay_worker"
     try:
@@ -319,6 +330,37 @@ def _repo() -> str:
 def free_running(settings) -> bool:
     """Whether the campaign's stack ran free (its registration's `mode: free`, no lockstep client)."""
     return ((settings or {}).get("registration") or {}).get("mode") == "free"
+
+
+#: the first port a replay's private master tries (docs/reliability.md: each script's port)
+FIRST_PORT = 11390
+
+
+def _free(port: int) -> bool:
+    """Whether nothing listens on loopback port `port` (a bind succeeds)."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
+def private_port(port: int = 0, tries: int = 64) -> int:
+    """The port of the replay's own master: `port` if given and free, else the first free one
+    from FIRST_PORT on. Another process's master on it (a second replay, a sim-time stack's)
+    would not be private: its /use_sim_time and workers are not this replay's. ValueError naming
+    the port when a given one is in use, or when none of `tries` ports is free."""
+    if port:
+        if not _free(port):
+            raise ValueError(f"--port {port} is in use (another ROS master?): give a free one, or leave --port out")
+        return port
+    for p in range(FIRST_PORT, FIRST_PORT + tries):
+        if _free(p):
+            return p
+    raise ValueError(f"no free port in {FIRST_PORT}-{FIRST_PORT + tries - 1} for the replay's own master")
 
 
 def bring_up_worker(stack: dict, port: int):
