@@ -20,14 +20,7 @@ import stand_in  # noqa: E402
 from asg_agent.records.store import Store  # noqa: E402
 
 EXP = os.path.join(REPO, "experiments", "exp1.yaml")
-ENV = stand_in.environ(
-    dict(
-        os.environ,
-        PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
-        + os.pathsep
-        + os.environ.get("PYTHONPATH", ""),
-    )
-)
+ENV = stand_in.environ()  # the stand-in and the agent's sources first on PYTHONPATH
 N = 200
 
 

@@ -157,14 +157,7 @@ def test_a_finished_campaign_is_extended_by_a_resume_with_a_larger_budget(tmp_pa
 
 
 def test_kill_9_of_the_campaign_process_then_resume(tmp_path):
-    env = stand_in.environ(  # the agent's sources, and the stand-in beside the tests
-        dict(
-            os.environ,
-            PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
-            + os.pathsep
-            + os.environ.get("PYTHONPATH", ""),
-        )
-    )
+    env = stand_in.environ()  # the stand-in and the agent's sources first on PYTHONPATH
     cmd = [
         sys.executable,
         "-m",

@@ -370,14 +370,7 @@ def test_an_experiment_with_free_terrain_sets_it_from_the_action(tmp_path):
 def test_a_signal_ends_the_campaign_as_ctrl_c_does_even_in_the_background(tmp_path, sig):
     # A campaign started with `&` by a non-interactive shell inherits SIGINT ignored; kill's
     # SIGTERM ended it at once. Both now save its state and end it with status 130.
-    env = stand_in.environ(  # the agent's sources, and the stand-in beside the tests
-        dict(
-            os.environ,
-            PYTHONPATH=os.path.join(REPO, "catkin_ws", "src", "asg_agent", "src")
-            + os.pathsep
-            + os.environ.get("PYTHONPATH", ""),
-        )
-    )
+    env = stand_in.environ()  # the stand-in and the agent's sources first on PYTHONPATH
     cmd = [sys.executable, "-m", "stand_in.campaign", EXP, "--fake-workers", "2", "--scenarios", "400"]
     cmd += ["--store", str(tmp_path / "s.sqlite"), "--name", "s", "--no-progress", "--method", "td3-per-asp"]
     store = Store(str(tmp_path / "s.sqlite"))

@@ -18,9 +18,14 @@ import os
 FOLDER = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+#: catkin_ws/src/asg_agent/src: the agent's own sources, as this checkout holds them
+SOURCES = os.path.join(os.path.dirname(FOLDER), "src")
+
+
 def environ(base=None) -> dict:
-    """`base` (default os.environ) with FOLDER first on PYTHONPATH: what `python3 -m
-    stand_in.campaign` (or .suite, .asp_effect) needs to find this package."""
+    """`base` (default os.environ) with FOLDER and the agent's sources (SOURCES) first on
+    PYTHONPATH: what `python3 -m stand_in.campaign` (or .suite, .asp_effect) needs to find this
+    package and the agent code under test."""
     env = dict(os.environ if base is None else base)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (FOLDER, env.get("PYTHONPATH", "")) if p)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (FOLDER, SOURCES, env.get("PYTHONPATH", "")) if p)
     return env
