@@ -190,3 +190,5 @@ def test_round_8_against_round_7s_end_back_to_back_is_what_the_records_say():
     before = open(os.path.join(REPO, "results", "bench", "r8-one-before-1.digest")).read().split()
     after = open(os.path.join(REPO, "results", "bench", "r8-one-after-1.digest")).read().split()
     assert before == after and f"{after[1][:8]})" in text
+    registry = open(os.path.join(REPO, "results", "bench", "r8-registry-after-1.digest")).read().split()
+    assert registry == after and "`r8-registry-after-1.digest`" in text
