@@ -236,11 +236,6 @@ class CoverageTS(SearchMethod):
                 out[:, cols] = known.near(cls, xy[:, cols].reshape(-1, 2)).reshape(m, len(cols))
         return out
 
-    def _novelty(self, xy: np.ndarray) -> np.ndarray:
-        """(m, n) novelty weights: 1 where an obstacle stands `radius` from every found or aimed
-        place of its class, else covered_weight."""
-        return np.where(self._covered(xy), self.covered_weight, 1.0)
-
     def _veto(self, chance: np.ndarray, covered: np.ndarray) -> int:
         """The candidate `veto` proposes: the first (in the order drawn) whose chance of a finding
         at a covered place is at most its chance of one at a new place; else the largest margin."""
